@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Installs every build and test dependency of rastercheck from Debian 12 packages.
+# Idempotent and non-interactive; runs as root or through sudo. CUDA is optional and not installed here.
+set -euo pipefail
+
+packages=(
+    build-essential cmake ninja-build pkg-config git ca-certificates
+    libeigen3-dev liburdfdom-dev liburdfdom-headers-dev libtinyxml2-dev libconsole-bridge-dev
+    libassimp-dev libyaml-cpp-dev libcli11-dev libcairo2-dev
+    libompl-dev ompl-demos
+    libboost-serialization-dev libboost-filesystem-dev libboost-system-dev libboost-program-options-dev
+    libfcl-dev libccd-dev
+    libgtest-dev libgmock-dev libbenchmark-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+    echo "install-deps: all ${#packages[@]} packages present"
+    exit 0
+fi
+
+sudo=""
+if ((EUID != 0)); then
+    command -v sudo >/dev/null || { echo "install-deps: run as root or install sudo" >&2; exit 1; }
+    sudo=sudo
+fi
+echo "install-deps: installing ${missing[*]}"
+$sudo env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+$sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"

@@ -1,0 +1,27 @@
+// The rastercheck command line: one binary, one subcommand per job.
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "rastercheck/BuildConfig.h"
+#include "rastercheck/core/Error.h"
+
+int main(int argc, char **argv)
+{
+    CLI::App app{"rastercheck: batched collision checking for motion planning (version " RASTERCHECK_VERSION ")"};
+    app.require_subcommand(1);
+    try
+    {
+        app.parse(argc, argv);
+    }
+    catch (const CLI::ParseError &e)
+    {
+        return app.exit(e);
+    }
+    catch (const rastercheck::Error &e)
+    {
+        std::cerr << "rastercheck: error: " << e.what() << '\n';
+        return 1;
+    }
+    return 0;
+}

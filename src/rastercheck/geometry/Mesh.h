@@ -1,0 +1,40 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "rastercheck/geometry/Aabb.h"
+
+namespace rastercheck
+{
+/** \brief A triangle mesh as flat arrays: vertices (metres, in the mesh's own frame) and triangles
+    as three vertex indices each, counter-clockwise seen from outside for a closed, consistently
+    oriented mesh. The layout maps one to one onto device buffers. */
+struct Mesh
+{
+    using Triangle = std::array<std::uint32_t, 3>;
+
+    std::vector<Eigen::Vector3d> vertices;
+    std::vector<Triangle> triangles;
+
+    std::size_t numVertices() const { return vertices.size(); }
+    std::size_t numTriangles() const { return triangles.size(); }
+    bool empty() const { return triangles.empty(); }
+
+    /** \brief Axis-aligned bounds of the vertices used by triangles (empty box for an empty mesh). */
+    Aabb bounds() const;
+
+    /** \brief Applies \a transform to every vertex. */
+    void transform(const Eigen::Isometry3d &transform);
+
+    /** \brief Scales every vertex coordinate-wise (URDF mesh `scale`). A negative number of negative
+        factors mirrors the mesh, so triangle orientation is flipped to stay outward. */
+    void scale(const Eigen::Vector3d &factors);
+
+    /** \brief Appends \a other, optionally placed by \a transform. */
+    void append(const Mesh &other, const Eigen::Isometry3d &transform = Eigen::Isometry3d::Identity());
+};
+}  // namespace rastercheck

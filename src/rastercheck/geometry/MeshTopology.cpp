@@ -1,0 +1,162 @@
+#include "rastercheck/geometry/MeshTopology.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+namespace rastercheck
+{
+std::string MeshTopology::summary() const
+{
+    if (closed)
+        return "closed";
+    std::string text = "open (";
+    std::string separator;
+    auto add = [&](std::size_t count, const char *what) {
+        if (count == 0)
+            return;
+        text += separator + std::to_string(count) + " " + what;
+        separator = ", ";
+    };
+    add(boundaryEdges, "boundary edges");
+    add(nonManifoldEdges, "non-manifold edges");
+    add(misorientedEdges, "misoriented edges");
+    if (separator.empty())
+        text += "no triangles";
+    return text + ")";
+}
+
+double signedVolume(const Mesh &mesh)
+{
+    double volume = 0.0;
+    for (const Mesh::Triangle &t : mesh.triangles)
+        volume += mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]]));
+    return volume / 6.0;
+}
+
+namespace
+{
+// Welds vertices that fall into the same cell of a grid of size `tolerance`, or a neighbouring
+// cell with a distance below it. Returns the old-to-new index map.
+std::vector<std::uint32_t> weldVertices(Mesh &mesh, double tolerance, std::size_t &merged)
+{
+    struct CellHash
+    {
+        std::size_t operator()(const std::array<std::int64_t, 3> &c) const
+        {
+            return static_cast<std::size_t>(c[0] * 73856093) ^ static_cast<std::size_t>(c[1] * 19349663) ^
+                   static_cast<std::size_t>(c[2] * 83492791);
+        }
+    };
+    const double cell = tolerance > 0 ? tolerance : 1e-12;
+    std::unordered_map<std::array<std::int64_t, 3>, std::vector<std::uint32_t>, CellHash> grid;
+    std::vector<Eigen::Vector3d> welded;
+    std::vector<std::uint32_t> remap(mesh.vertices.size());
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    {
+        const Eigen::Vector3d &v = mesh.vertices[i];
+        const std::array<std::int64_t, 3> key{static_cast<std::int64_t>(std::floor(v.x() / cell)),
+                                              static_cast<std::int64_t>(std::floor(v.y() / cell)),
+                                              static_cast<std::int64_t>(std::floor(v.z() / cell))};
+        long found = -1;
+        for (int dx = -1; dx <= 1 && found < 0; ++dx)
+            for (int dy = -1; dy <= 1 && found < 0; ++dy)
+                for (int dz = -1; dz <= 1 && found < 0; ++dz)
+                {
+                    auto it = grid.find({key[0] + dx, key[1] + dy, key[2] + dz});
+                    if (it == grid.end())
+                        continue;
+                    for (std::uint32_t candidate : it->second)
+                        if ((welded[candidate] - v).norm() <= tolerance)
+                        {
+                            found = candidate;
+                            break;
+                        }
+                }
+        if (found >= 0)
+        {
+            remap[i] = static_cast<std::uint32_t>(found);
+            ++merged;
+            continue;
+        }
+        remap[i] = static_cast<std::uint32_t>(welded.size());
+        grid[key].push_back(remap[i]);
+        welded.push_back(v);
+    }
+    mesh.vertices = std::move(welded);
+    return remap;
+}
+}  // namespace
+
+MeshTopology cleanMesh(Mesh &mesh, double weldTolerance)
+{
+    MeshTopology topology;
+    const std::vector<std::uint32_t> remap = weldVertices(mesh, weldTolerance, topology.mergedVertices);
+
+    // Drop degenerate triangles and duplicate faces (same vertex set, either orientation).
+    std::vector<Mesh::Triangle> kept;
+    kept.reserve(mesh.triangles.size());
+    std::map<std::array<std::uint32_t, 3>, std::size_t> seen;
+    for (const Mesh::Triangle &original : mesh.triangles)
+    {
+        const Mesh::Triangle t{remap[original[0]], remap[original[1]], remap[original[2]]};
+        const Eigen::Vector3d &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || (b - a).cross(c - a).squaredNorm() == 0.0)
+        {
+            ++topology.degenerateTriangles;
+            continue;
+        }
+        std::array<std::uint32_t, 3> key = t;
+        std::sort(key.begin(), key.end());
+        if (!seen.emplace(key, kept.size()).second)
+        {
+            ++topology.removedDuplicateFaces;
+            continue;
+        }
+        kept.push_back(t);
+    }
+    mesh.triangles = std::move(kept);
+
+    // Edge use: each undirected edge should be used twice, once in each direction.
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<int, int>> edges;  // (forward, backward) uses
+    for (const Mesh::Triangle &t : mesh.triangles)
+        for (int k = 0; k < 3; ++k)
+        {
+            const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+            auto &use = edges[{std::min(a, b), std::max(a, b)}];
+            (a < b ? use.first : use.second) += 1;
+        }
+    for (const auto &[edge, use] : edges)
+    {
+        const int total = use.first + use.second;
+        if (total == 1)
+            ++topology.boundaryEdges;
+        else if (total > 2)
+            ++topology.nonManifoldEdges;
+        else if (use.first != 1)
+            ++topology.misorientedEdges;
+    }
+    topology.closed = !mesh.triangles.empty() && topology.boundaryEdges == 0 && topology.nonManifoldEdges == 0 &&
+                      topology.misorientedEdges == 0;
+    if (topology.closed && signedVolume(mesh) < 0)
+        for (Mesh::Triangle &t : mesh.triangles)
+            std::swap(t[1], t[2]);
+
+    // Drop vertices no triangle uses, so bounds and vertex tests see only the surface.
+    std::vector<std::int64_t> used(mesh.vertices.size(), -1);
+    std::vector<Eigen::Vector3d> compact;
+    for (Mesh::Triangle &t : mesh.triangles)
+        for (std::uint32_t &i : t)
+        {
+            if (used[i] < 0)
+            {
+                used[i] = static_cast<std::int64_t>(compact.size());
+                compact.push_back(mesh.vertices[i]);
+            }
+            i = static_cast<std::uint32_t>(used[i]);
+        }
+    mesh.vertices = std::move(compact);
+    return topology;
+}
+}  // namespace rastercheck

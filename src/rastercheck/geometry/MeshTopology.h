@@ -1,0 +1,36 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "rastercheck/geometry/Mesh.h"
+
+namespace rastercheck
+{
+/** \brief What the load-time mesh check found. The parity test of the raster pipeline needs a
+    closed, consistently oriented surface; an open mesh is checked by the exact narrow phase. */
+struct MeshTopology
+{
+    bool closed = false;                  ///< every edge shared by exactly two triangles, consistently oriented
+    std::size_t boundaryEdges = 0;        ///< edges used by one triangle (holes)
+    std::size_t nonManifoldEdges = 0;     ///< edges used by more than two triangles
+    std::size_t misorientedEdges = 0;     ///< edges whose two triangles traverse it in the same direction
+    std::size_t degenerateTriangles = 0;  ///< removed: zero area or repeated vertex
+    std::size_t mergedVertices = 0;       ///< coincident vertices welded
+    std::size_t removedDuplicateFaces = 0;  ///< double-sided copies (front and back) removed
+
+    /** \brief One line for `rastercheck info` and warnings, e.g. "closed" or
+        "open (12 boundary edges, 2 non-manifold)". */
+    std::string summary() const;
+};
+
+/** \brief Cleans \a mesh in place and reports its topology: welds vertices closer than
+    \a weldTolerance (metres), drops degenerate triangles, removes duplicate faces (the same three
+    vertices, either orientation: SketchUp COLLADA stores every face front and back, which would
+    toggle parity twice), then checks closedness and orientation. When the mesh is closed but
+    oriented inward (negative signed volume), its triangles are flipped so normals point out. */
+MeshTopology cleanMesh(Mesh &mesh, double weldTolerance = 1e-9);
+
+/** \brief Signed volume (positive for outward-oriented closed meshes). */
+double signedVolume(const Mesh &mesh);
+}  // namespace rastercheck

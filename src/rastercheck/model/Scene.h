@@ -1,0 +1,40 @@
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rastercheck/geometry/Aabb.h"
+#include "rastercheck/geometry/Mesh.h"
+#include "rastercheck/geometry/MeshTopology.h"
+
+namespace rastercheck
+{
+/** \brief One Party-2 object: a static triangle mesh in the world frame. */
+struct SceneObject
+{
+    std::string name;
+    Mesh mesh;  ///< world frame, metres (or model units for OMPL.app problems)
+    MeshTopology topology;
+    Aabb bounds;  ///< world frame
+};
+
+/** \brief The environment (Party-2): immutable once built, shared as SceneConstPtr. */
+class Scene
+{
+public:
+    std::vector<SceneObject> objects;
+
+    /** \brief Adds an object: cleans its mesh (cleanMesh), computes bounds. Empty meshes are skipped
+        with a warning naming \a name (an empty object can never collide). */
+    void addObject(std::string name, Mesh worldMesh);
+
+    std::size_t numObjects() const { return objects.size(); }
+    std::size_t numTriangles() const;
+    Aabb bounds() const;
+    int objectIndex(const std::string &objectName) const;
+};
+
+using ScenePtr = std::shared_ptr<Scene>;
+using SceneConstPtr = std::shared_ptr<const Scene>;
+}  // namespace rastercheck

@@ -1,0 +1,30 @@
+#pragma once
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "rastercheck/io/DataPath.h"
+
+namespace rastercheck::test
+{
+/** \brief The shared data root (RASTERCHECK_DATA, else ../shared/data beside the source tree), or ""
+    when absent. */
+inline std::string sharedData() { return dataRoot(RASTERCHECK_DEFAULT_DATA); }
+
+/** \brief Path of a file inside the source tree. */
+inline std::string sourcePath(const std::string &relative) { return std::string(RASTERCHECK_SOURCE_DIR) + "/" + relative; }
+
+/** \brief A fresh temporary directory for one test (removed at exit of the process is not
+    guaranteed; it lives under the system temp folder). */
+std::string makeTempDir(const std::string &tag);
+
+/** \brief Writes \a text to \a path (creating it) and returns the path. */
+std::string writeFile(const std::string &path, const std::string &text);
+}  // namespace rastercheck::test
+
+/** \brief Skips the current test with a clear message when the shared data is absent. */
+#define RASTERCHECK_REQUIRE_DATA(root)                                                                        \
+    const std::string root = ::rastercheck::test::sharedData();                                               \
+    if (root.empty())                                                                                         \
+    GTEST_SKIP() << "shared data not found: set RASTERCHECK_DATA or place ../shared/data beside the checkout"

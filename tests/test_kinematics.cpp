@@ -1,0 +1,115 @@
+// Forward kinematics against poses computed by hand, mimic joints, and the model's derived layout.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "rastercheck/core/Error.h"
+#include "rastercheck/model/Kinematics.h"
+
+namespace rc = rastercheck;
+
+namespace
+{
+rc::Joint oneCoordinateJoint(const std::string &name, rc::JointKind kind, int parent, int child,
+                             const Eigen::Vector3d &offset, const Eigen::Vector3d &axis, double lo, double hi)
+{
+    rc::Joint joint;
+    joint.name = name;
+    joint.kind = kind;
+    joint.parentLink = parent;
+    joint.childLink = child;
+    joint.origin.translation() = offset;
+    joint.axis = axis;
+    joint.coordinateNames = {name};
+    joint.lower = {lo};
+    joint.upper = {hi};
+    return joint;
+}
+
+// base --(revolute z at (0,0,1))--> upper --(prismatic x at (2,0,0))--> fore
+//                                         \--(mimic of slide, x2, +0.1)--> twin
+rc::RobotModel planarArm()
+{
+    rc::RobotModel model;
+    model.name = "arm";
+    model.links = {{"base", -1, -1}, {"upper", -1, -1}, {"fore", -1, -1}, {"twin", -1, -1}};
+    model.joints.push_back(oneCoordinateJoint("swing", rc::JointKind::Revolute, 0, 1, {0, 0, 1}, {0, 0, 1}, -3, 3));
+    model.joints.push_back(oneCoordinateJoint("slide", rc::JointKind::Prismatic, 1, 2, {2, 0, 0}, {1, 0, 0}, 0, 1));
+    rc::Joint twin = oneCoordinateJoint("twin_slide", rc::JointKind::Prismatic, 1, 3, {0, 1, 0}, {1, 0, 0}, 0, 1);
+    twin.mimicOf = 1;
+    twin.mimicMultiplier = 2.0;
+    twin.mimicOffset = 0.1;
+    twin.coordinateNames.clear();
+    twin.lower.clear();
+    twin.upper.clear();
+    model.joints.push_back(twin);
+    model.finalize();
+    return model;
+}
+}  // namespace
+
+TEST(Kinematics, RevoluteAndPrismaticMatchHandComputedPoses)
+{
+    const rc::RobotModel model = planarArm();
+    ASSERT_EQ(model.numCoordinates(), 2u);
+    EXPECT_EQ(model.coordinateNames[0], "swing");
+    EXPECT_EQ(model.coordinateNames[1], "slide");
+    rc::RobotData data(model);
+    rc::forwardKinematics(model, data, std::vector<double>{M_PI / 2, 0.5});
+
+    const int upper = model.linkIndex("upper"), fore = model.linkIndex("fore");
+    // Swing by 90 degrees about z: upper's x axis points along world y.
+    EXPECT_TRUE(data.oMl[upper].translation().isApprox(Eigen::Vector3d(0, 0, 1)));
+    EXPECT_TRUE(data.oMl[upper].linear().col(0).isApprox(Eigen::Vector3d(0, 1, 0)));
+    // The fore link sits 2 m along upper's x plus the 0.5 m slide: world (0, 2.5, 1).
+    EXPECT_TRUE(data.oMl[fore].translation().isApprox(Eigen::Vector3d(0, 2.5, 1), 1e-12));
+}
+
+TEST(Kinematics, MimicJointFollowsItsSource)
+{
+    const rc::RobotModel model = planarArm();
+    rc::RobotData data(model);
+    rc::forwardKinematics(model, data, std::vector<double>{0.0, 0.3});
+    const int twin = model.linkIndex("twin");
+    // twin = 2 * 0.3 + 0.1 = 0.7 along x from (0, 1, 1).
+    EXPECT_TRUE(data.oMl[twin].translation().isApprox(Eigen::Vector3d(0.7, 1, 1), 1e-12));
+    EXPECT_EQ(model.activeJointNames(), (std::vector<std::string>{"swing", "slide"}));
+}
+
+TEST(Kinematics, FloatingJointTakesPositionAndQuaternion)
+{
+    rc::RobotModel model;
+    model.name = "body";
+    model.links = {{"world", -1, -1}, {"body", -1, -1}};
+    rc::Joint joint;
+    joint.name = "free";
+    joint.kind = rc::JointKind::Floating;
+    joint.parentLink = 0;
+    joint.childLink = 1;
+    joint.coordinateNames = {"x", "y", "z", "qx", "qy", "qz", "qw"};
+    joint.lower = {-10, -10, -10, -1, -1, -1, -1};
+    joint.upper = {10, 10, 10, 1, 1, 1, 1};
+    model.joints = {joint};
+    model.finalize();
+    rc::RobotData data(model);
+    // 90 degrees about x: (qx, qw) = (sin 45, cos 45).
+    const double h = std::sqrt(0.5);
+    rc::forwardKinematics(model, data, std::vector<double>{1, 2, 3, h, 0, 0, h});
+    EXPECT_TRUE(data.oMl[1].translation().isApprox(Eigen::Vector3d(1, 2, 3)));
+    EXPECT_TRUE((data.oMl[1].linear() * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
+}
+
+TEST(Kinematics, FinalizeRejectsInvertedBoundsAndCycles)
+{
+    rc::RobotModel model = planarArm();
+    model.joints[0].lower = {1.0};
+    model.joints[0].upper = {-1.0};
+    EXPECT_THROW(model.finalize(), rc::ConfigurationError);
+
+    rc::RobotModel cyclic;
+    cyclic.name = "cyclic";
+    cyclic.links = {{"a", -1, -1}, {"b", -1, -1}};
+    cyclic.joints = {oneCoordinateJoint("ab", rc::JointKind::Revolute, 0, 1, {0, 0, 0}, {0, 0, 1}, -1, 1),
+                     oneCoordinateJoint("ba", rc::JointKind::Revolute, 1, 0, {0, 0, 0}, {0, 0, 1}, -1, 1)};
+    EXPECT_THROW(cyclic.finalize(), rc::ConfigurationError);
+}
