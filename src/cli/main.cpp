@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "Commands.h"
 #include "rastercheck/BuildConfig.h"
 #include "rastercheck/core/Error.h"
 
@@ -10,6 +11,7 @@ int main(int argc, char **argv)
 {
     CLI::App app{"rastercheck: batched collision checking for motion planning (version " RASTERCHECK_VERSION ")"};
     app.require_subcommand(1);
+    rastercheck::cli::addCheckCommand(app);
     try
     {
         app.parse(argc, argv);
@@ -17,6 +19,10 @@ int main(int argc, char **argv)
     catch (const CLI::ParseError &e)
     {
         return app.exit(e);
+    }
+    catch (const rastercheck::cli::CommandResult &result)
+    {
+        return result.status;
     }
     catch (const rastercheck::Error &e)
     {

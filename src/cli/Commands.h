@@ -1,0 +1,34 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "rastercheck/io/Problem.h"
+
+namespace rastercheck::cli
+{
+/** \brief Thrown by a subcommand's callback to end the program with this exit status. */
+struct CommandResult
+{
+    int status;
+};
+
+/** \brief The PROBLEM arguments every subcommand shares: an OMPL.app .cfg (positional), or
+    --robot URDF [--srdf F] [--scene F] [--package-path P]... [--visual-fallback]. */
+struct ProblemArguments
+{
+    std::string cfgPath;
+    std::string urdfPath;
+    std::string srdfPath;
+    std::string scenePath;
+    std::vector<std::string> packagePaths;
+    bool visualFallback = false;
+
+    void addTo(CLI::App &command);
+    ProblemSource source() const;
+};
+
+void addCheckCommand(CLI::App &app);
+}  // namespace rastercheck::cli

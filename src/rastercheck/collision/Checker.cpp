@@ -1,0 +1,73 @@
+#include "rastercheck/collision/Checker.h"
+
+#include <sstream>
+
+#include "rastercheck/collision/CpuBackend.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/core/Log.h"
+
+namespace rastercheck
+{
+BackendChoice parseBackendChoice(const std::string &text)
+{
+    if (text == "auto")
+        return BackendChoice::Auto;
+    if (text == "cpu")
+        return BackendChoice::Cpu;
+    if (text == "cuda")
+        return BackendChoice::Cuda;
+    throw ConfigurationError("unknown backend '" + text + "' (expected auto, cpu or cuda)");
+}
+
+Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOptions &options)
+  : model_(std::make_shared<const CollisionModel>(std::move(robot), std::move(scene))), threads_(options.threads)
+{
+    if (options.threads < 0)
+        throw ConfigurationError("CheckerOptions::threads must be >= 0 (0 = all cores)");
+    if (options.backend == BackendChoice::Cuda)
+        logWarning("the CUDA backend is not compiled into this build; using the CPU backend");
+    backend_ = std::make_unique<CpuBackend>(model_);
+}
+
+Checker::~Checker() = default;
+
+void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request,
+                    Contact *contacts) const
+{
+    backend_->check(q, n, valid, contacts, request, threads_);
+}
+
+bool Checker::isValid(const double *q, const CollisionRequest &request, Contact *contact) const
+{
+    std::uint8_t valid = 0;
+    backend_->check(q, 1, &valid, contact, request, 1);
+    return valid != 0;
+}
+
+std::string Checker::describe(const Contact &contact) const
+{
+    std::ostringstream text;
+    const RobotModel &robot = *model_->robot;
+    auto componentName = [&](int c) { return c >= 0 ? robot.components[c].name : std::string("?"); };
+    switch (contact.kind)
+    {
+        case Contact::Kind::None:
+            return "valid";
+        case Contact::Kind::OutOfBounds:
+            return "out of bounds or not finite";
+        case Contact::Kind::Environment:
+            text << componentName(contact.component) << " vs object '"
+                 << (contact.object >= 0 ? model_->scene->objects[contact.object].name : std::string("?")) << "'";
+            break;
+        case Contact::Kind::SelfCollision:
+            text << componentName(contact.component) << " vs " << componentName(contact.otherComponent);
+            break;
+    }
+    if (contact.triangle >= 0)
+        text << " triangle " << contact.triangle;
+    else
+        text << " (containment)";
+    text << " at (" << contact.position.x() << ", " << contact.position.y() << ", " << contact.position.z() << ")";
+    return text.str();
+}
+}  // namespace rastercheck

@@ -1,0 +1,71 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rastercheck/collision/Backend.h"
+#include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/collision/CollisionRequest.h"
+
+namespace rastercheck
+{
+/** \brief Which backend runs the pipeline; chosen once at construction, never mid-planning. */
+enum class BackendChoice
+{
+    Auto,  ///< CUDA when compiled in and a device is usable, else CPU (with a one-line notice)
+    Cpu,
+    Cuda  ///< like Auto, but warns when it has to fall back to the CPU
+};
+
+/** \brief "auto", "cpu" or "cuda"; throws ConfigurationError otherwise. */
+BackendChoice parseBackendChoice(const std::string &text);
+
+struct CheckerOptions
+{
+    BackendChoice backend = BackendChoice::Auto;
+    /** \brief Worker threads of batch calls on the CPU backend; 0 = all cores. */
+    int threads = 0;
+};
+
+/** \brief Decides whether robot configurations collide with the scene or themselves, one state or
+    a batch at a time. Immutable after construction; every method is thread-safe (each call uses
+    its own pooled scratch). */
+class Checker
+{
+public:
+    Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOptions &options = {});
+    ~Checker();
+
+    /** \brief Decides \a n states. \a q: n x dof values in the robot's coordinate order (row-major).
+        \a valid[i] = 1 when state i is valid. \a contacts (optional, n entries) receives each
+        invalid state's first contact. Never throws for bad states: they are invalid. */
+    void check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request = {},
+               Contact *contacts = nullptr) const;
+
+    /** \brief One state. */
+    bool isValid(const double *q, const CollisionRequest &request = {}, Contact *contact = nullptr) const;
+    bool isValid(const std::vector<double> &q, const CollisionRequest &request = {}, Contact *contact = nullptr) const
+    {
+        return isValid(q.data(), request, contact);
+    }
+
+    /** \brief "cpu" or "cuda (<device>)". */
+    std::string backendName() const { return backend_->name(); }
+    const CollisionModel &collisionModel() const { return *model_; }
+    const RobotModel &robot() const { return *model_->robot; }
+    const Scene &scene() const { return *model_->scene; }
+    std::size_t dof() const { return model_->robot->numCoordinates(); }
+
+    /** \brief Human-readable description of a contact: "panda_link5 vs object 'box_3' triangle 7 at
+        (0.41, 0.02, 0.33)". */
+    std::string describe(const Contact &contact) const;
+
+private:
+    CollisionModelConstPtr model_;
+    std::unique_ptr<Backend> backend_;
+    int threads_;
+};
+}  // namespace rastercheck

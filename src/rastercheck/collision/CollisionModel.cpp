@@ -1,0 +1,122 @@
+#include "rastercheck/collision/CollisionModel.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rastercheck/core/Error.h"
+
+namespace rastercheck
+{
+namespace
+{
+CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, std::vector<float> &vertices,
+                                     std::vector<std::uint32_t> &triangles)
+{
+    CollisionModel::MeshSlice slice{static_cast<std::uint32_t>(vertices.size() / 3),
+                                    static_cast<std::uint32_t>(mesh.numVertices()),
+                                    static_cast<std::uint32_t>(triangles.size() / 3),
+                                    static_cast<std::uint32_t>(mesh.numTriangles()), closed};
+    for (const Eigen::Vector3d &v : mesh.vertices)
+        for (int k = 0; k < 3; ++k)
+            vertices.push_back(static_cast<float>(v[k]));
+    for (const Mesh::Triangle &t : mesh.triangles)
+        triangles.insert(triangles.end(), t.begin(), t.end());
+    return slice;
+}
+
+device::OrientedBox toDeviceBox(const Obb &box)
+{
+    device::OrientedBox b;
+    for (int r = 0; r < 3; ++r)
+    {
+        b.center[r] = static_cast<float>(box.center[r]);
+        b.half[r] = static_cast<float>(box.halfExtents[r]);
+        for (int c = 0; c < 3; ++c)
+            b.axes[3 * r + c] = static_cast<float>(box.axes(r, c));
+    }
+    return b;
+}
+}  // namespace
+
+CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr sceneModel)
+  : robot(std::move(robotModel)), scene(std::move(sceneModel))
+{
+    if (!robot)
+        throw ConfigurationError("CollisionModel needs a robot model");
+    if (!scene)
+        scene = std::make_shared<Scene>();
+
+    std::vector<double> diagonals;
+    for (const Component &component : robot->components)
+    {
+        components.push_back(appendMesh(component.mesh, component.topology.closed, componentVertices, componentTriangles));
+        // Float rounding of the transformed box must not cut off geometry: grow by a relative 1e-5.
+        Obb box = component.localObb;
+        box.halfExtents.array() += 1e-5 * box.halfExtents.norm() + 1e-9;
+        componentLocalBoxes.push_back(toDeviceBox(box));
+        componentLink.push_back(component.link);
+        componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh));
+        diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
+    }
+    componentSubtreeEnd = robot->componentSubtreeEnd;
+
+    for (const SceneObject &object : scene->objects)
+    {
+        objects.push_back(appendMesh(object.mesh, object.topology.closed, objectVertices, objectTriangles));
+        const Aabb grown = object.bounds.inflated(1e-5 * (object.bounds.max - object.bounds.min).norm() + 1e-9);
+        device::Box box;
+        for (int k = 0; k < 3; ++k)
+        {
+            box.min[k] = static_cast<float>(grown.min[k]);
+            box.max[k] = static_cast<float>(grown.max[k]);
+        }
+        objectBoxes.push_back(box);
+        objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh));
+    }
+
+    for (std::size_t a = 0; a < components.size(); ++a)
+        for (std::size_t b = a + 1; b < components.size(); ++b)
+            if (!robot->isCollisionAllowed(static_cast<int>(a), static_cast<int>(b)))
+                selfPairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
+
+    boundedCoordinates.assign(robot->numCoordinates(), 1);
+    for (const Joint &joint : robot->joints)
+    {
+        if (joint.firstCoordinate < 0)
+            continue;
+        if (joint.continuous)
+            boundedCoordinates[joint.firstCoordinate] = 0;
+        if (joint.kind == JointKind::Floating)
+            quaternionStarts.push_back(joint.firstCoordinate + 3);
+    }
+
+    if (!diagonals.empty())
+    {
+        std::nth_element(diagonals.begin(), diagonals.begin() + diagonals.size() / 2, diagonals.end());
+        defaultPixelSize = diagonals[diagonals.size() / 2] / 128.0;
+    }
+    if (!(defaultPixelSize > 0))
+        defaultPixelSize = 1e-3;
+}
+
+bool CollisionModel::configurationAdmissible(const double *q) const
+{
+    const double epsilon = std::numeric_limits<double>::epsilon();
+    for (std::size_t i = 0; i < boundedCoordinates.size(); ++i)
+    {
+        if (!std::isfinite(q[i]))
+            return false;
+        if (boundedCoordinates[i] && (q[i] - epsilon > robot->upperBounds[i] || q[i] + epsilon < robot->lowerBounds[i]))
+            return false;
+    }
+    for (int start : quaternionStarts)
+    {
+        const double norm2 = q[start] * q[start] + q[start + 1] * q[start + 1] + q[start + 2] * q[start + 2] +
+                             q[start + 3] * q[start + 3];
+        if (!(norm2 > 1e-12))
+            return false;
+    }
+    return true;
+}
+}  // namespace rastercheck

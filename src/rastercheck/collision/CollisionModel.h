@@ -1,0 +1,75 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "rastercheck/device/Boxes.h"
+#include "rastercheck/geometry/MeshBvh.h"
+#include "rastercheck/model/RobotModel.h"
+#include "rastercheck/model/Scene.h"
+
+namespace rastercheck
+{
+/** \brief Flat, immutable arrays of one robot and one scene, laid out for the pipeline stages (and
+    uploaded unchanged to a GPU), plus the oracle's BVHs. Built once per checker.
+
+    Shapes are written next to each buffer; "local" means link frame for components and world frame
+    for objects. Triangle indices are local to their mesh's vertex block. */
+class CollisionModel
+{
+public:
+    CollisionModel(RobotModelConstPtr robot, SceneConstPtr scene);
+
+    /** \brief A mesh's slice of the flat buffers. */
+    struct MeshSlice
+    {
+        std::uint32_t firstVertex;
+        std::uint32_t numVertices;
+        std::uint32_t firstTriangle;
+        std::uint32_t numTriangles;
+        bool closed;
+    };
+
+    RobotModelConstPtr robot;
+    SceneConstPtr scene;
+
+    std::vector<float> componentVertices;           // n_component_vertices x 3, link frame
+    std::vector<std::uint32_t> componentTriangles;  // n_component_triangles x 3
+    std::vector<MeshSlice> components;              // n_components
+    std::vector<device::OrientedBox> componentLocalBoxes;  // n_components, link frame
+    std::vector<int> componentLink;                 // n_components
+    std::vector<int> componentSubtreeEnd;           // n_components: layer k spans [k, end)
+
+    std::vector<float> objectVertices;           // n_object_vertices x 3, world frame
+    std::vector<std::uint32_t> objectTriangles;  // n_object_triangles x 3
+    std::vector<MeshSlice> objects;              // n_objects
+    std::vector<device::Box> objectBoxes;        // n_objects, world frame
+
+    /** \brief Component pairs (a < b) checked for self-collision: those the ACM does not allow. */
+    std::vector<std::pair<int, int>> selfPairs;
+
+    std::vector<std::unique_ptr<MeshBvh>> componentBvhs;  // n_components, link frame
+    std::vector<std::unique_ptr<MeshBvh>> objectBvhs;     // n_objects, world frame
+
+    /** \brief Raster pixel side used when a request gives none: 1/128 of the median diagonal of the
+        components' boxes (a few millimetres for an arm), so a typical link spans about a hundred
+        pixels. */
+    double defaultPixelSize = 0.0;
+
+    /** \brief Per coordinate: 1 when bounds apply (continuous joints wrap and have none). */
+    std::vector<std::uint8_t> boundedCoordinates;
+    /** \brief First coordinate of every floating joint's quaternion (qx). */
+    std::vector<int> quaternionStarts;
+
+    /** \brief True when every coordinate is finite, bounded coordinates lie within their bounds
+        (OMPL's tolerance: one double epsilon), and no quaternion is zero. */
+    bool configurationAdmissible(const double *q) const;
+
+    std::size_t numComponents() const { return components.size(); }
+    std::size_t numObjects() const { return objects.size(); }
+};
+
+using CollisionModelConstPtr = std::shared_ptr<const CollisionModel>;
+}  // namespace rastercheck

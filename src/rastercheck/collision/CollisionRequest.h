@@ -1,0 +1,65 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <Eigen/Core>
+
+namespace rastercheck
+{
+/** \brief How a state is decided. Every mode checks bounds, the environment and (unless disabled)
+    self-collision with the allowed-collision matrix, and honours padding exactly. */
+enum class CollisionMode
+{
+    /** \brief Default. The raster pipeline, made safe: a pair whose per-pixel depth ranges are
+        disjoint is proven free, a parity hit is a collision, anything else is decided by the exact
+        narrow phase. Never calls a colliding state valid (up to the float tolerance in DESIGN.md). */
+    Safe,
+    /** \brief The paper's method alone: rays through pixel centres only, so overlaps thinner than a
+        pixel or seen edge-on can be missed (measured in docs/accuracy.md). Pairs of two open meshes
+        and padding still go to the exact narrow phase. */
+    Raster,
+    /** \brief The exact narrow phase (triangle-triangle plus point-in-solid) on every pair that
+        survives the conservative box culls: the oracle. */
+    Exact
+};
+
+std::string toString(CollisionMode mode);
+/** \brief "safe", "raster" or "exact"; throws ConfigurationError otherwise. */
+CollisionMode parseCollisionMode(const std::string &text);
+
+/** \brief What to check and how (Coal/FCL style). */
+struct CollisionRequest
+{
+    CollisionMode mode = CollisionMode::Safe;
+    /** \brief Safety margin (metres, or the scene's units): solids closer than this collide. */
+    double padding = 0.0;
+    /** \brief Raster pixel side (world units); 0 uses CollisionModel::defaultPixelSize. */
+    double pixelSize = 0.0;
+    /** \brief Largest image side per pair; a larger window gets proportionally larger pixels. */
+    int maxImageSide = 256;
+    bool checkEnvironment = true;
+    bool checkSelfCollision = true;
+};
+
+/** \brief Why a state is invalid, and where: the first contact found (deterministic: pairs are
+    visited in a fixed order). */
+struct Contact
+{
+    enum class Kind : std::uint8_t
+    {
+        None,          ///< the state is valid
+        OutOfBounds,   ///< a coordinate is outside the bounds, not finite, or a quaternion is zero
+        Environment,   ///< component vs scene object
+        SelfCollision  ///< component vs component
+    };
+    Kind kind = Kind::None;
+    int component = -1;       ///< Party-1 component index
+    int object = -1;          ///< scene object index (Environment)
+    int otherComponent = -1;  ///< second component (SelfCollision)
+    /** \brief Triangle of the object (or other component) at the contact; -1 when the contact was
+        found by containment (one solid inside the other, surfaces apart). */
+    int triangle = -1;
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< world frame
+};
+}  // namespace rastercheck

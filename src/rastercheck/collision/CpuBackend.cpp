@@ -1,0 +1,396 @@
+#include "rastercheck/collision/CpuBackend.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <omp.h>
+
+#include "rastercheck/device/Raster.h"
+#include "rastercheck/model/Kinematics.h"
+
+namespace rastercheck
+{
+/** \brief Scratch of one thread: every buffer the stages write, sized on first use and reused. */
+struct CpuWorkspace
+{
+    explicit CpuWorkspace(const CollisionModel &model)
+      : data(*model.robot)
+      , componentPose(model.numComponents())
+      , componentExactPose(model.numComponents())
+      , componentBox(model.numComponents())
+      , componentBounds(model.numComponents())
+      , layerBounds(model.numComponents())
+    {
+    }
+
+    RobotData data;
+    std::vector<device::Pose<float>> componentPose;        // n_components
+    std::vector<Eigen::Isometry3d> componentExactPose;     // n_components
+    std::vector<device::OrientedBox> componentBox;         // n_components, world
+    std::vector<device::Box> componentBounds;              // n_components, world
+    std::vector<device::Box> layerBounds;                  // n_components: bounds of layer k's subtree
+
+    std::vector<device::Vec3<float>> worldA, worldB;  // transformed vertices of the pair's solids
+    std::vector<std::uint32_t> candidatesA, candidatesB;
+    std::vector<device::DepthRange> rangesA, rangesB;  // n_pixels
+    std::vector<int> pixelCount;                       // n_pixels
+    std::vector<int> pixelStart;                       // n_pixels + 1
+    std::vector<device::Fragment> fragments;           // total fragments
+};
+
+namespace
+{
+using device::Vec3;
+
+/** \brief One solid of a pair as the stages see it. */
+struct Solid
+{
+    const CollisionModel::MeshSlice *slice;
+    const float *vertices;           // slice's vertices, local frame, x y z
+    const std::uint32_t *triangles;  // slice's triangles
+    const device::Pose<float> *pose;  // null: vertices are already in the world frame
+    device::Box bounds;              // world
+    const MeshBvh *bvh;
+    const Eigen::Isometry3d *exactPose;
+};
+
+const Eigen::Isometry3d &identityPose()
+{
+    static const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    return identity;
+}
+
+// Stage: vertices of a solid in the world frame, and its triangles whose projection meets the
+// image rectangle grown by `margin` (every triangle a ray of the image can cross: parity stays exact).
+const Vec3<float> *worldVertices(const Solid &solid, std::vector<Vec3<float>> &buffer)
+{
+    const Vec3<float> *local = reinterpret_cast<const Vec3<float> *>(solid.vertices);
+    if (!solid.pose)
+        return local;
+    buffer.resize(solid.slice->numVertices);
+    for (std::uint32_t i = 0; i < solid.slice->numVertices; ++i)
+        buffer[i] = device::transformPoint(*solid.pose, local[i]);
+    return buffer.data();
+}
+
+void cullToImage(const Solid &solid, const Vec3<float> *world, const device::RasterGrid &grid, float margin,
+                 std::vector<std::uint32_t> &candidates)
+{
+    const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
+    const float uLo = grid.origin[0] - margin, uHi = grid.origin[0] + grid.width * grid.pixel + margin;
+    const float vLo = grid.origin[1] - margin, vHi = grid.origin[1] + grid.height * grid.pixel + margin;
+    candidates.clear();
+    for (std::uint32_t t = 0; t < solid.slice->numTriangles; ++t)
+    {
+        const std::uint32_t *tri = solid.triangles + 3 * t;
+        const Vec3<float> &a = world[tri[0]], &b = world[tri[1]], &c = world[tri[2]];
+        const float au = device::coordinate(a, u), bu = device::coordinate(b, u), cu = device::coordinate(c, u);
+        const float av = device::coordinate(a, v), bv = device::coordinate(b, v), cv = device::coordinate(c, v);
+        if (fmaxf(au, fmaxf(bu, cu)) < uLo || fminf(au, fminf(bu, cu)) > uHi || fmaxf(av, fmaxf(bv, cv)) < vLo ||
+            fminf(av, fminf(bv, cv)) > vHi)
+            continue;
+        candidates.push_back(t);
+    }
+}
+
+// Stage (safe mode): the separation proof over per-pixel conservative depth ranges.
+bool provenSeparated(const Solid &a, const Vec3<float> *worldA, const std::vector<std::uint32_t> &candidatesA,
+                     const Solid &b, const Vec3<float> *worldB, const std::vector<std::uint32_t> &candidatesB,
+                     const device::RasterGrid &grid, float margin, CpuWorkspace &ws)
+{
+    const std::size_t pixels = static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height);
+    const device::DepthRange empty{std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+    ws.rangesA.assign(pixels, empty);
+    ws.rangesB.assign(pixels, empty);
+    for (std::uint32_t t : candidatesA)
+    {
+        const std::uint32_t *tri = a.triangles + 3 * t;
+        device::coverTriangleRange(grid, worldA[tri[0]], worldA[tri[1]], worldA[tri[2]], margin, ws.rangesA.data());
+    }
+    for (std::uint32_t t : candidatesB)
+    {
+        const std::uint32_t *tri = b.triangles + 3 * t;
+        device::coverTriangleRange(grid, worldB[tri[0]], worldB[tri[1]], worldB[tri[2]], margin, ws.rangesB.data());
+    }
+    for (std::size_t p = 0; p < pixels; ++p)
+    {
+        const device::DepthRange &ra = ws.rangesA[p], &rb = ws.rangesB[p];
+        if (ra.lo <= ra.hi && rb.lo <= rb.hi && ra.lo <= rb.hi && rb.lo <= ra.hi)
+            return false;
+    }
+    return true;
+}
+
+// Stages: pre-rasterization count, scan, rasterization, per-pixel sort, Sort_Search_Pair.
+bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std::uint32_t> &candidatesA,
+               const Solid &b, const Vec3<float> *worldB, const std::vector<std::uint32_t> &candidatesB,
+               const device::RasterGrid &grid, CpuWorkspace &ws, Contact &contact)
+{
+    const int pixels = grid.width * grid.height;
+    ws.pixelCount.assign(static_cast<std::size_t>(pixels), 0);
+    auto forEachTriangle = [&](auto &&emitFor) {
+        for (std::uint32_t t : candidatesA)
+        {
+            const std::uint32_t *tri = a.triangles + 3 * t;
+            device::rasterizeTriangle(grid, worldA[tri[0]], worldA[tri[1]], worldA[tri[2]], emitFor(t));
+        }
+        for (std::uint32_t t : candidatesB)
+        {
+            const std::uint32_t *tri = b.triangles + 3 * t;
+            device::rasterizeTriangle(grid, worldB[tri[0]], worldB[tri[1]], worldB[tri[2]], emitFor(t | device::kPartyB));
+        }
+    };
+    forEachTriangle([&](std::uint32_t) { return [&](int pixel, float) { ++ws.pixelCount[pixel]; }; });
+
+    ws.pixelStart.resize(static_cast<std::size_t>(pixels) + 1);
+    ws.pixelStart[0] = 0;
+    for (int p = 0; p < pixels; ++p)
+        ws.pixelStart[p + 1] = ws.pixelStart[p] + ws.pixelCount[p];
+    ws.fragments.resize(static_cast<std::size_t>(ws.pixelStart[pixels]));
+    std::copy(ws.pixelStart.begin(), ws.pixelStart.end() - 1, ws.pixelCount.begin());  // write cursors
+    forEachTriangle([&](std::uint32_t code) {
+        return [&, code](int pixel, float depth) { ws.fragments[ws.pixelCount[pixel]++] = {depth, code}; };
+    });
+
+    for (int p = 0; p < pixels; ++p)
+    {
+        const int start = ws.pixelStart[p], count = ws.pixelStart[p + 1] - start;
+        if (count < 2)
+            continue;
+        device::Fragment *fragments = ws.fragments.data() + start;
+        device::sortFragments(fragments, count);
+        const int hit = device::sortSearchPair(fragments, count, a.slice->closed, b.slice->closed);
+        if (hit < 0)
+            continue;
+        int objectFragment = hit;
+        while (objectFragment > 0 && !device::isPartyB(fragments[objectFragment]))
+            --objectFragment;
+        contact.triangle = static_cast<int>(device::triangleOf(fragments[objectFragment]));
+        const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
+        contact.position[grid.axis] = fragments[hit].depth;
+        contact.position[u] = grid.origin[0] + (static_cast<float>(p % grid.width) + 0.5f) * grid.pixel;
+        contact.position[v] = grid.origin[1] + (static_cast<float>(p / grid.width) + 0.5f) * grid.pixel;
+        return true;
+    }
+    return false;
+}
+
+bool exactOverlap(const Solid &a, const Solid &b, double padding, Contact &contact)
+{
+    MeshContact meshContact;
+    if (!solidsOverlap(*a.bvh, *a.exactPose, a.slice->closed, *b.bvh, *b.exactPose, b.slice->closed, padding,
+                       &meshContact))
+        return false;
+    contact.triangle = meshContact.triangleB;
+    contact.position = meshContact.position;
+    return true;
+}
+
+/** \brief Decides one pair of solids; fills contact.triangle and contact.position on collision. */
+bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
+                  Contact &contact)
+{
+    const float padding = static_cast<float>(request.padding);
+    device::Box grownA = a.bounds;
+    for (int k = 0; k < 3; ++k)
+    {
+        grownA.min[k] -= padding;
+        grownA.max[k] += padding;
+    }
+    const device::Box window = device::intersection(grownA, b.bounds);
+    if (device::isEmpty(window))
+        return false;
+    const bool rasterUsable = a.slice->closed || b.slice->closed;
+    if (request.mode == CollisionMode::Exact || !rasterUsable)
+        return exactOverlap(a, b, request.padding, contact);
+
+    const device::RasterGrid grid = device::makeGrid(window, static_cast<float>(pixel), request.maxImageSide);
+    // Rounding allowance of the float pipeline: a few ulps of the largest coordinate in play.
+    float magnitude = 0;
+    for (int k = 0; k < 3; ++k)
+        magnitude = fmaxf(magnitude, fmaxf(fabsf(window.min[k]), fabsf(window.max[k])));
+    const float margin = padding + 1e-6f * magnitude + 1e-6f * grid.pixel;
+    const Vec3<float> *worldA = worldVertices(a, ws.worldA);
+    const Vec3<float> *worldB = worldVertices(b, ws.worldB);
+    cullToImage(a, worldA, grid, margin, ws.candidatesA);
+    cullToImage(b, worldB, grid, margin, ws.candidatesB);
+    if (request.mode == CollisionMode::Safe &&
+        provenSeparated(a, worldA, ws.candidatesA, b, worldB, ws.candidatesB, grid, margin, ws))
+        return false;
+    if (rasterHit(a, worldA, ws.candidatesA, b, worldB, ws.candidatesB, grid, ws, contact))
+        return true;
+    if (request.mode == CollisionMode::Raster && request.padding <= 0)
+        return false;
+    return exactOverlap(a, b, request.padding, contact);
+}
+}  // namespace
+
+CpuBackend::CpuBackend(CollisionModelConstPtr model) : model_(std::move(model)) {}
+
+CpuBackend::~CpuBackend() = default;
+
+std::unique_ptr<CpuWorkspace> CpuBackend::makeWorkspace() const { return std::make_unique<CpuWorkspace>(*model_); }
+
+std::unique_ptr<CpuWorkspace> CpuBackend::acquire() const
+{
+    {
+        std::lock_guard<std::mutex> lock(poolMutex_);
+        if (!pool_.empty())
+        {
+            std::unique_ptr<CpuWorkspace> workspace = std::move(pool_.back());
+            pool_.pop_back();
+            return workspace;
+        }
+    }
+    return makeWorkspace();
+}
+
+void CpuBackend::release(std::unique_ptr<CpuWorkspace> workspace) const
+{
+    std::lock_guard<std::mutex> lock(poolMutex_);
+    pool_.push_back(std::move(workspace));
+}
+
+bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut) const
+{
+    const CollisionModel &model = *model_;
+    const RobotModel &robot = *model.robot;
+    Contact contact;
+    auto invalid = [&](Contact::Kind kind) {
+        contact.kind = kind;
+        if (contactOut)
+            *contactOut = contact;
+        return false;
+    };
+
+    if (!model.configurationAdmissible(q))
+        return invalid(Contact::Kind::OutOfBounds);
+
+    // Stage: forward kinematics and the hybrid BVH refit (component OBBs, layer AABBs).
+    forwardKinematics(robot, ws.data, q);
+    const std::size_t m = model.numComponents();
+    for (std::size_t c = 0; c < m; ++c)
+    {
+        ws.componentExactPose[c] = ws.data.oMl[model.componentLink[c]];
+        const device::Pose<double> exact = toDevicePose(ws.componentExactPose[c]);
+        for (int k = 0; k < 12; ++k)
+            ws.componentPose[c].m[k] = static_cast<float>(exact.m[k]);
+        ws.componentBox[c] = device::transformBox(ws.componentPose[c], model.componentLocalBoxes[c]);
+        ws.componentBounds[c] = device::boundsOf(ws.componentBox[c]);
+    }
+    for (std::size_t k = m; k-- > 0;)
+    {
+        ws.layerBounds[k] = ws.componentBounds[k];
+        for (int j = static_cast<int>(k) + 1; j < model.componentSubtreeEnd[k]; ++j)
+            device::extend(ws.layerBounds[k], ws.componentBounds[j]);
+    }
+
+    const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
+    const float padding = static_cast<float>(request.padding);
+    auto componentSolid = [&](std::size_t c) {
+        return Solid{&model.components[c],
+                     model.componentVertices.data() + 3 * model.components[c].firstVertex,
+                     model.componentTriangles.data() + 3 * model.components[c].firstTriangle,
+                     &ws.componentPose[c],
+                     ws.componentBounds[c],
+                     model.componentBvhs[c].get(),
+                     &ws.componentExactPose[c]};
+    };
+
+    // Stage: distance set and the Alg. 1 box culls, then the pair pipeline.
+    if (request.checkEnvironment && model.numObjects() > 0 && m > 0)
+    {
+        device::Box robotBounds = device::emptyBox();
+        for (std::size_t c = 0; c < m; ++c)
+            device::extend(robotBounds, ws.componentBounds[c]);
+        float robotCenter[3], robotRadius = 0;
+        for (int k = 0; k < 3; ++k)
+        {
+            robotCenter[k] = 0.5f * (robotBounds.min[k] + robotBounds.max[k]);
+            const float half = 0.5f * (robotBounds.max[k] - robotBounds.min[k]);
+            robotRadius += half * half;
+        }
+        robotRadius = std::sqrt(robotRadius);
+        for (std::size_t o = 0; o < model.numObjects(); ++o)
+        {
+            const device::Box &objectBox = model.objectBoxes[o];
+            float distance = 0, objectRadius = 0;
+            for (int k = 0; k < 3; ++k)
+            {
+                const float d = 0.5f * (objectBox.min[k] + objectBox.max[k]) - robotCenter[k];
+                const float half = 0.5f * (objectBox.max[k] - objectBox.min[k]);
+                distance += d * d;
+                objectRadius += half * half;
+            }
+            if (std::sqrt(distance) > robotRadius + std::sqrt(objectRadius) + padding)
+                continue;
+            const Solid object{&model.objects[o],
+                               model.objectVertices.data() + 3 * model.objects[o].firstVertex,
+                               model.objectTriangles.data() + 3 * model.objects[o].firstTriangle,
+                               nullptr,
+                               objectBox,
+                               model.objectBvhs[o].get(),
+                               &identityPose()};
+            for (std::size_t k = 0; k < m;)
+            {
+                if (!device::boxesOverlap(ws.layerBounds[k], objectBox, padding))
+                {
+                    k = static_cast<std::size_t>(model.componentSubtreeEnd[k]);
+                    continue;
+                }
+                if (device::orientedBoxOverlapsBox(ws.componentBox[k], objectBox, padding) &&
+                    pairCollides(componentSolid(k), object, request, pixel, ws, contact))
+                {
+                    contact.component = static_cast<int>(k);
+                    contact.object = static_cast<int>(o);
+                    return invalid(Contact::Kind::Environment);
+                }
+                ++k;
+            }
+        }
+    }
+
+    if (request.checkSelfCollision)
+        for (const auto &[a, b] : model.selfPairs)
+        {
+            if (!device::orientedBoxesOverlap(ws.componentBox[a], ws.componentBox[b], padding))
+                continue;
+            if (pairCollides(componentSolid(a), componentSolid(b), request, pixel, ws, contact))
+            {
+                contact.component = a;
+                contact.otherComponent = b;
+                return invalid(Contact::Kind::SelfCollision);
+            }
+        }
+
+    if (contactOut)
+        *contactOut = Contact{};
+    return true;
+}
+
+void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
+                       const CollisionRequest &request, int threads) const
+{
+    const std::size_t dof = model_->robot->numCoordinates();
+    const int workers = threads > 0 ? threads : omp_get_max_threads();
+    if (workers == 1 || n < 2)
+    {
+        std::unique_ptr<CpuWorkspace> ws = acquire();
+        for (std::size_t i = 0; i < n; ++i)
+            valid[i] = isValid(q + i * dof, request, *ws, contacts ? contacts + i : nullptr) ? 1 : 0;
+        release(std::move(ws));
+        return;
+    }
+#pragma omp parallel num_threads(workers)
+    {
+        std::unique_ptr<CpuWorkspace> ws = acquire();
+#pragma omp for schedule(dynamic, 16)
+        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
+            valid[i] = isValid(q + static_cast<std::size_t>(i) * dof, request, *ws, contacts ? contacts + i : nullptr)
+                           ? 1
+                           : 0;
+        release(std::move(ws));
+    }
+}
+}  // namespace rastercheck
