@@ -1,0 +1,73 @@
+#pragma once
+
+#include <chrono>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "rastercheck/io/DataPath.h"
+#include "rastercheck/io/MoveItYaml.h"
+#include "rastercheck/io/SrdfLoader.h"
+#include "rastercheck/io/UrdfLoader.h"
+#include "rastercheck/model/RobotModel.h"
+
+namespace rastercheck::bench
+{
+/** \brief The seven MotionBenchMaker scenarios of the shared data. */
+inline const std::vector<std::string> &mbmScenarios()
+{
+    static const std::vector<std::string> names{"bookshelf_small", "bookshelf_tall", "bookshelf_thin", "box",
+                                                "cage",            "table_pick",     "table_under_pick"};
+    return names;
+}
+
+inline std::string sharedDataOrExit()
+{
+    const std::string root = dataRoot(RASTERCHECK_DEFAULT_DATA);
+    if (root.empty())
+    {
+        std::fprintf(stderr, "shared data not found: set RASTERCHECK_DATA or place ../shared/data beside the checkout\n");
+        std::exit(2);
+    }
+    return root;
+}
+
+/** \brief The MBM robot (URDF + SRDF) of \a robot ("panda", "ur5", "fetch"). */
+inline RobotModelConstPtr loadMbmRobot(const std::string &root, const std::string &robot)
+{
+    RobotModelPtr model = loadUrdf(root + "/mbm/" + robot + "/" + robot + ".urdf");
+    applySrdf(*model, loadSrdf(root + "/mbm/" + robot + "/" + robot + ".srdf"));
+    return model;
+}
+
+inline std::string mbmProblemPath(const std::string &root, const std::string &robot, const std::string &scenario,
+                                  int index, const std::string &kind)
+{
+    char name[32];
+    std::snprintf(name, sizeof name, "%s%04d.yaml", kind.c_str(), index);
+    return root + "/mbm/" + robot + "/problems/" + scenario + "_" + robot + "/" + name;
+}
+
+/** \brief \a n states drawn uniformly within the robot's bounds (fixed seed: every run and every
+    mode sees the same states). */
+inline std::vector<double> uniformStates(const RobotModel &robot, std::size_t n, unsigned seed)
+{
+    std::mt19937_64 rng(seed);
+    std::vector<double> q(n * robot.numCoordinates());
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = 0; k < robot.numCoordinates(); ++k)
+            q[i * robot.numCoordinates() + k] =
+                std::uniform_real_distribution<double>(robot.lowerBounds[k], robot.upperBounds[k])(rng);
+    return q;
+}
+
+/** \brief Wall-clock seconds of \a work. */
+template <class Work>
+double seconds(Work &&work)
+{
+    const auto start = std::chrono::steady_clock::now();
+    work();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace rastercheck::bench

@@ -1,0 +1,163 @@
+#include "Reference.h"
+
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+
+#include "rastercheck/model/Kinematics.h"
+
+namespace rastercheck::test
+{
+bool bruteForceCollides(const CollisionModel &model, const double *q, double padding)
+{
+    if (!model.configurationAdmissible(q))
+        return true;
+    RobotData data(*model.robot);
+    forwardKinematics(*model.robot, data, q);
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    for (std::size_t c = 0; c < model.numComponents(); ++c)
+    {
+        const Eigen::Isometry3d &pose = data.oMl[model.componentLink[c]];
+        for (std::size_t o = 0; o < model.numObjects(); ++o)
+            if (solidsOverlap(*model.componentBvhs[c], pose, model.components[c].closed, *model.objectBvhs[o], identity,
+                              model.objects[o].closed, padding))
+                return true;
+    }
+    for (const auto &[a, b] : model.selfPairs)
+        if (solidsOverlap(*model.componentBvhs[a], data.oMl[model.componentLink[a]], model.components[a].closed,
+                          *model.componentBvhs[b], data.oMl[model.componentLink[b]], model.components[b].closed,
+                          padding))
+            return true;
+    return false;
+}
+
+namespace
+{
+using Model = fcl::BVHModel<fcl::OBBRSSd>;
+
+std::shared_ptr<Model> toFcl(const Mesh &mesh)
+{
+    auto model = std::make_shared<Model>();
+    std::vector<fcl::Vector3d> vertices(mesh.vertices.begin(), mesh.vertices.end());
+    std::vector<fcl::Triangle> triangles;
+    for (const Mesh::Triangle &t : mesh.triangles)
+        triangles.emplace_back(t[0], t[1], t[2]);
+    model->beginModel();
+    model->addSubModel(vertices, triangles);
+    model->endModel();
+    return model;
+}
+
+struct CollideData
+{
+    fcl::CollisionRequestd request;
+    fcl::CollisionResultd result;
+    bool done = false;
+};
+
+bool collideCallback(fcl::CollisionObjectd *a, fcl::CollisionObjectd *b, void *raw)
+{
+    auto *data = static_cast<CollideData *>(raw);
+    if (data->done)
+        return true;
+    fcl::collide(a, b, data->request, data->result);
+    data->done = data->result.isCollision();
+    return data->done;
+}
+
+struct DistanceData
+{
+    double padding;
+    bool done = false;
+};
+
+bool distanceCallback(fcl::CollisionObjectd *a, fcl::CollisionObjectd *b, void *raw, double &distance)
+{
+    auto *data = static_cast<DistanceData *>(raw);
+    fcl::DistanceRequestd request;
+    fcl::DistanceResultd result;
+    fcl::distance(a, b, request, result);
+    distance = result.min_distance;
+    data->done = data->done || result.min_distance <= data->padding;
+    return data->done;
+}
+}  // namespace
+
+struct FclReference::Impl
+{
+    const CollisionModel &model;
+    RobotData data;
+    std::vector<std::unique_ptr<fcl::CollisionObjectd>> components;
+    std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
+    fcl::DynamicAABBTreeCollisionManagerd manager;
+
+    explicit Impl(const CollisionModel &m) : model(m), data(*m.robot)
+    {
+        for (const Component &component : m.robot->components)
+            components.push_back(std::make_unique<fcl::CollisionObjectd>(toFcl(component.mesh)));
+        for (const SceneObject &object : m.scene->objects)
+        {
+            objects.push_back(std::make_unique<fcl::CollisionObjectd>(toFcl(object.mesh)));
+            objects.back()->computeAABB();
+            manager.registerObject(objects.back().get());
+        }
+        manager.setup();
+    }
+};
+
+FclReference::FclReference(const CollisionModel &model) : impl_(std::make_unique<Impl>(model)) {}
+
+FclReference::~FclReference() = default;
+
+bool FclReference::collides(const double *q, double padding)
+{
+    const CollisionModel &model = impl_->model;
+    if (!model.configurationAdmissible(q))
+        return true;
+    forwardKinematics(*model.robot, impl_->data, q);
+    for (std::size_t c = 0; c < impl_->components.size(); ++c)
+    {
+        const Eigen::Isometry3d &pose = impl_->data.oMl[model.componentLink[c]];
+        impl_->components[c]->setTransform(pose.linear(), pose.translation());
+        impl_->components[c]->computeAABB();
+    }
+    for (auto &component : impl_->components)
+    {
+        if (padding > 0)
+        {
+            DistanceData data{padding};
+            impl_->manager.distance(component.get(), &data, distanceCallback);
+            if (data.done)
+                return true;
+        }
+        else
+        {
+            CollideData data;
+            impl_->manager.collide(component.get(), &data, collideCallback);
+            if (data.done)
+                return true;
+        }
+    }
+    for (const auto &[a, b] : model.selfPairs)
+    {
+        fcl::CollisionObjectd *oa = impl_->components[a].get(), *ob = impl_->components[b].get();
+        if (padding > 0)
+        {
+            fcl::DistanceRequestd request;
+            fcl::DistanceResultd result;
+            fcl::distance(oa, ob, request, result);
+            if (result.min_distance <= padding)
+                return true;
+        }
+        else
+        {
+            fcl::CollisionRequestd request;
+            fcl::CollisionResultd result;
+            if (fcl::collide(oa, ob, request, result) > 0)
+                return true;
+        }
+    }
+    return false;
+}
+}  // namespace rastercheck::test

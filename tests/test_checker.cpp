@@ -1,0 +1,258 @@
+// The collision engine end to end on the CPU backend: known answers, every mode against the exact
+// oracle on the blind-spot suites and the Panda MotionBenchMaker scenes, determinism across threads.
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "BlindSpots.h"
+#include "Reference.h"
+#include "TestSupport.h"
+#include "rastercheck/collision/Checker.h"
+#include "rastercheck/geometry/Primitives.h"
+#include "rastercheck/io/MoveItYaml.h"
+#include "rastercheck/io/SrdfLoader.h"
+#include "rastercheck/io/UrdfLoader.h"
+#include "rastercheck/model/RigidBody.h"
+
+namespace rc = rastercheck;
+
+namespace
+{
+rc::Mesh boxAt(const Eigen::Vector3d &size, const Eigen::Vector3d &center)
+{
+    rc::Mesh mesh = rc::makeBox(size);
+    mesh.transform(Eigen::Isometry3d(Eigen::Translation3d(center)));
+    return mesh;
+}
+
+rc::RobotModelConstPtr cubeRobot(double side)
+{
+    rc::Aabb bounds;
+    bounds.min = Eigen::Vector3d::Constant(-5);
+    bounds.max = Eigen::Vector3d::Constant(5);
+    return rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(side)), bounds);
+}
+
+// A unit-ish table (object 0) and a post (object 1).
+rc::SceneConstPtr tableScene()
+{
+    auto scene = std::make_shared<rc::Scene>();
+    scene->addObject("table", boxAt({1.0, 1.0, 0.1}, {0, 0, -0.05}));
+    scene->addObject("post", boxAt({0.1, 0.1, 1.0}, {2.0, 0, 0.5}));
+    return scene;
+}
+
+std::vector<double> at(double x, double y, double z) { return {x, y, z, 0, 0, 0, 1}; }
+
+const rc::CollisionMode kModes[] = {rc::CollisionMode::Safe, rc::CollisionMode::Raster, rc::CollisionMode::Exact};
+}  // namespace
+
+TEST(Checker, KnownAnswersInEveryMode)
+{
+    const rc::Checker checker(cubeRobot(0.2), tableScene());
+    for (rc::CollisionMode mode : kModes)
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        rc::Contact contact;
+        // Resting 5 cm into the table top: collision with object 0 near z = 0.
+        EXPECT_FALSE(checker.isValid(at(0.2, 0.1, 0.05), request, &contact)) << rc::toString(mode);
+        EXPECT_EQ(contact.kind, rc::Contact::Kind::Environment);
+        EXPECT_EQ(contact.object, 0);
+        EXPECT_EQ(contact.component, 0);
+        EXPECT_NEAR(contact.position.z(), 0.0, 0.06);
+        EXPECT_NEAR(contact.position.x(), 0.2, 0.11);
+        // 1 cm above the table and far from the post: free.
+        EXPECT_TRUE(checker.isValid(at(0.2, 0.1, 0.11), request, &contact)) << rc::toString(mode);
+        EXPECT_EQ(contact.kind, rc::Contact::Kind::None);
+        // Hitting the post.
+        EXPECT_FALSE(checker.isValid(at(2.1, 0.05, 0.5), request, &contact));
+        EXPECT_EQ(contact.object, 1);
+    }
+}
+
+TEST(Checker, PaddingIsHonouredExactly)
+{
+    const rc::Checker checker(cubeRobot(0.2), tableScene());
+    for (rc::CollisionMode mode : kModes)
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        const std::vector<double> gap1cm = at(0.2, 0.1, 0.11);
+        request.padding = 0.009;
+        EXPECT_TRUE(checker.isValid(gap1cm, request)) << rc::toString(mode);
+        request.padding = 0.011;
+        EXPECT_FALSE(checker.isValid(gap1cm, request)) << rc::toString(mode);
+    }
+}
+
+TEST(Checker, BadStatesAreInvalidNotErrors)
+{
+    const rc::Checker checker(cubeRobot(0.2), tableScene());
+    rc::Contact contact;
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    EXPECT_FALSE(checker.isValid(std::vector<double>{nan, 0, 3, 0, 0, 0, 1}, {}, &contact));
+    EXPECT_EQ(contact.kind, rc::Contact::Kind::OutOfBounds);
+    EXPECT_FALSE(checker.isValid(std::vector<double>{0, inf, 3, 0, 0, 0, 1}));
+    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 6, 0, 0, 0, 1}));  // z above its bound of 5
+    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 0}));  // zero quaternion
+    EXPECT_TRUE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 2}));   // unnormalised: normalised
+}
+
+TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
+{
+    // base (cube at origin) -j1-> middle (small cube, adjacent) -j2-> tip (cube 0.6 along its x).
+    rc::RobotModel model;
+    model.name = "folding";
+    model.links = {{"base", -1, 0}, {"middle", -1, 1}, {"tip", -1, 2}};
+    auto joint = [](const std::string &name, int parent, int child) {
+        rc::Joint j;
+        j.name = name;
+        j.kind = rc::JointKind::Revolute;
+        j.parentLink = parent;
+        j.childLink = child;
+        j.origin.translation() = Eigen::Vector3d(0.3, 0, 0);
+        j.axis = Eigen::Vector3d::UnitZ();
+        j.coordinateNames = {name};
+        j.lower = {-4};
+        j.upper = {4};
+        return j;
+    };
+    model.joints = {joint("j1", 0, 1), joint("j2", 1, 2)};
+    auto component = [](const std::string &name, int link, rc::Mesh mesh) {
+        rc::Component c;
+        c.name = name;
+        c.link = link;
+        c.mesh = std::move(mesh);
+        c.topology = rc::cleanMesh(c.mesh);
+        c.localAabb = c.mesh.bounds();
+        c.localObb = rc::Obb::fit(c.mesh);
+        return c;
+    };
+    model.components = {component("base", 0, boxAt({0.1, 0.1, 0.1}, {0, 0, 0})),
+                        component("middle", 1, boxAt({0.05, 0.05, 0.05}, {0, 0, 0})),
+                        component("tip", 2, boxAt({0.1, 0.1, 0.1}, {0.6, 0, 0}))};
+    model.finalize();
+    auto shared = std::make_shared<rc::RobotModel>(model);
+    for (rc::CollisionMode mode : kModes)
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        const rc::Checker checker(shared, nullptr);
+        rc::Contact contact;
+        EXPECT_TRUE(checker.isValid(std::vector<double>{0.0, 0.0}, request));
+        // Folded back: the tip lands on the base.
+        EXPECT_FALSE(checker.isValid(std::vector<double>{0.0, M_PI}, request, &contact)) << rc::toString(mode);
+        EXPECT_EQ(contact.kind, rc::Contact::Kind::SelfCollision);
+        EXPECT_EQ(model.components[contact.component].name, "base");
+        EXPECT_EQ(model.components[contact.otherComponent].name, "tip");
+        request.checkSelfCollision = false;
+        EXPECT_TRUE(checker.isValid(std::vector<double>{0.0, M_PI}, request));
+    }
+    // Allowing the pair silences it.
+    shared->setCollisionAllowed(0, 2, true);
+    EXPECT_TRUE(rc::Checker(shared, nullptr).isValid(std::vector<double>{0.0, M_PI}));
+}
+
+TEST(Checker, EveryModeAgainstTheOracleOnBlindSpots)
+{
+    for (const rc::test::BlindSpotSuite &suite : rc::test::blindSpotSuites(400))
+    {
+        const rc::Checker checker(suite.robot, suite.scene);
+        const std::size_t n = suite.numStates();
+        std::vector<std::uint8_t> truth(n);
+        std::size_t colliding = 0;
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            truth[i] = rc::test::bruteForceCollides(checker.collisionModel(), suite.states.data() + 7 * i, 0.0) ? 0 : 1;
+            colliding += !truth[i];
+        }
+        // Each suite must really straddle the boundary, or it tests nothing.
+        EXPECT_GT(colliding, n / 10) << suite.name;
+        EXPECT_LT(colliding, n - n / 10) << suite.name;
+        for (rc::CollisionMode mode : kModes)
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            std::vector<std::uint8_t> valid(n);
+            checker.check(suite.states.data(), n, valid.data(), request);
+            std::size_t falseNegatives = 0, falsePositives = 0;
+            for (std::size_t i = 0; i < n; ++i)
+            {
+                falseNegatives += valid[i] && !truth[i];
+                falsePositives += !valid[i] && truth[i];
+            }
+            if (mode != rc::CollisionMode::Raster)
+            {
+                EXPECT_EQ(falseNegatives, 0u) << suite.name << " " << rc::toString(mode);
+                EXPECT_EQ(falsePositives, 0u) << suite.name << " " << rc::toString(mode);
+            }
+            // The paper's method alone is allowed blind spots, but never false alarms.
+            if (mode == rc::CollisionMode::Raster)
+                EXPECT_EQ(falsePositives, 0u) << suite.name;
+        }
+    }
+}
+
+TEST(Checker, SafeModeMatchesTheOracleOnPandaScenes)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    rc::RobotModelPtr panda = rc::loadUrdf(root + "/mbm/panda/panda.urdf");
+    rc::applySrdf(*panda, rc::loadSrdf(root + "/mbm/panda/panda.srdf"));
+    for (const char *scenario : {"bookshelf_small", "bookshelf_tall", "bookshelf_thin", "box", "cage", "table_pick",
+                                 "table_under_pick"})
+    {
+        const rc::SceneConstPtr scene = rc::loadMoveItScene(root + "/mbm/panda/problems/" + scenario +
+                                                            "_panda/scene0001.yaml");
+        const rc::Checker checker(panda, scene);
+        std::mt19937_64 rng(11);
+        const std::size_t n = 150, dof = panda->numCoordinates();
+        std::vector<double> q(n * dof);
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t k = 0; k < dof; ++k)
+                q[i * dof + k] = std::uniform_real_distribution<double>(panda->lowerBounds[k], panda->upperBounds[k])(rng);
+        std::vector<std::uint8_t> valid(n), exact(n);
+        checker.check(q.data(), n, valid.data());
+        rc::CollisionRequest exactRequest;
+        exactRequest.mode = rc::CollisionMode::Exact;
+        checker.check(q.data(), n, exact.data(), exactRequest);
+        rc::test::FclReference fcl(checker.collisionModel());
+        std::size_t colliding = 0;
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            const bool truth = !rc::test::bruteForceCollides(checker.collisionModel(), q.data() + i * dof, 0.0);
+            colliding += !truth;
+            EXPECT_EQ(valid[i] != 0, truth) << scenario << " state " << i;
+            EXPECT_EQ(exact[i] != 0, truth) << scenario << " state " << i;
+            // FCL sees surfaces only: it may miss a buried link, never report a free state as colliding.
+            if (fcl.collides(q.data() + i * dof))
+                EXPECT_FALSE(truth) << scenario << " state " << i;
+        }
+        EXPECT_GT(colliding, 0u) << scenario;
+    }
+}
+
+TEST(Checker, VerdictsAndContactsAreIdenticalAcrossThreadCounts)
+{
+    const rc::test::BlindSpotSuite suite = rc::test::blindSpotSuites(500)[0];
+    std::vector<std::vector<std::uint8_t>> verdicts;
+    std::vector<std::vector<rc::Contact>> contacts;
+    for (int threads : {1, 2, 4})
+    {
+        const rc::Checker checker(suite.robot, suite.scene, rc::CheckerOptions{rc::BackendChoice::Cpu, threads});
+        verdicts.emplace_back(suite.numStates());
+        contacts.emplace_back(suite.numStates());
+        checker.check(suite.states.data(), suite.numStates(), verdicts.back().data(), {}, contacts.back().data());
+    }
+    for (std::size_t t = 1; t < verdicts.size(); ++t)
+    {
+        EXPECT_EQ(verdicts[t], verdicts[0]);
+        for (std::size_t i = 0; i < suite.numStates(); ++i)
+        {
+            EXPECT_EQ(contacts[t][i].triangle, contacts[0][i].triangle);
+            EXPECT_EQ(contacts[t][i].position, contacts[0][i].position);
+        }
+    }
+}
