@@ -22,6 +22,7 @@ import xml.etree.ElementTree as ET
 HERE = os.path.dirname(os.path.abspath(__file__))
 SITES = os.path.dirname(HERE)
 ROBOTS = os.path.dirname(SITES)
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.join(ROBOTS, "crane", "tools"))
 import crane_fk as ck  # noqa: E402
 
