@@ -70,7 +70,7 @@ std::vector<int> crossingsPerPixel(const rd::RasterGrid &grid, const TriangleSou
     std::vector<int> count(static_cast<std::size_t>(grid.width * grid.height), 0);
     for (const auto &t : soup.triangles)
         rd::rasterizeTriangle(grid, soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]],
-                              [&](int pixel, float) { ++count[pixel]; });
+                              [&](int pixel, float, bool) { ++count[pixel]; });
     return count;
 }
 }  // namespace
@@ -124,7 +124,8 @@ TEST(Raster, DepthIsInterpolatedAtPixelCentres)
     // A triangle in the plane z = 0.5 x over the window [0,1]^2 seen along z: depth = 0.5 * u.
     rd::RasterGrid grid{2, {0.0f, 0.0f}, 0.25f, 4, 4};
     int fragments = 0;
-    rd::rasterizeTriangle(grid, V{0, 0, 0}, V{1, 0, 0.5f}, V{0, 1, 0}, [&](int pixel, float depth) {
+    rd::rasterizeTriangle(grid, V{0, 0, 0}, V{1, 0, 0.5f}, V{0, 1, 0}, [&](int pixel, float depth, bool entering) {
+        EXPECT_FALSE(entering);  // counter-clockwise seen from +z: the normal points along the ray
         const float u = (pixel % 4 + 0.5f) * 0.25f;
         EXPECT_NEAR(depth, 0.5f * u, 1e-6f);
         ++fragments;
@@ -137,7 +138,7 @@ TEST(Raster, DepthIsInterpolatedAtPixelCentres)
     std::vector<int> count(16, 0);
     for (const auto &t : {std::array<V, 3>{V{0, 0, 0}, V{1, 0, 0}, V{0, 1, 0}},
                           std::array<V, 3>{V{1, 0, 0}, V{1, 1, 0}, V{0, 1, 0}}})
-        rd::rasterizeTriangle(grid, t[0], t[1], t[2], [&](int pixel, float) { ++count[pixel]; });
+        rd::rasterizeTriangle(grid, t[0], t[1], t[2], [&](int pixel, float, bool) { ++count[pixel]; });
     for (int c : count)
         EXPECT_EQ(c, 1);
 }
@@ -155,22 +156,49 @@ TEST(Raster, GridCoversTheWindowAndCapsItsSide)
 
 TEST(Raster, SortSearchPairFindsOverlapInBothDirections)
 {
-    auto a = [](float d) { return rd::Fragment{d, 1u}; };
-    auto b = [](float d) { return rd::Fragment{d, 2u | rd::kPartyB}; };
+    // Along a ray, a solid's first crossing enters it and the next leaves it.
+    auto a = [](float d, bool in) { return rd::Fragment{d, 1u | (in ? rd::kEntering : 0u)}; };
+    auto b = [](float d, bool in) { return rd::Fragment{d, 2u | rd::kPartyB | (in ? rd::kEntering : 0u)}; };
     // A spans [0, 2], B spans [1, 3]: B's entry at 1 is inside A.
-    std::vector<rd::Fragment> overlap{b(3), a(0), b(1), a(2)};
+    std::vector<rd::Fragment> overlap{b(3, false), a(0, true), b(1, true), a(2, false)};
     rd::sortFragments(overlap.data(), 4);
     EXPECT_EQ(rd::sortSearchPair(overlap.data(), 4, true, true), 1);
     // Disjoint intervals.
-    std::vector<rd::Fragment> apart{a(0), a(1), b(2), b(3)};
+    std::vector<rd::Fragment> apart{a(0, true), a(1, false), b(2, true), b(3, false)};
     EXPECT_EQ(rd::sortSearchPair(apart.data(), 4, true, true), -1);
     // A buried in B: only the symmetric test sees it (A's fragments inside closed B).
-    std::vector<rd::Fragment> buried{b(0), a(1), a(2), b(3)};
+    std::vector<rd::Fragment> buried{b(0, true), a(1, true), a(2, false), b(3, false)};
     EXPECT_EQ(rd::sortSearchPair(buried.data(), 4, true, true), 1);
     EXPECT_EQ(rd::sortSearchPair(buried.data(), 4, true, false), -1);  // B open: its parity means nothing
     // B buried in A: the paper's one-way test suffices.
-    std::vector<rd::Fragment> contains{a(0), b(1), b(2), a(3)};
+    std::vector<rd::Fragment> contains{a(0, true), b(1, true), b(2, false), a(3, false)};
     EXPECT_EQ(rd::sortSearchPair(contains.data(), 4, true, false), 1);
+    // A is two overlapping shells [0, 2] and [1, 3]; B sits in their overlap [1.2, 1.8]. Parity
+    // would say "outside A" there; windings say inside twice.
+    std::vector<rd::Fragment> shells{a(0, true), a(1, true), b(1.2f, true), b(1.8f, false), a(2, false), a(3, false)};
+    EXPECT_EQ(rd::sortSearchPair(shells.data(), 6, true, false), 2);
+}
+
+TEST(Raster, ClosedSphereIsEnteredThenLeftOnEveryRay)
+{
+    const TriangleSoup soup = sphere({0, 0, 0}, 1.0f, 3);
+    const rd::RasterGrid grid = rd::makeGrid(boxAround(soup), 1.0f / 16, 256);
+    std::vector<std::vector<rd::Fragment>> perPixel(static_cast<std::size_t>(grid.width * grid.height));
+    for (const auto &t : soup.triangles)
+        rd::rasterizeTriangle(grid, soup.vertices[t[0]], soup.vertices[t[1]], soup.vertices[t[2]],
+                              [&](int pixel, float depth, bool entering) {
+                                  perPixel[pixel].push_back({depth, entering ? rd::kEntering : 0u});
+                              });
+    for (auto &fragments : perPixel)
+    {
+        rd::sortFragments(fragments.data(), static_cast<int>(fragments.size()));
+        ASSERT_TRUE(fragments.empty() || fragments.size() == 2);
+        if (fragments.size() == 2)
+        {
+            EXPECT_TRUE(rd::isEntering(fragments[0]));
+            EXPECT_FALSE(rd::isEntering(fragments[1]));
+        }
+    }
 }
 
 TEST(Raster, DepthRangesProveSeparationOnlyWhenDisjoint)

@@ -141,7 +141,7 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
             device::rasterizeTriangle(grid, worldB[tri[0]], worldB[tri[1]], worldB[tri[2]], emitFor(t | device::kPartyB));
         }
     };
-    forEachTriangle([&](std::uint32_t) { return [&](int pixel, float) { ++ws.pixelCount[pixel]; }; });
+    forEachTriangle([&](std::uint32_t) { return [&](int pixel, float, bool) { ++ws.pixelCount[pixel]; }; });
 
     ws.pixelStart.resize(static_cast<std::size_t>(pixels) + 1);
     ws.pixelStart[0] = 0;
@@ -150,7 +150,9 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
     ws.fragments.resize(static_cast<std::size_t>(ws.pixelStart[pixels]));
     std::copy(ws.pixelStart.begin(), ws.pixelStart.end() - 1, ws.pixelCount.begin());  // write cursors
     forEachTriangle([&](std::uint32_t code) {
-        return [&, code](int pixel, float depth) { ws.fragments[ws.pixelCount[pixel]++] = {depth, code}; };
+        return [&, code](int pixel, float depth, bool entering) {
+            ws.fragments[ws.pixelCount[pixel]++] = {depth, entering ? code | device::kEntering : code};
+        };
     });
 
     for (int p = 0; p < pixels; ++p)

@@ -32,15 +32,19 @@ constexpr std::int64_t kSubpixel = std::int64_t(1) << kSubpixelBits;
 constexpr std::int64_t kSnapLimit = std::int64_t(1) << 30;
 
 /** \brief One fragment: where a triangle crosses a pixel's ray. \a code is the party bit
-    (kPartyB for the second solid of the pair) or'ed with the triangle's index in its mesh. */
+    (kPartyB for the second solid of the pair), the entering bit (the triangle faces against the
+    ray: the ray enters the solid there) and the triangle's index in its mesh. */
 struct Fragment
 {
     float depth;
     std::uint32_t code;
 };
 constexpr std::uint32_t kPartyB = 0x80000000u;
+constexpr std::uint32_t kEntering = 0x40000000u;
+constexpr std::uint32_t kTriangleMask = 0x3fffffffu;
 RC_HD bool isPartyB(const Fragment &f) { return (f.code & kPartyB) != 0; }
-RC_HD std::uint32_t triangleOf(const Fragment &f) { return f.code & ~kPartyB; }
+RC_HD bool isEntering(const Fragment &f) { return (f.code & kEntering) != 0; }
+RC_HD std::uint32_t triangleOf(const Fragment &f) { return f.code & kTriangleMask; }
 /** \brief Fragments are ordered by depth, ties by code, so the walk is deterministic. */
 RC_HD bool fragmentBefore(const Fragment &a, const Fragment &b)
 {
@@ -116,10 +120,12 @@ RC_HD bool ownsEdge(const SnappedVertex &a, const SnappedVertex &b)
     return dy > 0 || (dy == 0 && dx < 0);
 }
 
-/** \brief Calls emit(pixelIndex, depth) for every pixel centre inside the projection of triangle
-    (p0, p1, p2) (world frame), with the depth along the ray interpolated at the centre. Triangles
-    seen edge-on make no fragments (a ray grazing a face does not cross the surface). Returns the
-    number of fragments. Used twice per triangle: once to count (pre-rasterization), once to write. */
+/** \brief Calls emit(pixelIndex, depth, entering) for every pixel centre inside the projection of
+    triangle (p0, p1, p2) (world frame), with the depth along the ray interpolated at the centre;
+    \a entering is true when the triangle (outward, counter-clockwise) faces against the ray.
+    Triangles seen edge-on make no fragments (a ray grazing a face does not cross the surface).
+    Returns the number of fragments. Used twice per triangle: once to count (pre-rasterization),
+    once to write. */
 template <class Emit>
 RC_HD int rasterizeTriangle(const RasterGrid &grid, const Vec3<float> &p0, const Vec3<float> &p1,
                             const Vec3<float> &p2, Emit &&emit)
@@ -128,6 +134,9 @@ RC_HD int rasterizeTriangle(const RasterGrid &grid, const Vec3<float> &p0, const
     std::int64_t area = edgeFunction(a, b, c.x, c.y);
     if (area == 0)
         return 0;
+    // (u, v, axis) is right-handed: a counter-clockwise projection means the normal points along
+    // the ray, so the ray leaves the solid there.
+    const bool entering = area < 0;
     if (area < 0)
     {
         const SnappedVertex t = b;
@@ -171,7 +180,7 @@ RC_HD int rasterizeTriangle(const RasterGrid &grid, const Vec3<float> &p0, const
             const float depth = (static_cast<float>(w0) * a.depth + static_cast<float>(w1) * b.depth +
                                  static_cast<float>(w2) * c.depth) *
                                 inverseArea;
-            emit(static_cast<int>(j * grid.width + i), depth);
+            emit(static_cast<int>(j * grid.width + i), depth, entering);
             ++count;
         }
     }
@@ -196,24 +205,30 @@ RC_HD void sortFragments(Fragment *fragments, int count)
 }
 
 /** \brief Sort_Search_Pair (Cai et al., Alg. 2), symmetric: walks one pixel's depth-sorted
-    fragments toggling an inside flag per party. A fragment of B met while inside closed A, or a
+    fragments keeping an inside state per party. A fragment of B met while inside closed A, or a
     fragment of A met while inside closed B, means the solids overlap on this ray. Returns the index
-    of that fragment, or -1. An open party's flag means nothing and is not used. */
+    of that fragment, or -1. An open party's state means nothing and is not used.
+
+    The paper toggles a parity flag. We count windings instead (+1 entering, -1 leaving; inside
+    while positive): a component merged from several overlapping closed shells (a link with a
+    cylinder and two spheres) is inside where any shell is, which parity gets wrong where two shells
+    overlap. For a single closed shell the two agree. */
 RC_HD int sortSearchPair(const Fragment *sorted, int count, bool closedA, bool closedB)
 {
-    bool insideA = false, insideB = false;
+    int windingA = 0, windingB = 0;
     for (int k = 0; k < count; ++k)
     {
+        const int step = isEntering(sorted[k]) ? 1 : -1;
         if (isPartyB(sorted[k]))
         {
-            insideB = !insideB;
-            if (closedA && insideA)
+            windingB += step;
+            if (closedA && windingA > 0)
                 return k;
         }
         else
         {
-            insideA = !insideA;
-            if (closedB && insideB)
+            windingA += step;
+            if (closedB && windingB > 0)
                 return k;
         }
     }

@@ -139,9 +139,39 @@ MeshTopology cleanMesh(Mesh &mesh, double weldTolerance)
     }
     topology.closed = !mesh.triangles.empty() && topology.boundaryEdges == 0 && topology.nonManifoldEdges == 0 &&
                       topology.misorientedEdges == 0;
-    if (topology.closed && signedVolume(mesh) < 0)
-        for (Mesh::Triangle &t : mesh.triangles)
-            std::swap(t[1], t[2]);
+
+    // Shells: union-find over vertices joined by triangles.
+    std::vector<std::uint32_t> parent(mesh.vertices.size());
+    for (std::uint32_t i = 0; i < parent.size(); ++i)
+        parent[i] = i;
+    auto root = [&](std::uint32_t i) {
+        while (parent[i] != i)
+            i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (const Mesh::Triangle &t : mesh.triangles)
+        for (int k = 1; k < 3; ++k)
+            parent[root(t[k])] = root(t[0]);
+    std::map<std::uint32_t, std::size_t> shellOfRoot;
+    std::vector<double> shellVolume;
+    std::vector<std::size_t> shellOfTriangle(mesh.triangles.size());
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+    {
+        const Mesh::Triangle &t = mesh.triangles[i];
+        auto [it, added] = shellOfRoot.emplace(root(t[0]), shellVolume.size());
+        if (added)
+        {
+            shellVolume.push_back(0.0);
+            topology.shellSeeds.push_back(t[0]);
+        }
+        shellOfTriangle[i] = it->second;
+        shellVolume[it->second] +=
+            mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]])) / 6.0;
+    }
+    if (topology.closed)
+        for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+            if (shellVolume[shellOfTriangle[i]] < 0)
+                std::swap(mesh.triangles[i][1], mesh.triangles[i][2]);
 
     // Drop vertices no triangle uses, so bounds and vertex tests see only the surface.
     std::vector<std::int64_t> used(mesh.vertices.size(), -1);
@@ -157,6 +187,35 @@ MeshTopology cleanMesh(Mesh &mesh, double weldTolerance)
             i = static_cast<std::uint32_t>(used[i]);
         }
     mesh.vertices = std::move(compact);
+    for (std::uint32_t &seed : topology.shellSeeds)
+        seed = static_cast<std::uint32_t>(used[seed]);
     return topology;
+}
+
+MeshTopology cleanAndMerge(std::vector<Mesh> parts, Mesh &merged, double weldTolerance)
+{
+    MeshTopology total;
+    total.closed = false;
+    bool allClosed = !parts.empty();
+    merged = Mesh{};
+    for (Mesh &part : parts)
+    {
+        const MeshTopology t = cleanMesh(part, weldTolerance);
+        if (part.empty())
+            continue;
+        allClosed = allClosed && t.closed;
+        total.boundaryEdges += t.boundaryEdges;
+        total.nonManifoldEdges += t.nonManifoldEdges;
+        total.misorientedEdges += t.misorientedEdges;
+        total.degenerateTriangles += t.degenerateTriangles;
+        total.mergedVertices += t.mergedVertices;
+        total.removedDuplicateFaces += t.removedDuplicateFaces;
+        const auto offset = static_cast<std::uint32_t>(merged.vertices.size());
+        for (std::uint32_t seed : t.shellSeeds)
+            total.shellSeeds.push_back(seed + offset);
+        merged.append(part);
+    }
+    total.closed = allClosed && !merged.empty();
+    return total;
 }
 }  // namespace rastercheck

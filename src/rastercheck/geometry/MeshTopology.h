@@ -1,7 +1,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "rastercheck/geometry/Mesh.h"
 
@@ -18,6 +20,10 @@ struct MeshTopology
     std::size_t degenerateTriangles = 0;  ///< removed: zero area or repeated vertex
     std::size_t mergedVertices = 0;       ///< coincident vertices welded
     std::size_t removedDuplicateFaces = 0;  ///< double-sided copies (front and back) removed
+    /** \brief One vertex of each connected shell (triangles linked through shared vertices). A solid
+        made of several shells contains a point when any shell does; containment tests need a
+        point of every shell. */
+    std::vector<std::uint32_t> shellSeeds;
 
     /** \brief One line for `rastercheck info` and warnings, e.g. "closed" or
         "open (12 boundary edges, 2 non-manifold)". */
@@ -27,9 +33,14 @@ struct MeshTopology
 /** \brief Cleans \a mesh in place and reports its topology: welds vertices closer than
     \a weldTolerance (metres), drops degenerate triangles, removes duplicate faces (the same three
     vertices, either orientation: SketchUp COLLADA stores every face front and back, which would
-    toggle parity twice), then checks closedness and orientation. When the mesh is closed but
-    oriented inward (negative signed volume), its triangles are flipped so normals point out. */
+    toggle parity twice), then checks closedness and orientation. Each closed shell oriented inward
+    (negative signed volume) is flipped so normals point out. */
 MeshTopology cleanMesh(Mesh &mesh, double weldTolerance = 1e-9);
+
+/** \brief Cleans each part on its own, then concatenates them into \a merged. No welding across
+    parts: two collision elements of a link that touch or overlap stay two closed shells (welding
+    would make their shared edges non-manifold). The result is closed when every part is. */
+MeshTopology cleanAndMerge(std::vector<Mesh> parts, Mesh &merged, double weldTolerance = 1e-9);
 
 /** \brief Signed volume (positive for outward-oriented closed meshes). */
 double signedVolume(const Mesh &mesh);
