@@ -249,7 +249,9 @@ void collectShapes(const Reader &reader, const YAML::Node &object, const char *s
 }
 }  // namespace
 
-ScenePtr loadMoveItSceneString(const std::string &yaml, const std::string &sourceName, double primitiveError)
+namespace
+{
+ScenePtr readScene(const std::string &yaml, const std::string &sourceName, double primitiveError)
 {
     const Reader reader(sourceName);
     const YAML::Node root = reader.parse(yaml);
@@ -298,12 +300,30 @@ ScenePtr loadMoveItSceneString(const std::string &yaml, const std::string &sourc
     return scene;
 }
 
+}  // namespace
+
+// yaml-cpp throws on access that the helpers do not guard (a subscript into a scalar); such input
+// is malformed too, and reported with the position yaml-cpp knows.
+ScenePtr loadMoveItSceneString(const std::string &yaml, const std::string &sourceName, double primitiveError)
+{
+    try
+    {
+        return readScene(yaml, sourceName, primitiveError);
+    }
+    catch (const YAML::Exception &e)
+    {
+        throw InputError(sourceName, "line " + std::to_string(e.mark.line + 1), "unexpected YAML structure: " + e.msg);
+    }
+}
+
 ScenePtr loadMoveItScene(const std::string &path, double primitiveError)
 {
     return loadMoveItSceneString(readFile(path), path, primitiveError);
 }
 
-MotionPlanRequest loadMoveItRequestString(const std::string &yaml, const std::string &sourceName)
+namespace
+{
+MotionPlanRequest readRequest(const std::string &yaml, const std::string &sourceName)
 {
     const Reader reader(sourceName);
     const YAML::Node root = reader.parse(yaml);
@@ -313,9 +333,12 @@ MotionPlanRequest loadMoveItRequestString(const std::string &yaml, const std::st
     if (root["group_name"])
         request.groupName = reader.text(root["group_name"], "group_name");
 
-    const YAML::Node jointState = root["start_state"] ? root["start_state"]["joint_state"] : YAML::Node();
-    if (jointState)
+    const YAML::Node startState = root["start_state"];
+    if (startState && !startState.IsMap() && !startState.IsNull())
+        throw InputError(sourceName, "start_state", "expected a map");
+    if (startState && startState.IsMap() && startState["joint_state"])
     {
+        const YAML::Node jointState = startState["joint_state"];
         const std::vector<std::string> names = reader.texts(jointState["name"], "start_state.joint_state.name");
         const std::vector<double> positions =
             reader.numbers(jointState["position"], "start_state.joint_state.position");
@@ -347,6 +370,20 @@ MotionPlanRequest loadMoveItRequestString(const std::string &yaml, const std::st
         }
     }
     return request;
+}
+
+}  // namespace
+
+MotionPlanRequest loadMoveItRequestString(const std::string &yaml, const std::string &sourceName)
+{
+    try
+    {
+        return readRequest(yaml, sourceName);
+    }
+    catch (const YAML::Exception &e)
+    {
+        throw InputError(sourceName, "line " + std::to_string(e.mark.line + 1), "unexpected YAML structure: " + e.msg);
+    }
 }
 
 MotionPlanRequest loadMoveItRequest(const std::string &path)
