@@ -341,6 +341,13 @@ TEST(Urdf, BadInputNamesTheFileAndElement)
         "planar.urdf", robot(linkXml("a") + linkXml("b") + jointXml("p", "planar", "a", "b", "<axis xyz=\"1 0 0\"/>")));
     expectInputError([&] { rc::loadUrdf(planar); }, planar, "joint 'p' axis", "axis 0 0 1");
 
+    const std::string noLimit =
+        file("limit.urdf", robot(linkXml("a") + linkXml("b") + jointXml("j", "revolute", "a", "b")));
+    expectInputError([&] { rc::loadUrdf(noLimit); }, noLimit, "joint 'j'", "needs <limit");
+
+    const std::string twoRoots = file("roots.urdf", robot(linkXml("a") + linkXml("b")));
+    expectInputError([&] { rc::loadUrdf(twoRoots); }, twoRoots, "robot", "");
+
     const std::string notFound = folder + "/nothing.urdf";
     expectInputError([&] { rc::loadUrdf(notFound); }, notFound, "", "file not found");
 }

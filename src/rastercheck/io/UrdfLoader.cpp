@@ -168,6 +168,8 @@ XmlScan prescan(const std::string &xml, const std::string &file)
             if (!links.count(link))
                 throw InputError(file, where + " " + end, "link '" + std::string(link) + "' does not exist");
         }
+        if ((std::string(type) == "revolute" || std::string(type) == "prismatic") && !joint->FirstChildElement("limit"))
+            throw InputError(file, where, "a " + std::string(type) + " joint needs <limit lower=... upper=...>");
         checkOrigin(joint, file, where);
         checkNumbers(joint->FirstChildElement("axis"), "xyz", 3, file, where + " axis");
         for (const char *attribute : {"lower", "upper", "effort", "velocity"})
