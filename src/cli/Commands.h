@@ -30,5 +30,9 @@ struct ProblemArguments
     ProblemSource source() const;
 };
 
+/** \brief `rastercheck info <urdf | problem.cfg | scene.yaml | request.yaml>`: what the loaders
+    make of a file (robot, joints, coordinates, components, allowed pairs; scene objects). */
+void addInfoCommand(CLI::App &app);
+/** \brief `rastercheck check PROBLEM --states IN.csv ...`: one verdict per state. */
 void addCheckCommand(CLI::App &app);
 }  // namespace rastercheck::cli

@@ -11,6 +11,7 @@ int main(int argc, char **argv)
 {
     CLI::App app{"rastercheck: batched collision checking for motion planning (version " RASTERCHECK_VERSION ")"};
     app.require_subcommand(1);
+    rastercheck::cli::addInfoCommand(app);
     rastercheck::cli::addCheckCommand(app);
     try
     {
@@ -26,6 +27,12 @@ int main(int argc, char **argv)
     }
     catch (const rastercheck::Error &e)
     {
+        std::cerr << "rastercheck: error: " << e.what() << '\n';
+        return 1;
+    }
+    catch (const std::exception &e)
+    {
+        // Anything a library below us throws is still reported, never an abort.
         std::cerr << "rastercheck: error: " << e.what() << '\n';
         return 1;
     }

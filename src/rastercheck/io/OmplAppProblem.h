@@ -38,7 +38,11 @@ struct OmplAppProblem
     double objectiveThreshold = 0.0;
 };
 
-/** \brief Loads a .cfg and the meshes it names. Throws InputError naming the file and key on a
-    missing key, a number that does not parse, a missing mesh, or min > max in `volume`. */
+/** \brief Loads a .cfg and the meshes it names, as OMPL.app does: meshes are read with assimp's
+    default COLLADA handling (a Z_UP file is turned Y up, ColladaUpAxis::ConvertToYUp), the 3D start
+    and goal axis is normalised (a zero axis is allowed only with theta 0), `world` is optional (no
+    world: an empty scene) and without `volume.*` the position bounds are the world's bounds.
+    Throws InputError naming the file and key on a missing key, a number that does not parse or is
+    not finite, a missing or empty mesh, or min > max in `volume`. */
 OmplAppProblem loadOmplAppProblem(const std::string &cfgPath);
 }  // namespace rastercheck

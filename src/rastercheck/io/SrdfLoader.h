@@ -19,7 +19,9 @@ struct Srdf
     std::map<std::string, std::map<std::string, double>> groupStates;
 };
 
-/** \brief Parses an SRDF file. Throws InputError naming the file and element when malformed. */
+/** \brief Parses an SRDF file. Throws InputError naming the file and element when malformed (XML
+    syntax, a missing attribute, a value that is not a finite number). A group_state joint with
+    several values (a multi-DOF joint) is skipped with a warning. */
 Srdf loadSrdf(const std::string &path);
 Srdf loadSrdfString(const std::string &xml, const std::string &sourceName = "<srdf>");
 

@@ -14,6 +14,8 @@
 
 namespace rastercheck
 {
+struct UrdfOptions;
+
 using JointKind = device::JointKind;
 
 /** \brief One joint of the kinematic tree. Frames: \a origin places the joint frame in the parent
@@ -73,6 +75,11 @@ struct Component
 class RobotModel
 {
 public:
+    /** \brief Loads a robot from a URDF file; same as loadUrdf() (io/UrdfLoader.h), which documents
+        the options, fallbacks and errors. */
+    static std::shared_ptr<RobotModel> fromUrdf(const std::string &path);
+    static std::shared_ptr<RobotModel> fromUrdf(const std::string &path, const UrdfOptions &options);
+
     std::string name;
     /** \brief Links; index 0 is the root. */
     std::vector<Link> links;

@@ -1,0 +1,136 @@
+// Mesh files through assimp: node transforms, COLLADA units and up axis, non-triangle primitives,
+// in-memory input and the errors for missing, unreadable and empty files.
+#include <cstring>
+#include <functional>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "TestSupport.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/io/MeshLoader.h"
+
+namespace rc = rastercheck;
+using rc::test::makeTempDir;
+using rc::test::writeFile;
+
+namespace
+{
+// A triangle and a line in centimetres, Z up, placed by its node 10 cm along x.
+const char *kCollada = R"(<?xml version="1.0" encoding="utf-8"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit name="centimeter" meter="0.01"/><up_axis>Z_UP</up_axis></asset>
+  <library_geometries>
+    <geometry id="tri" name="tri">
+      <mesh>
+        <source id="tri-pos">
+          <float_array id="tri-pos-array" count="12">0 0 0 1 0 0 0 1 0 5 5 5</float_array>
+          <technique_common><accessor source="#tri-pos-array" count="4" stride="3">
+            <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+          </accessor></technique_common>
+        </source>
+        <vertices id="tri-vtx"><input semantic="POSITION" source="#tri-pos"/></vertices>
+        <triangles count="1"><input semantic="VERTEX" source="#tri-vtx" offset="0"/><p>0 1 2</p></triangles>
+        <lines count="1"><input semantic="VERTEX" source="#tri-vtx" offset="0"/><p>0 3</p></lines>
+      </mesh>
+    </geometry>
+  </library_geometries>
+  <library_visual_scenes>
+    <visual_scene id="Scene">
+      <node id="moved" name="moved">
+        <matrix>1 0 0 10 0 1 0 0 0 0 1 0 0 0 0 1</matrix>
+        <instance_geometry url="#tri"/>
+      </node>
+    </visual_scene>
+  </library_visual_scenes>
+  <scene><instance_visual_scene url="#Scene"/></scene>
+</COLLADA>
+)";
+
+const char *kTetrahedronObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+// Binary STL of the same tetrahedron (80-byte header, count, 50 bytes per facet).
+std::string tetrahedronStl()
+{
+    const float v[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    std::string bytes(80, ' ');
+    const std::uint32_t count = 4;
+    bytes.append(reinterpret_cast<const char *>(&count), 4);
+    for (const auto &f : faces)
+    {
+        const float normal[3] = {0, 0, 0};
+        bytes.append(reinterpret_cast<const char *>(normal), 12);
+        for (int k = 0; k < 3; ++k)
+            bytes.append(reinterpret_cast<const char *>(v[f[k]]), 12);
+        bytes.append(2, '\0');
+    }
+    return bytes;
+}
+}  // namespace
+
+TEST(MeshLoader, ColladaNodeTransformUnitAndUpAxis)
+{
+    const std::string dae = writeFile(makeTempDir("mesh") + "/tri.dae", kCollada);
+    const std::vector<rc::MeshNode> kept = rc::loadMeshNodes(dae);
+    ASSERT_EQ(kept.size(), 1u);
+    EXPECT_EQ(kept[0].name, "moved");
+    ASSERT_EQ(kept[0].mesh.numTriangles(), 1u) << "the <lines> primitive is dropped";
+    const rc::Aabb box = kept[0].mesh.bounds();
+    // Centimetres to metres, node offset 10 cm, Z_UP kept (ROS convention).
+    EXPECT_TRUE(box.min.isApprox(Eigen::Vector3d(0.10, 0.0, 0.0), 1e-6));
+    EXPECT_TRUE(box.max.isApprox(Eigen::Vector3d(0.11, 0.01, 0.0), 1e-6));
+    // Every vertex assimp returns counts for OMPL.app's centre, the line's included.
+    EXPECT_EQ(kept[0].vertexCount, 5u);
+    EXPECT_TRUE(kept[0].vertexSum.isApprox(Eigen::Vector3d(0.56, 0.06, 0.05), 1e-6));
+
+    // assimp's default turns Z up into Y up: (x, y, z) -> (x, z, -y).
+    const rc::Mesh converted = rc::loadMesh(dae, rc::ColladaUpAxis::ConvertToYUp);
+    const rc::Aabb turned = converted.bounds();
+    EXPECT_TRUE(turned.min.isApprox(Eigen::Vector3d(0.10, 0.0, -0.01), 1e-6));
+    EXPECT_TRUE(turned.max.isApprox(Eigen::Vector3d(0.11, 0.0, 0.0), 1e-6));
+}
+
+TEST(MeshLoader, StlObjAndMemoryGiveTheSameTetrahedron)
+{
+    const std::string folder = makeTempDir("mesh");
+    const std::string stl = tetrahedronStl();
+    const rc::Mesh fromStl = rc::loadMesh(writeFile(folder + "/tet.stl", stl));
+    const rc::Mesh fromObj = rc::loadMesh(writeFile(folder + "/tet.obj", kTetrahedronObj));
+    const std::vector<rc::MeshNode> fromMemory = rc::loadMeshNodesFromMemory(stl.data(), stl.size(), "stl", "tet");
+    for (const rc::Mesh *mesh : {&fromStl, &fromObj, &fromMemory.at(0).mesh})
+    {
+        EXPECT_EQ(mesh->numTriangles(), 4u);
+        EXPECT_TRUE(mesh->bounds().max.isApprox(Eigen::Vector3d(1, 1, 1)));
+        EXPECT_TRUE(mesh->bounds().min.isApprox(Eigen::Vector3d(0, 0, 0)));
+    }
+}
+
+TEST(MeshLoader, ErrorsNameTheFile)
+{
+    const std::string folder = makeTempDir("mesh");
+    auto expectError = [](const std::function<void()> &load, const std::string &file, const std::string &what)
+    {
+        try
+        {
+            load();
+            FAIL() << "expected an InputError about " << file;
+        }
+        catch (const rc::InputError &e)
+        {
+            EXPECT_EQ(e.file(), file);
+            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+        }
+    };
+    const std::string missing = folder + "/missing.stl";
+    expectError([&] { rc::loadMesh(missing); }, missing, "file not found");
+    const std::string empty = writeFile(folder + "/empty.stl", "");
+    expectError([&] { rc::loadMesh(empty); }, empty, "cannot read mesh");
+    const std::string pointsOnly = writeFile(folder + "/points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    expectError([&] { rc::loadMesh(pointsOnly); }, pointsOnly, "");
+    const std::string garbage = writeFile(folder + "/garbage.dae", "<COLLADA><not closed");
+    expectError([&] { rc::loadMesh(garbage); }, garbage, "");
+    const std::string nan = writeFile(folder + "/nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+    expectError([&] { rc::loadMesh(nan); }, nan, "");
+    expectError([&] { rc::loadMeshNodesFromMemory("", 0, "stl", "<bytes>"); }, "<bytes>", "empty");
+}

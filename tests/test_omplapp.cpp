@@ -1,0 +1,227 @@
+// OMPL.app .cfg problems written here (OMPL.app's own files are not redistributable): robot
+// re-centring on the vertex mean, axis-angle starts, 2D problems, planners and bad input.
+#include <cmath>
+#include <functional>
+
+#include <gtest/gtest.h>
+
+#include "TestSupport.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/io/OmplAppProblem.h"
+
+namespace rc = rastercheck;
+using rc::test::makeTempDir;
+using rc::test::writeFile;
+
+namespace
+{
+// Tetrahedron with corners (5,5,5) + {0, e_x, e_y, e_z}: vertex mean 5.25, box centre 5.5, so the
+// two choices of centre differ.
+const char *kRobotObj = "v 5 5 5\nv 6 5 5\nv 5 6 5\nv 5 5 6\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+// Two closed boxes as two OBJ objects (two assimp nodes).
+const char *kWorldObj =
+    "o wallA\n"
+    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+    "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n"
+    "o wallB\n"
+    "v 10 0 0\nv 11 0 0\nv 11 1 0\nv 10 1 0\nv 10 0 2\nv 11 0 2\nv 11 1 2\nv 10 1 2\n"
+    "f 9 12 11\nf 9 11 10\nf 13 14 15\nf 13 15 16\nf 9 10 14\nf 9 14 13\nf 12 16 15\nf 12 15 11\n"
+    "f 9 13 16\nf 9 16 12\nf 10 11 15\nf 10 15 14\n";
+
+const char *kProblem3d = R"(# a test problem
+[problem]
+name = tetra
+robot = robot.obj
+world = world.obj
+start.x = 1
+start.y = 2
+start.z = 3
+start.theta = 1.5707963267948966
+start.axis.x = 0
+start.axis.y = 0
+start.axis.z = 2   # not unit length
+goal.x = 4
+goal.y = 5
+goal.z = 6
+goal.theta = 0
+goal.axis.x = 1
+goal.axis.y = 0
+goal.axis.z = 0
+volume.min.x = -10
+volume.min.y = -20
+volume.min.z = -30
+volume.max.x = 10
+volume.max.y = 20
+volume.max.z = 30
+objective = length
+objective.threshold = 12.5
+
+[benchmark]
+time_limit=20.0
+mem_limit=1000.0
+run_count=50
+
+[planner]
+rrt=
+rrt.range=5
+prm=
+rrt=
+rrt.goal_bias=0.1
+)";
+
+std::string problemFolder()
+{
+    const std::string folder = makeTempDir("omplapp");
+    writeFile(folder + "/robot.obj", kRobotObj);
+    writeFile(folder + "/world.obj", kWorldObj);
+    return folder;
+}
+
+std::string replaceLine(std::string text, const std::string &line, const std::string &replacement)
+{
+    const std::size_t at = text.find(line);
+    EXPECT_NE(at, std::string::npos) << line;
+    return text.replace(at, line.size(), replacement);
+}
+
+void expectInputError(const std::function<void()> &load, const std::string &file, const std::string &element,
+                      const std::string &what)
+{
+    try
+    {
+        load();
+        ADD_FAILURE() << "expected an InputError (" << element << ": " << what << ")";
+    }
+    catch (const rc::InputError &e)
+    {
+        EXPECT_EQ(e.file(), file) << e.what();
+        EXPECT_NE(e.element().find(element), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+}
+}  // namespace
+
+TEST(OmplApp, ThreeDimensionalProblem)
+{
+    const std::string folder = problemFolder();
+    const rc::OmplAppProblem problem = rc::loadOmplAppProblem(writeFile(folder + "/tetra.cfg", kProblem3d));
+    EXPECT_EQ(problem.name, "tetra");
+    EXPECT_FALSE(problem.planar);
+    EXPECT_EQ(problem.robotMeshPath, folder + "/robot.obj");
+    EXPECT_EQ(problem.worldMeshPath, folder + "/world.obj");
+
+    // 90 degrees about z (axis normalised): quaternion (0, 0, sin 45, cos 45), w last.
+    const double h = std::sqrt(0.5);
+    ASSERT_EQ(problem.start.size(), 7u);
+    const std::vector<double> start{1, 2, 3, 0, 0, h, h};
+    for (std::size_t i = 0; i < 7; ++i)
+        EXPECT_NEAR(problem.start[i], start[i], 1e-12) << i;
+    const std::vector<double> goal{4, 5, 6, 0, 0, 0, 1};
+    for (std::size_t i = 0; i < 7; ++i)
+        EXPECT_NEAR(problem.goal[i], goal[i], 1e-12) << i;
+
+    const rc::RobotModel &robot = *problem.robot;
+    EXPECT_EQ(robot.coordinateNames, (std::vector<std::string>{"x", "y", "z", "qx", "qy", "qz", "qw"}));
+    EXPECT_EQ(robot.lowerBounds, (std::vector<double>{-10, -20, -30, -1, -1, -1, -1}));
+    EXPECT_EQ(robot.upperBounds, (std::vector<double>{10, 20, 30, 1, 1, 1, 1}));
+    ASSERT_EQ(robot.numComponents(), 1u);
+    // Shifted by the vertex mean (5.25), not the box centre (5.5).
+    const rc::Aabb box = robot.components[0].localAabb;
+    EXPECT_TRUE(box.min.isApprox(Eigen::Vector3d::Constant(-0.25), 1e-12));
+    EXPECT_TRUE(box.max.isApprox(Eigen::Vector3d::Constant(0.75), 1e-12));
+    EXPECT_TRUE(robot.components[0].topology.closed);
+
+    ASSERT_EQ(problem.scene->numObjects(), 2u);
+    EXPECT_EQ(problem.scene->objects[0].name, "wallA");
+    EXPECT_EQ(problem.scene->objects[1].name, "wallB");
+    EXPECT_EQ(problem.scene->numTriangles(), 24u);
+    EXPECT_TRUE(problem.scene->bounds().max.isApprox(Eigen::Vector3d(11, 1, 2)));
+
+    EXPECT_DOUBLE_EQ(problem.timeLimit, 20.0);
+    EXPECT_DOUBLE_EQ(problem.memoryLimit, 1000.0);
+    EXPECT_EQ(problem.runCount, 50);
+    EXPECT_EQ(problem.objective, "length");
+    EXPECT_DOUBLE_EQ(problem.objectiveThreshold, 12.5);
+    ASSERT_EQ(problem.planners.size(), 3u);
+    EXPECT_EQ(problem.planners[0].first, "rrt");
+    EXPECT_EQ(problem.planners[0].second, (std::vector<std::pair<std::string, std::string>>{{"range", "5"}}));
+    EXPECT_EQ(problem.planners[1].first, "prm");
+    EXPECT_TRUE(problem.planners[1].second.empty());
+    EXPECT_EQ(problem.planners[2].second, (std::vector<std::pair<std::string, std::string>>{{"goal_bias", "0.1"}}));
+}
+
+TEST(OmplApp, TwoDimensionalProblemKeepsTheRobotHeight)
+{
+    const std::string folder = problemFolder();
+    const std::string cfg = writeFile(folder + "/planar.cfg", R"([problem]
+robot = robot.obj
+world = world.obj
+start.x = 1
+start.y = 2
+start.theta = 0.5
+goal.x = 3
+goal.y = 4
+goal.theta = -0.5
+volume.min.x = 0
+volume.min.y = 0
+volume.max.x = 50
+volume.max.y = 60
+)");
+    const rc::OmplAppProblem problem = rc::loadOmplAppProblem(cfg);
+    EXPECT_TRUE(problem.planar);
+    EXPECT_EQ(problem.start, (std::vector<double>{1, 2, 0.5}));
+    EXPECT_EQ(problem.goal, (std::vector<double>{3, 4, -0.5}));
+    EXPECT_EQ(problem.robot->coordinateNames, (std::vector<std::string>{"x", "y", "yaw"}));
+    EXPECT_EQ(problem.robot->lowerBounds, (std::vector<double>{0, 0, -M_PI}));
+    EXPECT_EQ(problem.robot->upperBounds, (std::vector<double>{50, 60, M_PI}));
+    EXPECT_EQ(problem.robot->joints[0].kind, rc::JointKind::Planar);
+    const rc::Aabb box = problem.robot->components[0].localAabb;
+    EXPECT_TRUE(box.min.isApprox(Eigen::Vector3d(-0.25, -0.25, 5.0), 1e-12)) << "z shift is 0 in 2D";
+    EXPECT_TRUE(box.max.isApprox(Eigen::Vector3d(0.75, 0.75, 6.0), 1e-12));
+}
+
+TEST(OmplApp, WithoutVolumeTheWorldBoundsAreUsed)
+{
+    const std::string folder = problemFolder();
+    std::string text = kProblem3d;
+    for (const char *axis : {"x", "y", "z"})
+        for (const char *side : {"min", "max"})
+        {
+            const std::string key = std::string("volume.") + side + "." + axis + " = ";
+            const std::size_t at = text.find(key);
+            text.erase(at, text.find('\n', at) - at + 1);
+        }
+    const rc::OmplAppProblem problem = rc::loadOmplAppProblem(writeFile(folder + "/novolume.cfg", text));
+    EXPECT_EQ(problem.robot->lowerBounds, (std::vector<double>{0, 0, 0, -1, -1, -1, -1}));
+    EXPECT_EQ(problem.robot->upperBounds, (std::vector<double>{11, 1, 2, 1, 1, 1, 1}));
+}
+
+TEST(OmplApp, BadInputNamesTheFileAndKey)
+{
+    const std::string folder = problemFolder();
+    auto check =
+        [&](const std::string &name, const std::string &text, const std::string &element, const std::string &what)
+    {
+        const std::string path = writeFile(folder + "/" + name, text);
+        expectInputError([&] { rc::loadOmplAppProblem(path); }, path, element, what);
+    };
+    check("missing.cfg", replaceLine(kProblem3d, "start.x = 1\n", ""), "[problem] start.x", "missing");
+    check("nan.cfg", replaceLine(kProblem3d, "start.y = 2", "start.y = nan"), "[problem] start.y",
+          "'nan' is not a finite number");
+    check("word.cfg", replaceLine(kProblem3d, "goal.z = 6", "goal.z = six"), "[problem] goal.z", "not a finite number");
+    check("volume.cfg", replaceLine(kProblem3d, "volume.min.y = -20", "volume.min.y = 25"), "[problem] volume.min.y",
+          "above max");
+    check("mesh.cfg", replaceLine(kProblem3d, "robot = robot.obj", "robot = nothing.obj"),
+          "[problem] robot 'nothing.obj'", "file not found");
+    check("line.cfg", replaceLine(kProblem3d, "name = tetra", "this line has no equals sign"), "line 3",
+          "expected 'key = value'");
+    check("section.cfg", replaceLine(kProblem3d, "[benchmark]", "[benchmark"), "line", "malformed section header");
+    check("axis.cfg", replaceLine(kProblem3d, "start.axis.z = 2", "start.axis.z = 0"), "[problem] start.axis",
+          "zero length");
+    writeFile(folder + "/empty.obj", "v 0 0 0\n");
+    check("empty.cfg", replaceLine(kProblem3d, "robot = robot.obj", "robot = empty.obj"), "[problem] robot 'empty.obj'",
+          "");
+    const std::string none = folder + "/none.cfg";
+    expectInputError([&] { rc::loadOmplAppProblem(none); }, none, "", "file not found");
+}
