@@ -106,6 +106,6 @@ void addCheckCommand(CLI::App &app)
     command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
     command->add_option("--pixel", options->pixel, "raster pixel size in scene units (0 = automatic)")
         ->check(CLI::NonNegativeNumber);
-    command->callback([options]() { throw CommandResult(runCheck(*options)); });
+    command->callback([options]() { throw CommandResult{runCheck(*options)}; });
 }
 }  // namespace rastercheck::cli

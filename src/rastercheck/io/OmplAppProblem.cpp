@@ -1,4 +1,5 @@
 #include "rastercheck/io/OmplAppProblem.h"
+#include "rastercheck/model/RigidBody.h"
 
 #include <cerrno>
 #include <cmath>
@@ -208,38 +209,19 @@ OmplAppProblem loadOmplAppProblem(const std::string &cfgPath)
         center.z() = 0.0;
     robotMesh.transform(Eigen::Isometry3d(Eigen::Translation3d(-center)));
 
-    auto robot = std::make_shared<RobotModel>();
-    robot->name = problem.name.empty() ? "robot" : problem.name;
-    robot->links = {Link{"world", -1, -1}, Link{"robot", -1, 0}};
-    Joint joint;
-    joint.name = "pose";
-    joint.parentLink = 0;
-    joint.childLink = 1;
-    if (problem.planar)
+    Aabb positionBounds;
+    positionBounds.min = Eigen::Vector3d(lower[0], lower[1], problem.planar ? 0.0 : lower[2]);
+    positionBounds.max = Eigen::Vector3d(upper[0], upper[1], problem.planar ? 0.0 : upper[2]);
+    RobotModelPtr robot;
+    try
     {
-        joint.kind = JointKind::Planar;
-        joint.coordinateNames = {"x", "y", "yaw"};
-        joint.lower = {lower[0], lower[1], -M_PI};
-        joint.upper = {upper[0], upper[1], M_PI};
+        robot = makeRigidBodyModel(problem.name.empty() ? "robot" : problem.name, std::move(robotMesh),
+                                   positionBounds, problem.planar);
     }
-    else
+    catch (const ConfigurationError &e)
     {
-        joint.kind = JointKind::Floating;
-        joint.coordinateNames = {"x", "y", "z", "qx", "qy", "qz", "qw"};
-        joint.lower = {lower[0], lower[1], lower[2], -1.0, -1.0, -1.0, -1.0};
-        joint.upper = {upper[0], upper[1], upper[2], 1.0, 1.0, 1.0, 1.0};
+        throw InputError(cfgPath, "[problem] robot", e.what());
     }
-    robot->joints = {joint};
-    Component component;
-    component.name = "robot";
-    component.mesh = std::move(robotMesh);
-    component.topology = cleanMesh(component.mesh);
-    if (component.mesh.empty())
-        throw InputError(cfgPath, "[problem] robot", "robot mesh has no triangles after cleaning");
-    component.localObb = Obb::fit(component.mesh);
-    component.localAabb = component.mesh.bounds();
-    robot->components.push_back(std::move(component));
-    robot->finalize();
     problem.robot = robot;
 
     problem.timeLimit = config.number("benchmark.time_limit", 0.0);

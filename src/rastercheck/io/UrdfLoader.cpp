@@ -407,7 +407,7 @@ private:
 
     template <class Element>
     void appendElements(const std::vector<std::shared_ptr<Element>> &elements, const std::string &linkName,
-                        const char *kind, Mesh &out)
+                        const char *kind, std::vector<Mesh> &parts)
     {
         for (std::size_t k = 0; k < elements.size(); ++k)
         {
@@ -415,37 +415,35 @@ private:
             const std::string where = "link '" + linkName + "' " + kind + " " + std::to_string(k);
             if (!element.geometry)
                 throw InputError(file_, where, "has no geometry");
-            out.append(geometryMesh(*element.geometry, linkName, kind, where), toIsometry(element.origin));
+            parts.push_back(geometryMesh(*element.geometry, linkName, kind, where));
+            parts.back().transform(toIsometry(element.origin));
         }
     }
 
     void addComponent(RobotModel &model, Link &link)
     {
         const urdf::LinkConstSharedPtr source = urdf_->getLink(link.name);
-        Mesh mesh;
+        std::vector<Mesh> parts;
         const char *kind = "collision";
         if (!source->collision_array.empty())
-            appendElements(source->collision_array, link.name, kind, mesh);
+            appendElements(source->collision_array, link.name, kind, parts);
         else if (options_.visualWhenNoCollision && !source->visual_array.empty())
         {
             kind = "visual";
             logWarning(file_ + ": link '" + link.name + "' has no collision geometry; its visual geometry is used");
-            appendElements(source->visual_array, link.name, kind, mesh);
+            appendElements(source->visual_array, link.name, kind, parts);
         }
         else
             return;
 
-        Component component;
-        component.name = link.name;
-        component.mesh = std::move(mesh);
-        component.topology = cleanMesh(component.mesh);
+        // Elements stay separate shells: two touching boxes of one link must not weld into a
+        // non-manifold surface (see cleanAndMerge).
+        Component component = makeComponent(link.name, std::move(parts));
         if (component.mesh.empty())
             throw InputError(file_, "link '" + link.name + "' " + kind, "geometry has no triangles after cleaning");
         if (!component.topology.closed)
             logInfo(file_ + ": link '" + link.name + "' " + kind + " geometry is " + component.topology.summary() +
                     "; the exact narrow phase checks it");
-        component.localObb = Obb::fit(component.mesh);
-        component.localAabb = component.mesh.bounds();
         link.component = static_cast<int>(model.components.size());
         model.components.push_back(std::move(component));
     }

@@ -35,14 +35,9 @@ RobotModelPtr makeRigidBodyModel(const std::string &name, Mesh mesh, const Aabb 
     }
     model->joints = {joint};
 
-    Component component;
-    component.name = "body";
-    component.mesh = std::move(mesh);
-    component.topology = cleanMesh(component.mesh);
+    Component component = makeComponent("body", {std::move(mesh)});
     if (component.mesh.empty())
         throw ConfigurationError("rigid body '" + name + "' has no triangles");
-    component.localAabb = component.mesh.bounds();
-    component.localObb = Obb::fit(component.mesh);
     model->components = {std::move(component)};
     model->finalize();
     return model;

@@ -9,6 +9,16 @@
 
 namespace rastercheck
 {
+Component makeComponent(const std::string &name, std::vector<Mesh> parts)
+{
+    Component component;
+    component.name = name;
+    component.topology = cleanAndMerge(std::move(parts), component.mesh);
+    component.localObb = Obb::fit(component.mesh);
+    component.localAabb = component.mesh.bounds();
+    return component;
+}
+
 void RobotModel::setCollisionAllowed(int a, int b, bool allowed)
 {
     const std::size_t n = components.size();

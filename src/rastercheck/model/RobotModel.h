@@ -68,6 +68,11 @@ struct Component
     Aabb localAabb;  ///< bounds in the link frame
 };
 
+/** \brief A component from the meshes of a link's collision elements (link frame): each part is
+    cleaned on its own and the parts are kept as separate shells (cleanAndMerge), then the boxes
+    are fitted. The result's mesh is empty when no part has a triangle. */
+Component makeComponent(const std::string &name, std::vector<Mesh> parts);
+
 /** \brief An immutable description of a robot (or a rigid body): kinematic tree, configuration
     layout, bounds, collision components and the allowed-collision matrix. Build it with the
     loaders (io/UrdfLoader.h, io/OmplAppProblem.h), then share it as RobotModelConstPtr; all
