@@ -70,7 +70,7 @@ struct MeshContact
 };
 
 /** \brief Do the surfaces of A (placed by poseA) and B (placed by poseB) come within \a padding
-    (metres; 0 = intersect or touch)? Simultaneous traversal of both trees; node pairs are
+    (metres; 0 = intersect or touch; negative counts as 0)? Simultaneous traversal of both trees; node pairs are
     culled by a 15-axis separating-axis test of their boxes (each an AABB in its own mesh frame)
     inflated by \a padding, and leaf pairs decided by trianglesIntersect() (padding 0) or
     trianglesWithin() (padding > 0) on B's triangles expressed in A's frame. So the answer is exact
