@@ -432,6 +432,10 @@ TEST(PointInsideClosedMesh, BoxInsideOutsideAndNearFaces)
     EXPECT_TRUE(rc::pointInsideClosedMesh(bvh, Vec(0.3, -0.5 + 1e-6, 0.25 - 1e-6)));
     EXPECT_FALSE(rc::pointInsideClosedMesh(bvh, Vec(0.3, -0.5 - 1e-6, 0.1)));
     EXPECT_FALSE(rc::pointInsideClosedMesh(bvh, Vec(5, 5, 5)));
+    // On a face every ray starts on the surface, so the winding-number fallback decides; either
+    // answer is allowed on the surface, but it must be the same every time.
+    const bool onFace = rc::pointInsideClosedMesh(bvh, Vec(0.3, 0.5, 0.1));
+    EXPECT_EQ(rc::pointInsideClosedMesh(bvh, Vec(0.3, 0.5, 0.1)), onFace);
     // Points on the lines of the box's edges and face diagonals, just inside and just outside.
     for (double s : {-0.9, -1.0 / 3.0, 0.0, 1.0 / 3.0, 0.9})
     {
