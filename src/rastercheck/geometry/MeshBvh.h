@@ -1,7 +1,7 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
-#include <memory>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -13,7 +13,11 @@ namespace rastercheck
 {
 /** \brief Bounding-volume hierarchy over a mesh's triangles, in the mesh's own frame: a flat array
     of nodes (AABBs) linked by index, leaves holding a few triangles. Immutable after build; share
-    it between threads freely. This is the exact oracle's acceleration structure. */
+    it between threads freely. This is the exact oracle's acceleration structure.
+
+    Built top-down by splitting at the median centroid along the longest axis of the centroids'
+    bounds, so the tree is balanced: its depth is about log2(triangles / maxLeafTriangles), which
+    lets every query traverse it with a small fixed stack instead of allocating. */
 class MeshBvh
 {
 public:
@@ -25,19 +29,36 @@ public:
         std::int32_t first = 0;
         std::uint32_t count = 0;  ///< leaf: number of triangles; inner: 0
         bool isLeaf() const { return first < 0; }
+        std::uint32_t firstSlot() const { return static_cast<std::uint32_t>(-(first + 1)); }
     };
 
-    /** \brief Builds over \a mesh, which must outlive this object and not change. */
+    /** \brief Deepest tree the queries' fixed stacks allow; a balanced build of any mesh that fits
+        in memory stays far below it (the constructor checks). */
+    static constexpr int kMaxDepth = 60;
+
+    /** \brief Builds over \a mesh, which must outlive this object and not change. Empty meshes give
+        an empty tree. Throws rastercheck::Error if a triangle names a vertex that does not exist. */
     explicit MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles = 4);
 
     const Mesh &mesh() const { return *mesh_; }
     const std::vector<Node> &nodes() const { return nodes_; }
     const std::vector<std::uint32_t> &triangleOrder() const { return triangleOrder_; }
+    /** \brief Corners of the triangle in slot \a slot of triangleOrder (mesh frame), stored in
+        traversal order so that leaves read contiguous memory. */
+    const std::array<Eigen::Vector3d, 3> &slotTriangle(std::uint32_t slot) const { return corners_[slot]; }
+    /** \brief Levels below the root (0 for a single leaf, -1 when empty). */
+    int depth() const { return depth_; }
+    bool empty() const { return nodes_.empty(); }
 
 private:
+    int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Eigen::Vector3d> &centroids,
+              unsigned maxLeafTriangles);
+
     const Mesh *mesh_;
     std::vector<Node> nodes_;
     std::vector<std::uint32_t> triangleOrder_;
+    std::vector<std::array<Eigen::Vector3d, 3>> corners_;
+    int depth_ = -1;
 };
 
 /** \brief Where two meshes touch: a point (world frame) and the triangle of each mesh. */
@@ -49,17 +70,28 @@ struct MeshContact
 };
 
 /** \brief Do the surfaces of A (placed by poseA) and B (placed by poseB) come within \a padding
-    (metres; 0 = intersect or touch)? Exact triangle tests over both BVHs. */
-bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b,
-                    const Eigen::Isometry3d &poseB, double padding, MeshContact *contact = nullptr);
+    (metres; 0 = intersect or touch; negative counts as 0)? Simultaneous traversal of both trees; node pairs are
+    culled by a 15-axis separating-axis test of their boxes (each an AABB in its own mesh frame)
+    inflated by \a padding, and leaf pairs decided by trianglesIntersect() (padding 0) or
+    trianglesWithin() (padding > 0) on B's triangles expressed in A's frame. So the answer is exact
+    for the coordinates after that one rigid transform. Stops at the first contact found, which
+    \a contact (when not null) receives: for padding > 0 the midpoint of a close-enough pair.
+    No allocation; thread-safe. */
+bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
+                    double padding, MeshContact *contact = nullptr);
 
 /** \brief Is \a point (frame of the mesh) strictly inside the closed mesh of \a bvh? Parity of a
-    ray cast, retried along other directions when the ray grazes an edge or vertex. Meaningful
-    only for closed meshes. */
+    ray cast through the tree, retried along another of a fixed set of directions whenever the ray
+    comes within a small tolerance (1e-9 of the mesh's size) of an edge or vertex or lies in a
+    face's plane. If every direction grazes, the generalized winding number over all triangles
+    decides (> 1/2 is inside). A point on the surface may go either way. Meaningful only for
+    closed meshes. No allocation; thread-safe. */
 bool pointInsideClosedMesh(const MeshBvh &bvh, const Eigen::Vector3d &point);
 
 /** \brief The exact oracle for two solids: true when their surfaces come within \a padding or one
-    contains the other (tested for closed meshes only: \a closedA / \a closedB). */
+    contains the other (tested for closed meshes only: \a closedA / \a closedB). Containment is
+    decided by one vertex of the inner mesh, which suffices once the surfaces are known not to
+    cross. On containment \a contact gets that vertex (world frame) and triangles -1. */
 bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closedA, const MeshBvh &b,
                    const Eigen::Isometry3d &poseB, bool closedB, double padding, MeshContact *contact = nullptr);
 }  // namespace rastercheck

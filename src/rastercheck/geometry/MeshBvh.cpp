@@ -1,0 +1,324 @@
+#include "rastercheck/geometry/MeshBvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include "rastercheck/core/Error.h"
+#include "rastercheck/geometry/TriangleTests.h"
+
+namespace rastercheck
+{
+namespace
+{
+using Vec = Eigen::Vector3d;
+
+// A simultaneous traversal pushes two pairs per level descended in either tree, popping one, so
+// it never holds more than depthA + depthB + 1 pairs.
+constexpr int kPairStackSize = 2 * MeshBvh::kMaxDepth + 2;
+constexpr int kNodeStackSize = MeshBvh::kMaxDepth + 2;
+
+struct NodePair
+{
+    std::int32_t a, b;
+};
+
+// Separating-axis test of box A (axis-aligned in frame A: centre ca, half extents ea) against box
+// B (centre cb and half extents eb in frame B, whose axes are the columns of R in frame A):
+// the 3 + 3 face axes and 9 edge-pair axes (Gottschalk's OBB test). True when some axis shows a
+// gap wider than reach. The cross-product axes are not normalised; their length is at most 1,
+// so comparing their projected gap against the full reach only keeps more pairs, never fewer.
+bool boxesSeparated(const Vec &ca, const Vec &ea, const Vec &cb, const Vec &eb, const Eigen::Matrix3d &R,
+                    const Eigen::Matrix3d &absR, double reach)
+{
+    const Vec d = cb - ca;
+    for (int i = 0; i < 3; ++i)
+        if (std::abs(d[i]) > ea[i] + absR.row(i).dot(eb) + reach)
+            return true;
+    for (int j = 0; j < 3; ++j)
+        if (std::abs(R.col(j).dot(d)) > absR.col(j).dot(ea) + eb[j] + reach)
+            return true;
+    for (int i = 0; i < 3; ++i)
+    {
+        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+        for (int j = 0; j < 3; ++j)
+        {
+            const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            const double gap = std::abs(d[i2] * R(i1, j) - d[i1] * R(i2, j));
+            const double radii =
+                ea[i1] * absR(i2, j) + ea[i2] * absR(i1, j) + eb[j1] * absR(i, j2) + eb[j2] * absR(i, j1);
+            if (gap > radii + reach)
+                return true;
+        }
+    }
+    return false;
+}
+
+// Slab test of the ray origin + t * direction, t >= 0, against box (inverse direction given).
+bool rayHitsBox(const Vec &origin, const Vec &inverseDirection, const Aabb &box, double margin)
+{
+    double near = 0.0, far = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k)
+    {
+        const double t1 = (box.min[k] - margin - origin[k]) * inverseDirection[k];
+        const double t2 = (box.max[k] + margin - origin[k]) * inverseDirection[k];
+        near = std::max(near, std::min(t1, t2));
+        far = std::min(far, std::max(t1, t2));
+    }
+    return near <= far;
+}
+
+// Directions with "irrational" components (from sqrt 2, sqrt 3, sqrt 5 and the golden ratio), all
+// non-zero, so that no ray runs parallel to the axis-aligned walls and edges real meshes are full
+// of, and no two are related by a simple symmetry of a box.
+const Vec kRayDirections[] = {
+    {0.4142135623730951, 0.6180339887498949, 0.7320508075688772},
+    {-0.6180339887498949, 0.7320508075688772, 0.4142135623730951},
+    {0.7320508075688772, -0.4142135623730951, 0.6180339887498949},
+    {-0.2360679774997897, -0.8660254037844386, 0.4472135954999579},
+    {0.8660254037844386, 0.4472135954999579, -0.2360679774997897},
+    {-0.4472135954999579, 0.2360679774997897, -0.8660254037844386},
+    {0.5411961001461970, -0.3090169943749474, -0.7818314824680298},
+    {-0.3826834323650898, -0.5411961001461970, -0.7487781956271592},
+};
+
+// Generalised winding number (sum of signed solid angles, Van Oosterom and Strackee), the
+// fallback when every ray grazes. About 1 inside an outward-oriented closed mesh, 0 outside.
+double windingNumber(const MeshBvh &bvh, const Vec &point)
+{
+    double total = 0.0;
+    for (std::uint32_t slot = 0; slot < bvh.triangleOrder().size(); ++slot)
+    {
+        const std::array<Vec, 3> &t = bvh.slotTriangle(slot);
+        const Vec a = t[0] - point, b = t[1] - point, c = t[2] - point;
+        const double la = a.norm(), lb = b.norm(), lc = c.norm();
+        const double numerator = a.dot(b.cross(c));
+        const double denominator = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+        total += 2.0 * std::atan2(numerator, denominator);
+    }
+    return total / (4.0 * M_PI);
+}
+
+double boxRadius(const Aabb &box)
+{
+    return box.halfExtents().norm();
+}
+}  // namespace
+
+MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles) : mesh_(&mesh)
+{
+    const std::size_t n = mesh.triangles.size();
+    if (n == 0)
+        return;
+    if (n > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 2))
+        throw ConfigurationError("MeshBvh: " + std::to_string(n) + " triangles exceed the index range");
+    std::vector<Vec> centroids(n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        for (std::uint32_t v : mesh.triangles[i])
+            if (v >= mesh.vertices.size())
+                throw ConfigurationError("MeshBvh: triangle " + std::to_string(i) + " names vertex " +
+                                         std::to_string(v) + " of " + std::to_string(mesh.vertices.size()));
+        const Mesh::Triangle &t = mesh.triangles[i];
+        centroids[i] = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
+    }
+    triangleOrder_.resize(n);
+    std::iota(triangleOrder_.begin(), triangleOrder_.end(), 0u);
+    const unsigned leafSize = std::max(1u, maxLeafTriangles);
+    nodes_.reserve(2 * (n / leafSize + 1));
+    nodes_.emplace_back();
+    depth_ = build(0, static_cast<std::uint32_t>(n), 0, centroids, leafSize);
+    if (depth_ > kMaxDepth)  // cannot happen for a median split of fewer than 2^31 triangles
+        throw ConfigurationError("MeshBvh: tree depth " + std::to_string(depth_) + " exceeds the query stacks");
+    corners_.resize(n);
+    for (std::size_t slot = 0; slot < n; ++slot)
+    {
+        const Mesh::Triangle &t = mesh.triangles[triangleOrder_[slot]];
+        corners_[slot] = {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
+    }
+}
+
+int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Vec> &centroids,
+                   unsigned maxLeafTriangles)
+{
+    Aabb box, centroidBox;
+    for (std::uint32_t slot = begin; slot < end; ++slot)
+    {
+        const std::uint32_t triangle = triangleOrder_[slot];
+        for (std::uint32_t v : mesh_->triangles[triangle])
+            box.extend(mesh_->vertices[v]);
+        centroidBox.extend(centroids[triangle]);
+    }
+    nodes_[node].box = box;
+    const std::uint32_t count = end - begin;
+    if (count <= maxLeafTriangles)
+    {
+        nodes_[node].first = -static_cast<std::int32_t>(begin) - 1;
+        nodes_[node].count = count;
+        return 0;
+    }
+    int axis = 0;
+    centroidBox.halfExtents().maxCoeff(&axis);
+    const std::uint32_t middle = begin + count / 2;
+    std::nth_element(triangleOrder_.begin() + begin, triangleOrder_.begin() + middle, triangleOrder_.begin() + end,
+                     [&centroids, axis](std::uint32_t i, std::uint32_t j)
+                     { return centroids[i][axis] < centroids[j][axis]; });
+    const auto child = static_cast<std::int32_t>(nodes_.size());
+    nodes_.emplace_back();
+    nodes_.emplace_back();
+    nodes_[node].first = child;
+    nodes_[node].count = 0;
+    const int left = build(begin, middle, child, centroids, maxLeafTriangles);
+    const int right = build(middle, end, child + 1, centroids, maxLeafTriangles);
+    return 1 + std::max(left, right);
+}
+
+bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
+                    double padding, MeshContact *contact)
+{
+    if (a.empty() || b.empty())
+        return false;
+    // Everything happens in A's frame: B's boxes become oriented boxes there, and B's triangles
+    // are moved by this one transform before the exact tests.
+    const Eigen::Isometry3d aMb = poseA.inverse(Eigen::Isometry) * poseB;
+    const Eigen::Matrix3d R = aMb.linear();
+    const Vec T = aMb.translation();
+    const Eigen::Matrix3d absR = R.cwiseAbs();
+    padding = std::max(0.0, padding);
+    // The box test must never drop a pair the triangle test would accept; rounding in R, T and the
+    // projections is a few ulps of the magnitudes involved, far below this slack.
+    const Aabb &rootA = a.nodes()[0].box, &rootB = b.nodes()[0].box;
+    const double slack =
+        1e-12 * (T.norm() + rootA.center().norm() + rootB.center().norm() + boxRadius(rootA) + boxRadius(rootB));
+    const double reach = padding + slack;
+
+    const std::vector<MeshBvh::Node> &nodesA = a.nodes(), &nodesB = b.nodes();
+    NodePair stack[kPairStackSize];
+    int top = 0;
+    stack[top++] = {0, 0};
+    while (top > 0)
+    {
+        const NodePair pair = stack[--top];
+        const MeshBvh::Node &na = nodesA[pair.a], &nb = nodesB[pair.b];
+        const Vec ea = na.box.halfExtents(), eb = nb.box.halfExtents();
+        if (boxesSeparated(na.box.center(), ea, R * nb.box.center() + T, eb, R, absR, reach))
+            continue;
+        if (na.isLeaf() && nb.isLeaf())
+        {
+            for (std::uint32_t sb = nb.firstSlot(); sb < nb.firstSlot() + nb.count; ++sb)
+            {
+                const std::array<Vec, 3> &tb = b.slotTriangle(sb);
+                const Vec q0 = R * tb[0] + T, q1 = R * tb[1] + T, q2 = R * tb[2] + T;
+                for (std::uint32_t sa = na.firstSlot(); sa < na.firstSlot() + na.count; ++sa)
+                {
+                    const std::array<Vec, 3> &ta = a.slotTriangle(sa);
+                    Vec point;
+                    const bool hit = padding > 0.0 ? trianglesWithin(ta[0], ta[1], ta[2], q0, q1, q2, padding, &point)
+                                                   : trianglesIntersect(ta[0], ta[1], ta[2], q0, q1, q2, &point);
+                    if (hit)
+                    {
+                        if (contact)
+                        {
+                            contact->position = poseA * point;
+                            contact->triangleA = static_cast<std::int32_t>(a.triangleOrder()[sa]);
+                            contact->triangleB = static_cast<std::int32_t>(b.triangleOrder()[sb]);
+                        }
+                        return true;
+                    }
+                }
+            }
+            continue;
+        }
+        // Descend into the bigger box, so both trees shrink at a similar pace.
+        const bool splitA = nb.isLeaf() || (!na.isLeaf() && ea.squaredNorm() >= eb.squaredNorm());
+        if (splitA)
+        {
+            stack[top++] = {na.first + 1, pair.b};
+            stack[top++] = {na.first, pair.b};
+        }
+        else
+        {
+            stack[top++] = {pair.a, nb.first + 1};
+            stack[top++] = {pair.a, nb.first};
+        }
+    }
+    return false;
+}
+
+bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
+{
+    if (bvh.empty())
+        return false;
+    const Aabb &root = bvh.nodes()[0].box;
+    // Large against the rounding of the ray/triangle arithmetic (1e-16 of these magnitudes), small
+    // against any feature a mesh is meant to resolve.
+    const double tolerance = 1e-9 * (2.0 * boxRadius(root) + (point - root.center()).norm());
+    if (!root.inflated(tolerance).contains(point))
+        return false;
+
+    const std::vector<MeshBvh::Node> &nodes = bvh.nodes();
+    for (const Vec &direction : kRayDirections)
+    {
+        const Vec inverse = direction.cwiseInverse();
+        bool parity = false, grazed = false;
+        std::int32_t stack[kNodeStackSize];
+        int top = 0;
+        stack[top++] = 0;
+        while (top > 0 && !grazed)
+        {
+            const MeshBvh::Node &node = nodes[stack[--top]];
+            if (!rayHitsBox(point, inverse, node.box, tolerance))
+                continue;
+            if (!node.isLeaf())
+            {
+                stack[top++] = node.first + 1;
+                stack[top++] = node.first;
+                continue;
+            }
+            for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
+            {
+                const std::array<Vec, 3> &t = bvh.slotTriangle(slot);
+                double hitAt = 0.0;
+                const int crossing = rayTriangle(point, direction, t[0], t[1], t[2], tolerance, hitAt);
+                if (crossing < 0)
+                {
+                    grazed = true;
+                    break;
+                }
+                parity ^= crossing == 1;
+            }
+        }
+        if (!grazed)
+            return parity;
+    }
+    return windingNumber(bvh, point) > 0.5;
+}
+
+bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closedA, const MeshBvh &b,
+                   const Eigen::Isometry3d &poseB, bool closedB, double padding, MeshContact *contact)
+{
+    if (surfacesWithin(a, poseA, b, poseB, padding, contact))
+        return true;
+    if (a.empty() || b.empty())
+        return false;
+    // The surfaces do not meet, so each solid lies wholly inside or wholly outside the other:
+    // one vertex tells which.
+    const auto containedIn = [contact](const MeshBvh &inner, const Eigen::Isometry3d &innerPose, const MeshBvh &outer,
+                                       const Eigen::Isometry3d &outerPose)
+    {
+        const Vec vertex = innerPose * inner.slotTriangle(0)[0];
+        if (!pointInsideClosedMesh(outer, outerPose.inverse(Eigen::Isometry) * vertex))
+            return false;
+        if (contact)
+        {
+            contact->position = vertex;
+            contact->triangleA = -1;
+            contact->triangleB = -1;
+        }
+        return true;
+    };
+    return (closedB && containedIn(a, poseA, b, poseB)) || (closedA && containedIn(b, poseB, a, poseA));
+}
+}  // namespace rastercheck

@@ -1,0 +1,583 @@
+// The exact oracle over whole meshes: BVH structure, surfacesWithin against brute force and FCL,
+// point-in-solid parity (grazing rays included) and containment in solidsOverlap.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <random>
+#include <tuple>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/OBBRSS.h>
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+
+#include "rastercheck/geometry/MeshBvh.h"
+#include "rastercheck/geometry/MeshTopology.h"
+#include "rastercheck/geometry/TriangleTests.h"
+
+namespace rc = rastercheck;
+using Vec = Eigen::Vector3d;
+
+namespace
+{
+// ---- test meshes, closed and outward-oriented (checked by cleanMesh below) -----------------
+
+class MeshBuilder
+{
+public:
+    std::uint32_t vertex(const Vec &p)
+    {
+        const auto key = std::make_tuple(p.x(), p.y(), p.z());
+        const auto found = index_.find(key);
+        if (found != index_.end())
+            return found->second;
+        mesh.vertices.push_back(p);
+        return index_[key] = static_cast<std::uint32_t>(mesh.vertices.size() - 1);
+    }
+    void triangle(const Vec &a, const Vec &b, const Vec &c)
+    {
+        mesh.triangles.push_back({vertex(a), vertex(b), vertex(c)});
+    }
+
+    rc::Mesh mesh;
+
+private:
+    std::map<std::tuple<double, double, double>, std::uint32_t> index_;
+};
+
+// A box of half extents \a half centred at the origin, each face split into divisions^2 squares.
+// Grid coordinates come from one table per axis, so faces that share an edge share its vertices
+// bit for bit and the mesh is closed without welding.
+rc::Mesh boxMesh(const Vec &half, int divisions = 1)
+{
+    std::vector<double> grid[3];
+    for (int k = 0; k < 3; ++k)
+        for (int i = 0; i <= divisions; ++i)
+            grid[k].push_back(i == divisions ? half[k] : -half[k] + 2.0 * half[k] * i / divisions);
+    MeshBuilder builder;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side : {0, divisions})
+        {
+            const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+            const auto corner = [&](int i, int j)
+            {
+                Vec p;
+                p[axis] = grid[axis][side];
+                p[a1] = grid[a1][i];
+                p[a2] = grid[a2][j];
+                return p;
+            };
+            // e_a1 x e_a2 = e_axis: counter-clockwise in (a1, a2) faces +axis, so flip the low side.
+            for (int i = 0; i < divisions; ++i)
+                for (int j = 0; j < divisions; ++j)
+                {
+                    const Vec c00 = corner(i, j), c10 = corner(i + 1, j), c11 = corner(i + 1, j + 1),
+                              c01 = corner(i, j + 1);
+                    if (side > 0)
+                    {
+                        builder.triangle(c00, c10, c11);
+                        builder.triangle(c00, c11, c01);
+                    }
+                    else
+                    {
+                        builder.triangle(c00, c11, c10);
+                        builder.triangle(c00, c01, c11);
+                    }
+                }
+        }
+    return builder.mesh;
+}
+
+// An icosphere of 20 * 4^subdivisions triangles with vertices on the sphere of \a radius.
+rc::Mesh sphereMesh(double radius, int subdivisions)
+{
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    std::vector<Vec> vertices = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<std::array<int, 3>> faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                             {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                             {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                             {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+    for (Vec &v : vertices)
+        v.normalize();
+    for (int level = 0; level < subdivisions; ++level)
+    {
+        std::map<std::pair<int, int>, int> midpoints;
+        const auto midpoint = [&](int i, int j)
+        {
+            const auto key = std::minmax(i, j);
+            const auto found = midpoints.find(key);
+            if (found != midpoints.end())
+                return found->second;
+            vertices.push_back((vertices[i] + vertices[j]).normalized());
+            return midpoints[key] = static_cast<int>(vertices.size() - 1);
+        };
+        std::vector<std::array<int, 3>> finer;
+        for (const auto &f : faces)
+        {
+            const int a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
+            finer.push_back({f[0], a, c});
+            finer.push_back({f[1], b, a});
+            finer.push_back({f[2], c, b});
+            finer.push_back({a, b, c});
+        }
+        faces = finer;
+    }
+    rc::Mesh mesh;
+    for (const Vec &v : vertices)
+        mesh.vertices.push_back(radius * v);
+    for (const auto &f : faces)
+        mesh.triangles.push_back({std::uint32_t(f[0]), std::uint32_t(f[1]), std::uint32_t(f[2])});
+    return mesh;
+}
+
+void expectClosedOutward(rc::Mesh mesh)
+{
+    const rc::MeshTopology topology = rc::cleanMesh(mesh);
+    EXPECT_TRUE(topology.closed) << topology.summary();
+    EXPECT_GT(rc::signedVolume(mesh), 0.0);
+}
+
+Eigen::Isometry3d randomPose(std::mt19937_64 &rng, double reach)
+{
+    std::normal_distribution<double> gauss;
+    std::uniform_real_distribution<double> uniform(-reach, reach);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = Eigen::Quaterniond(gauss(rng), gauss(rng), gauss(rng), gauss(rng)).normalized().toRotationMatrix();
+    pose.translation() = Vec(uniform(rng), uniform(rng), uniform(rng));
+    return pose;
+}
+
+// ---- references ----------------------------------------------------------------------------
+
+// All triangle pairs, with B's triangles moved into A's frame exactly as surfacesWithin does.
+bool bruteForceWithin(const rc::Mesh &a, const Eigen::Isometry3d &poseA, const rc::Mesh &b,
+                      const Eigen::Isometry3d &poseB, double padding)
+{
+    const Eigen::Isometry3d aMb = poseA.inverse(Eigen::Isometry) * poseB;
+    const Eigen::Matrix3d R = aMb.linear();
+    const Vec T = aMb.translation();
+    for (const rc::Mesh::Triangle &tb : b.triangles)
+    {
+        const Vec q0 = R * b.vertices[tb[0]] + T, q1 = R * b.vertices[tb[1]] + T, q2 = R * b.vertices[tb[2]] + T;
+        for (const rc::Mesh::Triangle &ta : a.triangles)
+        {
+            const Vec &p0 = a.vertices[ta[0]], &p1 = a.vertices[ta[1]], &p2 = a.vertices[ta[2]];
+            if (padding > 0.0 ? rc::trianglesWithin(p0, p1, p2, q0, q1, q2, padding)
+                              : rc::trianglesIntersect(p0, p1, p2, q0, q1, q2))
+                return true;
+        }
+    }
+    return false;
+}
+
+double bruteForceDistance(const rc::Mesh &a, const Eigen::Isometry3d &poseA, const rc::Mesh &b,
+                          const Eigen::Isometry3d &poseB)
+{
+    double best = std::numeric_limits<double>::infinity();
+    for (const rc::Mesh::Triangle &tb : b.triangles)
+        for (const rc::Mesh::Triangle &ta : a.triangles)
+            best = std::min(best, rc::triangleDistance(poseA * a.vertices[ta[0]], poseA * a.vertices[ta[1]],
+                                                       poseA * a.vertices[ta[2]], poseB * b.vertices[tb[0]],
+                                                       poseB * b.vertices[tb[1]], poseB * b.vertices[tb[2]]));
+    return best;
+}
+
+std::shared_ptr<fcl::BVHModel<fcl::OBBRSSd>> fclModel(const rc::Mesh &mesh)
+{
+    auto model = std::make_shared<fcl::BVHModel<fcl::OBBRSSd>>();
+    std::vector<fcl::Triangle> triangles;
+    for (const rc::Mesh::Triangle &t : mesh.triangles)
+        triangles.emplace_back(t[0], t[1], t[2]);
+    model->beginModel();
+    model->addSubModel(mesh.vertices, triangles);
+    model->endModel();
+    return model;
+}
+
+// Independent inside test: the generalised winding number (1 inside, 0 outside).
+double windingNumber(const rc::Mesh &mesh, const Vec &point)
+{
+    double total = 0.0;
+    for (const rc::Mesh::Triangle &t : mesh.triangles)
+    {
+        const Vec a = mesh.vertices[t[0]] - point, b = mesh.vertices[t[1]] - point, c = mesh.vertices[t[2]] - point;
+        const double la = a.norm(), lb = b.norm(), lc = c.norm();
+        total += 2.0 * std::atan2(a.dot(b.cross(c)), la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la);
+    }
+    return total / (4.0 * M_PI);
+}
+
+struct Scenario
+{
+    const char *name;
+    rc::Mesh a, b;
+    double reach;  // translations drawn from [-reach, reach]^3
+};
+
+std::vector<Scenario> scenarios()
+{
+    return {{"sphere320/box48", sphereMesh(1.0, 2), boxMesh(Vec(0.6, 0.3, 0.2), 2), 1.0},
+            {"sphere80/sphere320", sphereMesh(0.7, 1), sphereMesh(1.0, 2), 1.2},
+            {"box12/box108", boxMesh(Vec(0.5, 0.5, 0.5)), boxMesh(Vec(1.0, 0.2, 0.4), 3), 1.0}};
+}
+}  // namespace
+
+TEST(MeshBvh, TestMeshesAreClosedAndOutward)
+{
+    expectClosedOutward(boxMesh(Vec(1, 2, 3)));
+    expectClosedOutward(boxMesh(Vec(1, 2, 3), 4));
+    expectClosedOutward(sphereMesh(1.0, 0));
+    expectClosedOutward(sphereMesh(2.0, 3));
+}
+
+TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
+{
+    for (unsigned leafSize : {1u, 4u, 7u})
+    {
+        const rc::Mesh mesh = sphereMesh(1.0, 3);  // 1280 triangles
+        const rc::MeshBvh bvh(mesh, leafSize);
+        std::vector<int> seen(mesh.numTriangles(), 0);
+        for (std::size_t i = 0; i < bvh.nodes().size(); ++i)
+        {
+            const rc::MeshBvh::Node &node = bvh.nodes()[i];
+            if (!node.isLeaf())
+            {
+                ASSERT_EQ(node.count, 0u);
+                for (int child : {node.first, node.first + 1})
+                {
+                    ASSERT_GT(child, static_cast<int>(i));
+                    ASSERT_LT(child, static_cast<int>(bvh.nodes().size()));
+                    EXPECT_TRUE(node.box.contains(bvh.nodes()[child].box.min));
+                    EXPECT_TRUE(node.box.contains(bvh.nodes()[child].box.max));
+                }
+                continue;
+            }
+            ASSERT_GE(node.count, 1u);
+            ASSERT_LE(node.count, leafSize);
+            for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
+            {
+                const std::uint32_t triangle = bvh.triangleOrder()[slot];
+                ++seen[triangle];
+                for (int k = 0; k < 3; ++k)
+                {
+                    const Vec &corner = mesh.vertices[mesh.triangles[triangle][k]];
+                    EXPECT_EQ(bvh.slotTriangle(slot)[k], corner);
+                    EXPECT_TRUE(node.box.contains(corner));
+                }
+            }
+        }
+        for (int count : seen)
+            ASSERT_EQ(count, 1);
+        // Median splits keep the tree balanced.
+        EXPECT_LE(bvh.depth(), static_cast<int>(std::ceil(std::log2(double(mesh.numTriangles()) / leafSize))) + 1);
+    }
+}
+
+TEST(MeshBvh, EmptyMeshesNeverTouch)
+{
+    const rc::Mesh empty, box = boxMesh(Vec(1, 1, 1));
+    const rc::MeshBvh emptyBvh(empty), boxBvh(box);
+    EXPECT_TRUE(emptyBvh.empty());
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    EXPECT_FALSE(rc::surfacesWithin(emptyBvh, identity, boxBvh, identity, 1.0));
+    EXPECT_FALSE(rc::solidsOverlap(boxBvh, identity, true, emptyBvh, identity, true, 0.0));
+    EXPECT_FALSE(rc::pointInsideClosedMesh(emptyBvh, Vec::Zero()));
+}
+
+TEST(SurfacesWithin, MatchesBruteForceOverAllTrianglePairs)
+{
+    std::mt19937_64 rng(21);
+    for (const Scenario &s : scenarios())
+    {
+        const rc::MeshBvh a(s.a), b(s.b);
+        int hits[2] = {0, 0};
+        for (int trial = 0; trial < 120; ++trial)
+        {
+            const Eigen::Isometry3d poseA = randomPose(rng, s.reach), poseB = randomPose(rng, s.reach);
+            for (int p = 0; p < 2; ++p)
+            {
+                const double padding = p == 0 ? 0.0 : 0.05;
+                rc::MeshContact contact;
+                const bool ours = rc::surfacesWithin(a, poseA, b, poseB, padding, &contact);
+                ASSERT_EQ(ours, bruteForceWithin(s.a, poseA, s.b, poseB, padding))
+                    << s.name << " trial " << trial << " padding " << padding;
+                ASSERT_EQ(rc::surfacesWithin(b, poseB, a, poseA, padding), ours) << s.name << " swapped";
+                if (!ours)
+                    continue;
+                ++hits[p];
+                // The reported triangles are within the padding of each other and of the point.
+                ASSERT_GE(contact.triangleA, 0);
+                ASSERT_GE(contact.triangleB, 0);
+                const rc::Mesh::Triangle &ta = s.a.triangles[contact.triangleA], &tb = s.b.triangles[contact.triangleB];
+                const Vec p0 = poseA * s.a.vertices[ta[0]], p1 = poseA * s.a.vertices[ta[1]],
+                          p2 = poseA * s.a.vertices[ta[2]];
+                const Vec q0 = poseB * s.b.vertices[tb[0]], q1 = poseB * s.b.vertices[tb[1]],
+                          q2 = poseB * s.b.vertices[tb[2]];
+                EXPECT_LE(rc::triangleDistance(p0, p1, p2, q0, q1, q2), padding + 1e-12);
+                const Vec &x = contact.position;
+                EXPECT_LE(rc::triangleDistance(p0, p1, p2, x, x, x), padding + 1e-9);
+                EXPECT_LE(rc::triangleDistance(q0, q1, q2, x, x, x), padding + 1e-9);
+            }
+        }
+        std::printf("[ info     ] %s: %d of 120 poses touch, %d within 0.05\n", s.name, hits[0], hits[1]);
+        EXPECT_GT(hits[0], 20);
+        EXPECT_LT(hits[0], 100);
+    }
+}
+
+TEST(SurfacesWithin, AgreesWithFclCollideAndDistance)
+{
+    // FCL works in floating point with its own tolerances, so the two may differ where the meshes
+    // (nearly) touch: such cases are counted, and any disagreement farther than 1e-9 from touching
+    // fails. Distances within 1e-9 of the padding are likewise counted, not compared.
+    std::mt19937_64 rng(33);
+    const double padding = 0.05, band = 1e-9;
+    for (const Scenario &s : scenarios())
+    {
+        const rc::MeshBvh a(s.a), b(s.b);
+        const auto modelA = fclModel(s.a), modelB = fclModel(s.b);
+        int collideDisagree = 0, distanceDisagree = 0, inBand = 0, colliding = 0;
+        for (int trial = 0; trial < 1000; ++trial)
+        {
+            const Eigen::Isometry3d poseA = randomPose(rng, s.reach), poseB = randomPose(rng, s.reach);
+            const fcl::CollisionObjectd objectA(modelA, poseA), objectB(modelB, poseB);
+
+            fcl::CollisionRequestd request;
+            fcl::CollisionResultd result;
+            fcl::collide(&objectA, &objectB, request, result);
+            const bool touching = rc::surfacesWithin(a, poseA, b, poseB, 0.0);
+            colliding += touching;
+            if (touching != result.isCollision())
+            {
+                ++collideDisagree;
+                const double gap = bruteForceDistance(s.a, poseA, s.b, poseB);
+                EXPECT_LT(gap, band) << s.name << " trial " << trial << ": ours " << touching << ", FCL "
+                                     << result.isCollision();
+            }
+
+            fcl::DistanceRequestd distanceRequest;
+            fcl::DistanceResultd distanceResult;
+            fcl::distance(&objectA, &objectB, distanceRequest, distanceResult);
+            const double d = std::max(0.0, distanceResult.min_distance);
+            if (std::abs(d - padding) < band)
+            {
+                ++inBand;
+                continue;
+            }
+            if (rc::surfacesWithin(a, poseA, b, poseB, padding) != (d <= padding))
+            {
+                ++distanceDisagree;
+                ADD_FAILURE() << s.name << " trial " << trial << ": FCL distance " << d;
+            }
+        }
+        std::printf(
+            "[ info     ] %s: 1000 poses, %d touching; disagreements with fcl::collide %d, with "
+            "fcl::distance at padding %.2f %d (%d in the +-%.0e band)\n",
+            s.name, colliding, collideDisagree, padding, distanceDisagree, inBand, band);
+    }
+}
+
+TEST(SurfacesWithin, ExactContactsAreTouching)
+{
+    // Boxes stacked face on face, turned about the vertical and slid sideways: the rigid transform
+    // keeps the contact plane exact, so the oracle must call every one touching, and a gap of a
+    // picometre apart. FCL decides these in floating point; its answers are counted, not asserted.
+    const rc::Mesh lower = boxMesh(Vec(0.5, 0.5, 0.5), 2), upper = boxMesh(Vec(0.3, 0.2, 0.25));
+    const rc::MeshBvh lowerBvh(lower), upperBvh(upper);
+    const auto lowerModel = fclModel(lower), upperModel = fclModel(upper);
+    std::mt19937_64 rng(4);
+    std::uniform_real_distribution<double> angle(-M_PI, M_PI), slide(-0.6, 0.6);
+    int fclMisses = 0, touching = 0;
+    const int trials = 500;
+    for (int trial = 0; trial < trials; ++trial)
+    {
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.linear() = Eigen::AngleAxisd(angle(rng), Vec::UnitZ()).toRotationMatrix();
+        pose.translation() = Vec(slide(rng), slide(rng), 0.75);
+        const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+        // Slid too far, the footprints can miss each other; brute force says which ones touch.
+        const bool expected = bruteForceWithin(lower, identity, upper, pose, 0.0);
+        ASSERT_EQ(rc::surfacesWithin(lowerBvh, identity, upperBvh, pose, 0.0), expected);
+        if (!expected)
+            continue;
+        ++touching;
+        const fcl::CollisionObjectd objectA(lowerModel, identity), objectB(upperModel, pose);
+        fcl::CollisionRequestd request;
+        fcl::CollisionResultd result;
+        fcl::collide(&objectA, &objectB, request, result);
+        fclMisses += !result.isCollision();
+        Eigen::Isometry3d lifted = pose;
+        lifted.translation().z() += 1e-12;
+        EXPECT_FALSE(rc::surfacesWithin(lowerBvh, identity, upperBvh, lifted, 0.0));
+        EXPECT_TRUE(rc::surfacesWithin(lowerBvh, identity, upperBvh, lifted, 2e-12));
+        EXPECT_TRUE(rc::solidsOverlap(lowerBvh, identity, true, upperBvh, pose, true, 0.0));
+    }
+    std::printf("[ info     ] exact face-on-face contacts: fcl::collide calls %d of %d touching poses free\n",
+                fclMisses, touching);
+}
+
+TEST(PointInsideClosedMesh, BoxInsideOutsideAndNearFaces)
+{
+    const rc::Mesh mesh = boxMesh(Vec(1.0, 0.5, 0.25), 3);
+    const rc::MeshBvh bvh(mesh);
+    EXPECT_TRUE(rc::pointInsideClosedMesh(bvh, Vec::Zero()));
+    EXPECT_TRUE(rc::pointInsideClosedMesh(bvh, Vec(1.0 - 1e-6, 0, 0)));
+    EXPECT_FALSE(rc::pointInsideClosedMesh(bvh, Vec(1.0 + 1e-6, 0, 0)));
+    EXPECT_TRUE(rc::pointInsideClosedMesh(bvh, Vec(0.3, -0.5 + 1e-6, 0.25 - 1e-6)));
+    EXPECT_FALSE(rc::pointInsideClosedMesh(bvh, Vec(0.3, -0.5 - 1e-6, 0.1)));
+    EXPECT_FALSE(rc::pointInsideClosedMesh(bvh, Vec(5, 5, 5)));
+    // On a face every ray starts on the surface, so the winding-number fallback decides; either
+    // answer is allowed on the surface, but it must be the same every time.
+    const bool onFace = rc::pointInsideClosedMesh(bvh, Vec(0.3, 0.5, 0.1));
+    EXPECT_EQ(rc::pointInsideClosedMesh(bvh, Vec(0.3, 0.5, 0.1)), onFace);
+    // Points on the lines of the box's edges and face diagonals, just inside and just outside.
+    for (double s : {-0.9, -1.0 / 3.0, 0.0, 1.0 / 3.0, 0.9})
+    {
+        EXPECT_TRUE(rc::pointInsideClosedMesh(bvh, Vec(s, 0.5 - 1e-7, 0.25 - 1e-7)));
+        EXPECT_FALSE(rc::pointInsideClosedMesh(bvh, Vec(s, 0.5 + 1e-7, 0.25 + 1e-7)));
+        EXPECT_TRUE(rc::pointInsideClosedMesh(bvh, Vec(s, s * 0.5 * 0.999, 0)));
+    }
+    std::mt19937_64 rng(8);
+    std::uniform_real_distribution<double> coordinate(-1.5, 1.5);
+    for (int trial = 0; trial < 5000; ++trial)
+    {
+        const Vec p(coordinate(rng), coordinate(rng) / 2, coordinate(rng) / 4);
+        const Vec margin = Vec(1.0, 0.5, 0.25) - p.cwiseAbs();
+        if (std::abs(margin.minCoeff()) < 1e-9)
+            continue;
+        ASSERT_EQ(rc::pointInsideClosedMesh(bvh, p), margin.minCoeff() > 0) << p.transpose();
+    }
+}
+
+TEST(PointInsideClosedMesh, GrazingRaysAreRetried)
+{
+    // The first of the fixed ray directions; from these points it runs exactly through a corner or
+    // along a line meeting an edge of the box, which rayTriangle must flag as ambiguous.
+    const Vec direction(0.4142135623730951, 0.6180339887498949, 0.7320508075688772);
+    const rc::Mesh mesh = boxMesh(Vec(1, 1, 1));
+    const rc::MeshBvh bvh(mesh);
+    const std::vector<std::pair<Vec, bool>> cases = {
+        {Vec(1, 1, 1) - 0.5 * direction, true},        // leaves through the corner
+        {Vec(1, 1, 0.3) - 3.0 * direction, false},     // enters through a face, leaves through an edge
+        {Vec(1, 1, 0.3) - 0.2 * direction, true},      // leaves through that edge
+        {Vec(0.2, -1, -1) - 0.01 * direction, false},  // enters through an edge
+        {Vec(1, 0.2, 1) - 0.1 * direction, true},      // leaves through an edge
+    };
+    for (const auto &[point, inside] : cases)
+    {
+        int grazes = 0;
+        for (const rc::Mesh::Triangle &t : mesh.triangles)
+        {
+            double hit = 0.0;
+            grazes += rc::rayTriangle(point, direction, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]],
+                                      1e-9, hit) < 0;
+        }
+        EXPECT_GT(grazes, 0) << "the case no longer grazes: " << point.transpose();
+        EXPECT_EQ(rc::pointInsideClosedMesh(bvh, point), inside) << point.transpose();
+    }
+}
+
+TEST(PointInsideClosedMesh, SphereMatchesWindingNumber)
+{
+    const rc::Mesh mesh = sphereMesh(1.0, 2);
+    const rc::MeshBvh bvh(mesh);
+    std::mt19937_64 rng(9);
+    std::uniform_real_distribution<double> coordinate(-1.2, 1.2);
+    int inside = 0;
+    for (int trial = 0; trial < 3000; ++trial)
+    {
+        // Every tenth point sits on the ray from the centre through a vertex, near the surface.
+        const Vec p = trial % 10 == 0
+                          ? Vec(mesh.vertices[trial % mesh.numVertices()] * (trial % 20 == 0 ? 0.999 : 1.001))
+                          : Vec(coordinate(rng), coordinate(rng), coordinate(rng));
+        const double winding = windingNumber(mesh, p);
+        ASSERT_TRUE(winding < 0.01 || winding > 0.99) << p.transpose();
+        ASSERT_EQ(rc::pointInsideClosedMesh(bvh, p), winding > 0.5) << p.transpose();
+        inside += winding > 0.5;
+    }
+    EXPECT_GT(inside, 500);
+}
+
+TEST(SolidsOverlap, ContainmentNeedsAClosedContainer)
+{
+    const rc::Mesh big = boxMesh(Vec(1, 1, 1), 2), small = boxMesh(Vec(0.1, 0.2, 0.1));
+    rc::Mesh open = big;
+    open.triangles.resize(open.triangles.size() - 8);  // drop the last face (+z): a box without a lid
+    const rc::MeshBvh bigBvh(big), smallBvh(small), openBvh(open);
+    Eigen::Isometry3d inside = Eigen::Isometry3d::Identity();
+    inside.translation() = Vec(0.3, -0.2, 0.1);
+    inside.linear() = Eigen::AngleAxisd(0.7, Vec(1, 2, 3).normalized()).toRotationMatrix();
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+
+    EXPECT_FALSE(rc::surfacesWithin(smallBvh, inside, bigBvh, identity, 0.0));
+    rc::MeshContact contact;
+    EXPECT_TRUE(rc::solidsOverlap(smallBvh, inside, true, bigBvh, identity, true, 0.0, &contact));
+    EXPECT_EQ(contact.triangleA, -1);
+    EXPECT_EQ(contact.triangleB, -1);
+    EXPECT_TRUE(rc::pointInsideClosedMesh(bigBvh, contact.position));
+    EXPECT_TRUE(rc::solidsOverlap(bigBvh, identity, true, smallBvh, inside, true, 0.0));
+    // The small box is no container: only "big is closed" makes the answer true.
+    EXPECT_TRUE(rc::solidsOverlap(smallBvh, inside, false, bigBvh, identity, true, 0.0));
+    EXPECT_FALSE(rc::solidsOverlap(smallBvh, inside, true, bigBvh, identity, false, 0.0));
+
+    // An open container claims nothing, in either argument order ...
+    EXPECT_FALSE(rc::solidsOverlap(smallBvh, inside, true, openBvh, identity, false, 0.0));
+    EXPECT_FALSE(rc::solidsOverlap(openBvh, identity, false, smallBvh, inside, true, 0.0));
+    // ... but its surface still counts once within the padding (the small box is 0.66 from a wall).
+    EXPECT_TRUE(rc::solidsOverlap(smallBvh, inside, true, openBvh, identity, false, 0.7));
+
+    // Apart: no overlap at all.
+    Eigen::Isometry3d outside = inside;
+    outside.translation() = Vec(3, 0, 0);
+    EXPECT_FALSE(rc::solidsOverlap(smallBvh, outside, true, bigBvh, identity, true, 0.0));
+    EXPECT_FALSE(rc::solidsOverlap(bigBvh, identity, true, smallBvh, outside, true, 0.0));
+}
+
+TEST(SurfacesWithin, TimingOfTwoThousandTriangleQueries)
+{
+    // Not asserted: a sanity print for the hot path, with FCL on the same poses for scale.
+    const rc::Mesh a = sphereMesh(1.0, 3), b = sphereMesh(0.8, 3);  // 1280 triangles each
+    const rc::MeshBvh bvhA(a), bvhB(b);
+    const auto modelA = fclModel(a), modelB = fclModel(b);
+    std::mt19937_64 rng(99);
+    std::vector<std::pair<Eigen::Isometry3d, Eigen::Isometry3d>> poses;
+    for (int i = 0; i < 2000; ++i)
+        poses.emplace_back(randomPose(rng, 1.2), randomPose(rng, 1.2));
+    using Clock = std::chrono::steady_clock;
+    for (double padding : {0.0, 0.02})
+    {
+        int hits = 0;
+        double ours[2] = {0, 0};
+        int counts[2] = {0, 0};
+        for (const auto &[poseA, poseB] : poses)
+        {
+            const auto start = Clock::now();
+            const bool hit = rc::surfacesWithin(bvhA, poseA, bvhB, poseB, padding);
+            ours[hit] += std::chrono::duration<double, std::micro>(Clock::now() - start).count();
+            ++counts[hit];
+            hits += hit;
+        }
+        std::printf(
+            "[ info     ] surfacesWithin 1280 x 1280 triangles, padding %.2f: %.1f us per touching pose "
+            "(%d), %.1f us per separated pose (%d)\n",
+            padding, ours[1] / std::max(1, counts[1]), counts[1], ours[0] / std::max(1, counts[0]), counts[0]);
+    }
+    const auto start = Clock::now();
+    int fclHits = 0;
+    for (const auto &[poseA, poseB] : poses)
+    {
+        const fcl::CollisionObjectd objectA(modelA, poseA), objectB(modelB, poseB);
+        fcl::CollisionRequestd request;
+        fcl::CollisionResultd result;
+        fcl::collide(&objectA, &objectB, request, result);
+        fclHits += result.isCollision();
+    }
+    std::printf("[ info     ] fcl::collide (OBBRSS) on the same poses: %.1f us per pose (%d touching)\n",
+                std::chrono::duration<double, std::micro>(Clock::now() - start).count() / poses.size(), fclHits);
+}
