@@ -98,7 +98,8 @@ TEST(Checker, BadStatesAreInvalidNotErrors)
     EXPECT_FALSE(checker.isValid(std::vector<double>{0, inf, 3, 0, 0, 0, 1}));
     EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 6, 0, 0, 0, 1}));  // z above its bound of 5
     EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 0}));  // zero quaternion
-    EXPECT_TRUE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 2}));   // unnormalised: normalised
+    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 2}));  // qw outside [-1, 1]
+    EXPECT_TRUE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 0.5}));  // unnormalised: normalised
 }
 
 TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
@@ -156,6 +157,40 @@ TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
     EXPECT_TRUE(rc::Checker(shared, nullptr).isValid(std::vector<double>{0.0, M_PI}));
 }
 
+TEST(Checker, ComponentOfOverlappingShellsContainsWhatEitherShellContains)
+{
+    // Two 0.4 m cubes overlapping in x in [-0.1, 0.1] form one component; a 2 cm pebble sits in the
+    // overlap. Parity would count two shells around it and call it outside.
+    rc::RobotModel model;
+    model.name = "twin_cubes";
+    model.links = {{"world", -1, -1}, {"body", -1, 0}};
+    rc::Joint slide;
+    slide.name = "slide";
+    slide.kind = rc::JointKind::Prismatic;
+    slide.parentLink = 0;
+    slide.childLink = 1;
+    slide.axis = Eigen::Vector3d::UnitX();
+    slide.coordinateNames = {"slide"};
+    slide.lower = {-2};
+    slide.upper = {2};
+    model.joints = {slide};
+    model.components = {rc::makeComponent("body", {boxAt({0.4, 0.4, 0.4}, {-0.1, 0, 0}), boxAt({0.4, 0.4, 0.4}, {0.1, 0, 0})})};
+    model.finalize();
+    ASSERT_TRUE(model.components[0].topology.closed);
+    ASSERT_EQ(model.components[0].topology.shells, 2u);
+    auto scene = std::make_shared<rc::Scene>();
+    scene->addObject("pebble", boxAt({0.02, 0.02, 0.02}, {0, 0, 0}));
+    const rc::Checker checker(std::make_shared<rc::RobotModel>(model), scene);
+    for (rc::CollisionMode mode : kModes)
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        rc::Contact contact;
+        EXPECT_FALSE(checker.isValid(std::vector<double>{0.0}, request, &contact)) << rc::toString(mode);
+        EXPECT_TRUE(checker.isValid(std::vector<double>{1.0}, request)) << rc::toString(mode);
+    }
+}
+
 TEST(Checker, EveryModeAgainstTheOracleOnBlindSpots)
 {
     for (const rc::test::BlindSpotSuite &suite : rc::test::blindSpotSuites(400))
@@ -191,7 +226,9 @@ TEST(Checker, EveryModeAgainstTheOracleOnBlindSpots)
             }
             // The paper's method alone is allowed blind spots, but never false alarms.
             if (mode == rc::CollisionMode::Raster)
+            {
                 EXPECT_EQ(falsePositives, 0u) << suite.name;
+            }
         }
     }
 }
@@ -228,7 +265,9 @@ TEST(Checker, SafeModeMatchesTheOracleOnPandaScenes)
             EXPECT_EQ(exact[i] != 0, truth) << scenario << " state " << i;
             // FCL sees surfaces only: it may miss a buried link, never report a free state as colliding.
             if (fcl.collides(q.data() + i * dof))
+            {
                 EXPECT_FALSE(truth) << scenario << " state " << i;
+            }
         }
         EXPECT_GT(colliding, 0u) << scenario;
     }

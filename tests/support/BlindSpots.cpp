@@ -60,10 +60,29 @@ std::vector<BlindSpotSuite> blindSpotSuites(std::size_t n, unsigned seed)
         scene->addObject("wall_y", boxAt({1.0, 0.01, 1.0}, {0, 0.3, 0}));
         scene->addObject("floor", boxAt({1.0, 1.0, 0.01}, {0, 0, -0.3}));
         suite.scene = scene;
-        const Eigen::Quaterniond identity = Eigen::Quaterniond::Identity();
+        // Each state faces one wall with a gap or overlap of up to 2 mm, away from the other walls.
+        const Eigen::Vector3d half(0.1, 0.025, 0.05);
+        const Eigen::Quaterniond turned(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
         for (std::size_t i = 0; i < n; ++i)
-            pushState(suite.states, {0.3 + 0.12 * unit(rng), 0.3 + 0.05 * unit(rng), -0.3 + 0.07 * unit(rng)},
-                      i % 2 ? identity : Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ())));
+        {
+            const bool isTurned = (i / 3) % 2 == 1;
+            const Eigen::Vector3d extent = isTurned ? Eigen::Vector3d(half.y(), half.x(), half.z()) : half;
+            const double gap = 0.002 * unit(rng);
+            Eigen::Vector3d p(-0.1 + 0.1 * unit(rng), -0.1 + 0.1 * unit(rng), 0.05 + 0.1 * unit(rng));
+            switch (i % 3)
+            {
+                case 0:
+                    p.x() = 0.3 - 0.005 - extent.x() - gap;
+                    break;
+                case 1:
+                    p.y() = 0.3 - 0.005 - extent.y() - gap;
+                    break;
+                default:
+                    p.z() = -0.3 + 0.005 + extent.z() + gap;
+                    break;
+            }
+            pushState(suite.states, p, isTurned ? turned : Eigen::Quaterniond::Identity());
+        }
         suites.push_back(std::move(suite));
     }
     {  // Buried: the robot inside a big block, or a small block inside a hollow-free robot.

@@ -132,6 +132,28 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles) : mesh_(&mesh)
     depth_ = build(0, static_cast<std::uint32_t>(n), 0, centroids, leafSize);
     if (depth_ > kMaxDepth)  // cannot happen for a median split of fewer than 2^31 triangles
         throw ConfigurationError("MeshBvh: tree depth " + std::to_string(depth_) + " exceeds the query stacks");
+    // One vertex per connected shell (union-find over triangles sharing vertices).
+    std::vector<std::uint32_t> parent(mesh.vertices.size());
+    std::iota(parent.begin(), parent.end(), 0u);
+    const auto root = [&parent](std::uint32_t i)
+    {
+        while (parent[i] != i)
+            i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (const Mesh::Triangle &t : mesh.triangles)
+        for (int k = 1; k < 3; ++k)
+            parent[root(t[k])] = root(t[0]);
+    std::vector<bool> seen(mesh.vertices.size(), false);
+    for (const Mesh::Triangle &t : mesh.triangles)
+    {
+        const std::uint32_t r = root(t[0]);
+        if (!seen[r])
+        {
+            seen[r] = true;
+            shellSeeds_.push_back(t[0]);
+        }
+    }
     corners_.resize(n);
     for (std::size_t slot = 0; slot < n; ++slot)
     {
@@ -262,7 +284,11 @@ bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
     for (const Vec &direction : kRayDirections)
     {
         const Vec inverse = direction.cwiseInverse();
-        bool parity = false, grazed = false;
+        // Signed crossings (+1 leaving through an outward face, -1 entering) rather than parity: a
+        // mesh of several overlapping closed shells (a link of a cylinder and two spheres) contains
+        // the point when any shell does, which parity gets wrong inside an overlap.
+        int winding = 0;
+        bool grazed = false;
         std::int32_t stack[kNodeStackSize];
         int top = 0;
         stack[top++] = 0;
@@ -287,11 +313,12 @@ bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
                     grazed = true;
                     break;
                 }
-                parity ^= crossing == 1;
+                if (crossing == 1)
+                    winding += direction.dot((t[1] - t[0]).cross(t[2] - t[0])) > 0 ? 1 : -1;
             }
         }
         if (!grazed)
-            return parity;
+            return winding > 0;
     }
     return windingNumber(bvh, point) > 0.5;
 }
@@ -303,21 +330,26 @@ bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closed
         return true;
     if (a.empty() || b.empty())
         return false;
-    // The surfaces do not meet, so each solid lies wholly inside or wholly outside the other:
-    // one vertex tells which.
+    // The surfaces do not meet, so each shell of one solid lies wholly inside or wholly outside
+    // the other: one vertex per shell tells which.
     const auto containedIn = [contact](const MeshBvh &inner, const Eigen::Isometry3d &innerPose, const MeshBvh &outer,
                                        const Eigen::Isometry3d &outerPose)
     {
-        const Vec vertex = innerPose * inner.slotTriangle(0)[0];
-        if (!pointInsideClosedMesh(outer, outerPose.inverse(Eigen::Isometry) * vertex))
-            return false;
-        if (contact)
+        const Eigen::Isometry3d innerToOuter = outerPose.inverse(Eigen::Isometry) * innerPose;
+        for (std::uint32_t seed : inner.shellSeeds())
         {
-            contact->position = vertex;
-            contact->triangleA = -1;
-            contact->triangleB = -1;
+            const Vec vertex = inner.mesh().vertices[seed];
+            if (!pointInsideClosedMesh(outer, innerToOuter * vertex))
+                continue;
+            if (contact)
+            {
+                contact->position = innerPose * vertex;
+                contact->triangleA = -1;
+                contact->triangleB = -1;
+            }
+            return true;
         }
-        return true;
+        return false;
     };
     return (closedB && containedIn(a, poseA, b, poseB)) || (closedA && containedIn(b, poseB, a, poseA));
 }

@@ -50,6 +50,9 @@ public:
     int depth() const { return depth_; }
     bool empty() const { return nodes_.empty(); }
 
+    /** \brief One vertex index of every connected shell of the mesh (for containment tests). */
+    const std::vector<std::uint32_t> &shellSeeds() const { return shellSeeds_; }
+
 private:
     int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Eigen::Vector3d> &centroids,
               unsigned maxLeafTriangles);
@@ -58,6 +61,7 @@ private:
     std::vector<Node> nodes_;
     std::vector<std::uint32_t> triangleOrder_;
     std::vector<std::array<Eigen::Vector3d, 3>> corners_;
+    std::vector<std::uint32_t> shellSeeds_;
     int depth_ = -1;
 };
 

@@ -160,14 +160,12 @@ MeshTopology cleanMesh(Mesh &mesh, double weldTolerance)
         const Mesh::Triangle &t = mesh.triangles[i];
         auto [it, added] = shellOfRoot.emplace(root(t[0]), shellVolume.size());
         if (added)
-        {
             shellVolume.push_back(0.0);
-            topology.shellSeeds.push_back(t[0]);
-        }
         shellOfTriangle[i] = it->second;
         shellVolume[it->second] +=
             mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]])) / 6.0;
     }
+    topology.shells = shellVolume.size();
     if (topology.closed)
         for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
             if (shellVolume[shellOfTriangle[i]] < 0)
@@ -187,8 +185,6 @@ MeshTopology cleanMesh(Mesh &mesh, double weldTolerance)
             i = static_cast<std::uint32_t>(used[i]);
         }
     mesh.vertices = std::move(compact);
-    for (std::uint32_t &seed : topology.shellSeeds)
-        seed = static_cast<std::uint32_t>(used[seed]);
     return topology;
 }
 
@@ -210,9 +206,7 @@ MeshTopology cleanAndMerge(std::vector<Mesh> parts, Mesh &merged, double weldTol
         total.degenerateTriangles += t.degenerateTriangles;
         total.mergedVertices += t.mergedVertices;
         total.removedDuplicateFaces += t.removedDuplicateFaces;
-        const auto offset = static_cast<std::uint32_t>(merged.vertices.size());
-        for (std::uint32_t seed : t.shellSeeds)
-            total.shellSeeds.push_back(seed + offset);
+        total.shells += t.shells;
         merged.append(part);
     }
     total.closed = allClosed && !merged.empty();

@@ -20,10 +20,7 @@ struct MeshTopology
     std::size_t degenerateTriangles = 0;  ///< removed: zero area or repeated vertex
     std::size_t mergedVertices = 0;       ///< coincident vertices welded
     std::size_t removedDuplicateFaces = 0;  ///< double-sided copies (front and back) removed
-    /** \brief One vertex of each connected shell (triangles linked through shared vertices). A solid
-        made of several shells contains a point when any shell does; containment tests need a
-        point of every shell. */
-    std::vector<std::uint32_t> shellSeeds;
+    std::size_t shells = 0;  ///< connected pieces (triangles linked through shared vertices)
 
     /** \brief One line for `rastercheck info` and warnings, e.g. "closed" or
         "open (12 boundary edges, 2 non-manifold)". */
