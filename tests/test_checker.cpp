@@ -295,3 +295,33 @@ TEST(Checker, VerdictsAndContactsAreIdenticalAcrossThreadCounts)
         }
     }
 }
+
+TEST(Checker, RasterImageMarksTheCollisionPixels)
+{
+    const rc::Checker checker(cubeRobot(0.2), tableScene());
+    rc::CollisionRequest request;
+    request.mode = rc::CollisionMode::Raster;
+    rc::Contact contact;
+    const std::vector<double> q = at(0.2, 0.1, 0.05);
+    ASSERT_FALSE(checker.isValid(q, request, &contact));
+    rc::RasterImage image;
+    ASSERT_TRUE(checker.rasterImage(q.data(), contact, request, image));
+    const std::size_t pixels = static_cast<std::size_t>(image.grid.width * image.grid.height);
+    ASSERT_EQ(image.hits.size(), pixels);
+    std::size_t hits = 0, both = 0;
+    for (std::size_t p = 0; p < pixels; ++p)
+    {
+        hits += image.hits[p];
+        both += image.coverage[p] == 3;
+        if (image.hits[p])
+        {
+            EXPECT_EQ(image.coverage[p], 3);  // an overlap needs fragments of both solids
+        }
+    }
+    // The cube's 0.2 x 0.2 footprint sinks into the table top: rays along z (the window's thinnest
+    // extent, 5 cm) see the overlap over the whole footprint.
+    EXPECT_EQ(image.grid.axis, 2);
+    EXPECT_GT(hits, pixels / 2);
+    EXPECT_EQ(hits, both);
+    EXPECT_FALSE(checker.rasterImage(q.data(), rc::Contact{}, request, image));
+}

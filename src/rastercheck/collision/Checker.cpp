@@ -20,7 +20,9 @@ BackendChoice parseBackendChoice(const std::string &text)
 }
 
 Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOptions &options)
-  : model_(std::make_shared<const CollisionModel>(std::move(robot), std::move(scene))), threads_(options.threads)
+  : model_(std::make_shared<const CollisionModel>(std::move(robot), std::move(scene)))
+  , reference_(model_)
+  , threads_(options.threads)
 {
     if (options.threads < 0)
         throw ConfigurationError("CheckerOptions::threads must be >= 0 (0 = all cores)");
@@ -42,6 +44,12 @@ bool Checker::isValid(const double *q, const CollisionRequest &request, Contact 
     std::uint8_t valid = 0;
     backend_->check(q, 1, &valid, contact, request, 1);
     return valid != 0;
+}
+
+bool Checker::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
+                          RasterImage &image) const
+{
+    return reference_.rasterImage(q, contact, request, image);
 }
 
 std::string Checker::describe(const Contact &contact) const

@@ -9,6 +9,7 @@
 #include "rastercheck/collision/Backend.h"
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/collision/CollisionRequest.h"
+#include "rastercheck/collision/CpuBackend.h"
 
 namespace rastercheck
 {
@@ -59,6 +60,11 @@ public:
     const Scene &scene() const { return *model_->scene; }
     std::size_t dof() const { return model_->robot->numCoordinates(); }
 
+    /** \brief The raster image of the pair named by \a contact at state \a q (CPU pipeline; for
+        pictures such as the paper's Fig. 6). False when the contact names no pair. */
+    bool rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
+                     RasterImage &image) const;
+
     /** \brief Human-readable description of a contact: "panda_link5 vs object 'box_3' triangle 7 at
         (0.41, 0.02, 0.33)". */
     std::string describe(const Contact &contact) const;
@@ -66,6 +72,7 @@ public:
 private:
     CollisionModelConstPtr model_;
     std::unique_ptr<Backend> backend_;
+    CpuBackend reference_;  // pictures and diagnostics run the CPU pipeline whatever the backend
     int threads_;
 };
 }  // namespace rastercheck

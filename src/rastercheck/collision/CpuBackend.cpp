@@ -122,10 +122,11 @@ bool provenSeparated(const Solid &a, const Vec3<float> *worldA, const std::vecto
     return true;
 }
 
-// Stages: pre-rasterization count, scan, rasterization, per-pixel sort, Sort_Search_Pair.
+// Stages: pre-rasterization count, scan, rasterization, per-pixel sort, Sort_Search_Pair. With an
+// image, every pixel is walked and recorded (pictures); without, the first hit ends the pair.
 bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std::uint32_t> &candidatesA,
                const Solid &b, const Vec3<float> *worldB, const std::vector<std::uint32_t> &candidatesB,
-               const device::RasterGrid &grid, CpuWorkspace &ws, Contact &contact)
+               const device::RasterGrid &grid, CpuWorkspace &ws, Contact &contact, RasterImage *image = nullptr)
 {
     const int pixels = grid.width * grid.height;
     ws.pixelCount.assign(static_cast<std::size_t>(pixels), 0);
@@ -155,16 +156,31 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
         };
     });
 
+    if (image)
+    {
+        image->grid = grid;
+        image->coverage.assign(static_cast<std::size_t>(pixels), 0);
+        image->hits.assign(static_cast<std::size_t>(pixels), 0);
+    }
+    bool found = false;
     for (int p = 0; p < pixels; ++p)
     {
         const int start = ws.pixelStart[p], count = ws.pixelStart[p + 1] - start;
+        device::Fragment *fragments = ws.fragments.data() + start;
+        if (image)
+            for (int k = 0; k < count; ++k)
+                image->coverage[p] |= device::isPartyB(fragments[k]) ? 2 : 1;
         if (count < 2)
             continue;
-        device::Fragment *fragments = ws.fragments.data() + start;
         device::sortFragments(fragments, count);
         const int hit = device::sortSearchPair(fragments, count, a.slice->closed, b.slice->closed);
         if (hit < 0)
             continue;
+        if (image)
+            image->hits[p] = 1;
+        if (found)
+            continue;
+        found = true;
         int objectFragment = hit;
         while (objectFragment > 0 && !device::isPartyB(fragments[objectFragment]))
             --objectFragment;
@@ -173,9 +189,10 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
         contact.position[grid.axis] = fragments[hit].depth;
         contact.position[u] = grid.origin[0] + (static_cast<float>(p % grid.width) + 0.5f) * grid.pixel;
         contact.position[v] = grid.origin[1] + (static_cast<float>(p / grid.width) + 0.5f) * grid.pixel;
-        return true;
+        if (!image)
+            return true;
     }
-    return false;
+    return found;
 }
 
 bool exactOverlap(const Solid &a, const Solid &b, double padding, Contact &contact)
@@ -189,9 +206,17 @@ bool exactOverlap(const Solid &a, const Solid &b, double padding, Contact &conta
     return true;
 }
 
-/** \brief Decides one pair of solids; fills contact.triangle and contact.position on collision. */
-bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
-                  Contact &contact)
+/** \brief The image plane of a pair and its candidate triangles: the stages before rasterization. */
+struct PreparedPair
+{
+    device::RasterGrid grid;
+    float margin;  // padding plus the float pipeline's rounding allowance
+    const Vec3<float> *worldA;
+    const Vec3<float> *worldB;
+};
+
+bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
+                 PreparedPair &pair)
 {
     const float padding = static_cast<float>(request.padding);
     device::Box grownA = a.bounds;
@@ -203,28 +228,91 @@ bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &reques
     const device::Box window = device::intersection(grownA, b.bounds);
     if (device::isEmpty(window))
         return false;
-    const bool rasterUsable = a.slice->closed || b.slice->closed;
-    if (request.mode == CollisionMode::Exact || !rasterUsable)
-        return exactOverlap(a, b, request.padding, contact);
-
-    const device::RasterGrid grid = device::makeGrid(window, static_cast<float>(pixel), request.maxImageSide);
+    pair.grid = device::makeGrid(window, static_cast<float>(pixel), request.maxImageSide);
     // Rounding allowance of the float pipeline: a few ulps of the largest coordinate in play.
     float magnitude = 0;
     for (int k = 0; k < 3; ++k)
         magnitude = fmaxf(magnitude, fmaxf(fabsf(window.min[k]), fabsf(window.max[k])));
-    const float margin = padding + 1e-6f * magnitude + 1e-6f * grid.pixel;
-    const Vec3<float> *worldA = worldVertices(a, ws.worldA);
-    const Vec3<float> *worldB = worldVertices(b, ws.worldB);
-    cullToImage(a, worldA, grid, margin, ws.candidatesA);
-    cullToImage(b, worldB, grid, margin, ws.candidatesB);
-    if (request.mode == CollisionMode::Safe &&
-        provenSeparated(a, worldA, ws.candidatesA, b, worldB, ws.candidatesB, grid, margin, ws))
+    pair.margin = padding + 1e-6f * magnitude + 1e-6f * pair.grid.pixel;
+    pair.worldA = worldVertices(a, ws.worldA);
+    pair.worldB = worldVertices(b, ws.worldB);
+    cullToImage(a, pair.worldA, pair.grid, pair.margin, ws.candidatesA);
+    cullToImage(b, pair.worldB, pair.grid, pair.margin, ws.candidatesB);
+    return true;
+}
+
+/** \brief Decides one pair of solids; fills contact.triangle and contact.position on collision. */
+bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
+                  Contact &contact)
+{
+    const bool rasterUsable = a.slice->closed || b.slice->closed;
+    if (request.mode == CollisionMode::Exact || !rasterUsable)
+    {
+        // The box culls already passed; the window test is the last cheap exit before the oracle.
+        device::Box grownA = a.bounds;
+        for (int k = 0; k < 3; ++k)
+        {
+            grownA.min[k] -= static_cast<float>(request.padding);
+            grownA.max[k] += static_cast<float>(request.padding);
+        }
+        return !device::isEmpty(device::intersection(grownA, b.bounds)) &&
+               exactOverlap(a, b, request.padding, contact);
+    }
+    PreparedPair pair;
+    if (!preparePair(a, b, request, pixel, ws, pair))
         return false;
-    if (rasterHit(a, worldA, ws.candidatesA, b, worldB, ws.candidatesB, grid, ws, contact))
+    if (request.mode == CollisionMode::Safe &&
+        provenSeparated(a, pair.worldA, ws.candidatesA, b, pair.worldB, ws.candidatesB, pair.grid, pair.margin, ws))
+        return false;
+    if (rasterHit(a, pair.worldA, ws.candidatesA, b, pair.worldB, ws.candidatesB, pair.grid, ws, contact))
         return true;
     if (request.mode == CollisionMode::Raster && request.padding <= 0)
         return false;
     return exactOverlap(a, b, request.padding, contact);
+}
+
+// Stages: forward kinematics and the hybrid BVH refit (component OBBs, layer AABBs).
+void refit(const CollisionModel &model, const double *q, CpuWorkspace &ws)
+{
+    forwardKinematics(*model.robot, ws.data, q);
+    const std::size_t m = model.numComponents();
+    for (std::size_t c = 0; c < m; ++c)
+    {
+        ws.componentExactPose[c] = ws.data.oMl[model.componentLink[c]];
+        const device::Pose<double> exact = toDevicePose(ws.componentExactPose[c]);
+        for (int k = 0; k < 12; ++k)
+            ws.componentPose[c].m[k] = static_cast<float>(exact.m[k]);
+        ws.componentBox[c] = device::transformBox(ws.componentPose[c], model.componentLocalBoxes[c]);
+        ws.componentBounds[c] = device::boundsOf(ws.componentBox[c]);
+    }
+    for (std::size_t k = m; k-- > 0;)
+    {
+        ws.layerBounds[k] = ws.componentBounds[k];
+        for (int j = static_cast<int>(k) + 1; j < model.componentSubtreeEnd[k]; ++j)
+            device::extend(ws.layerBounds[k], ws.componentBounds[j]);
+    }
+}
+
+Solid componentSolid(const CollisionModel &model, CpuWorkspace &ws, std::size_t c)
+{
+    return Solid{&model.components[c],
+                 model.componentVertices.data() + 3 * model.components[c].firstVertex,
+                 model.componentTriangles.data() + 3 * model.components[c].firstTriangle,
+                 &ws.componentPose[c],
+                 ws.componentBounds[c],
+                 model.componentBvhs[c].get(),
+                 &ws.componentExactPose[c]};
+}
+
+Solid objectSolid(const CollisionModel &model, std::size_t o)
+{
+    return Solid{&model.objects[o],
+                 model.objectVertices.data() + 3 * model.objects[o].firstVertex,
+                 model.objectTriangles.data() + 3 * model.objects[o].firstTriangle,
+                 nullptr,
+                 model.objectBoxes[o],
+                 model.objectBvhs[o].get(),
+                 &identityPose()};
 }
 }  // namespace
 
@@ -257,7 +345,6 @@ void CpuBackend::release(std::unique_ptr<CpuWorkspace> workspace) const
 bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut) const
 {
     const CollisionModel &model = *model_;
-    const RobotModel &robot = *model.robot;
     Contact contact;
     auto invalid = [&](Contact::Kind kind) {
         contact.kind = kind;
@@ -269,37 +356,11 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     if (!model.configurationAdmissible(q))
         return invalid(Contact::Kind::OutOfBounds);
 
-    // Stage: forward kinematics and the hybrid BVH refit (component OBBs, layer AABBs).
-    forwardKinematics(robot, ws.data, q);
+    refit(model, q, ws);
     const std::size_t m = model.numComponents();
-    for (std::size_t c = 0; c < m; ++c)
-    {
-        ws.componentExactPose[c] = ws.data.oMl[model.componentLink[c]];
-        const device::Pose<double> exact = toDevicePose(ws.componentExactPose[c]);
-        for (int k = 0; k < 12; ++k)
-            ws.componentPose[c].m[k] = static_cast<float>(exact.m[k]);
-        ws.componentBox[c] = device::transformBox(ws.componentPose[c], model.componentLocalBoxes[c]);
-        ws.componentBounds[c] = device::boundsOf(ws.componentBox[c]);
-    }
-    for (std::size_t k = m; k-- > 0;)
-    {
-        ws.layerBounds[k] = ws.componentBounds[k];
-        for (int j = static_cast<int>(k) + 1; j < model.componentSubtreeEnd[k]; ++j)
-            device::extend(ws.layerBounds[k], ws.componentBounds[j]);
-    }
 
     const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
     const float padding = static_cast<float>(request.padding);
-    auto componentSolid = [&](std::size_t c) {
-        return Solid{&model.components[c],
-                     model.componentVertices.data() + 3 * model.components[c].firstVertex,
-                     model.componentTriangles.data() + 3 * model.components[c].firstTriangle,
-                     &ws.componentPose[c],
-                     ws.componentBounds[c],
-                     model.componentBvhs[c].get(),
-                     &ws.componentExactPose[c]};
-    };
-
     // Stage: distance set and the Alg. 1 box culls, then the pair pipeline.
     if (request.checkEnvironment && model.numObjects() > 0 && m > 0)
     {
@@ -327,13 +388,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
             }
             if (std::sqrt(distance) > robotRadius + std::sqrt(objectRadius) + padding)
                 continue;
-            const Solid object{&model.objects[o],
-                               model.objectVertices.data() + 3 * model.objects[o].firstVertex,
-                               model.objectTriangles.data() + 3 * model.objects[o].firstTriangle,
-                               nullptr,
-                               objectBox,
-                               model.objectBvhs[o].get(),
-                               &identityPose()};
+            const Solid object = objectSolid(model, o);
             for (std::size_t k = 0; k < m;)
             {
                 if (!device::boxesOverlap(ws.layerBounds[k], objectBox, padding))
@@ -342,7 +397,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     continue;
                 }
                 if (device::orientedBoxOverlapsBox(ws.componentBox[k], objectBox, padding) &&
-                    pairCollides(componentSolid(k), object, request, pixel, ws, contact))
+                    pairCollides(componentSolid(model, ws, k), object, request, pixel, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -358,7 +413,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         {
             if (!device::orientedBoxesOverlap(ws.componentBox[a], ws.componentBox[b], padding))
                 continue;
-            if (pairCollides(componentSolid(a), componentSolid(b), request, pixel, ws, contact))
+            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b), request, pixel, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;
@@ -369,6 +424,28 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     if (contactOut)
         *contactOut = Contact{};
     return true;
+}
+
+bool CpuBackend::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
+                             RasterImage &image) const
+{
+    const CollisionModel &model = *model_;
+    const bool environment = contact.kind == Contact::Kind::Environment;
+    if ((!environment && contact.kind != Contact::Kind::SelfCollision) || !model.configurationAdmissible(q))
+        return false;
+    std::unique_ptr<CpuWorkspace> ws = acquire();
+    refit(model, q, *ws);
+    const Solid a = componentSolid(model, *ws, static_cast<std::size_t>(contact.component));
+    const Solid b = environment ? objectSolid(model, static_cast<std::size_t>(contact.object))
+                                : componentSolid(model, *ws, static_cast<std::size_t>(contact.otherComponent));
+    const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
+    PreparedPair pair;
+    Contact scratch;
+    const bool made = preparePair(a, b, request, pixel, *ws, pair);
+    if (made)
+        rasterHit(a, pair.worldA, ws->candidatesA, b, pair.worldB, ws->candidatesB, pair.grid, *ws, scratch, &image);
+    release(std::move(ws));
+    return made;
 }
 
 void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
