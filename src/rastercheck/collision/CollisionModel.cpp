@@ -94,7 +94,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
     if (!diagonals.empty())
     {
         std::nth_element(diagonals.begin(), diagonals.begin() + diagonals.size() / 2, diagonals.end());
-        defaultPixelSize = diagonals[diagonals.size() / 2] / 128.0;
+        defaultPixelSize = diagonals[diagonals.size() / 2] / 32.0;
     }
     if (!(defaultPixelSize > 0))
         defaultPixelSize = 1e-3;

@@ -37,7 +37,7 @@ struct CollisionRequest
     /** \brief Raster pixel side (world units); 0 uses CollisionModel::defaultPixelSize. */
     double pixelSize = 0.0;
     /** \brief Largest image side per pair; a larger window gets proportionally larger pixels. */
-    int maxImageSide = 256;
+    int maxImageSide = 64;
     bool checkEnvironment = true;
     bool checkSelfCollision = true;
 };

@@ -21,6 +21,8 @@ struct CpuWorkspace
       , componentBox(model.numComponents())
       , componentBounds(model.numComponents())
       , layerBounds(model.numComponents())
+      , componentWorld(model.numComponents())
+      , componentWorldState(model.numComponents(), 0)
     {
     }
 
@@ -31,7 +33,11 @@ struct CpuWorkspace
     std::vector<device::Box> componentBounds;              // n_components, world
     std::vector<device::Box> layerBounds;                  // n_components: bounds of layer k's subtree
 
-    std::vector<device::Vec3<float>> worldA, worldB;  // transformed vertices of the pair's solids
+    // World vertices of each component, transformed once per state on first use (a component
+    // meets several objects); componentWorldState says for which state they are current.
+    std::vector<std::vector<device::Vec3<float>>> componentWorld;  // n_components x n_vertices
+    std::vector<std::uint64_t> componentWorldState;                // n_components
+    std::uint64_t state = 0;
     std::vector<std::uint32_t> candidatesA, candidatesB;
     std::vector<device::DepthRange> rangesA, rangesB;  // n_pixels
     std::vector<int> pixelCount;                       // n_pixels
@@ -50,6 +56,7 @@ struct Solid
     const float *vertices;           // slice's vertices, local frame, x y z
     const std::uint32_t *triangles;  // slice's triangles
     const device::Pose<float> *pose;  // null: vertices are already in the world frame
+    int component;                    // index for the per-state vertex cache; -1 for objects
     device::Box bounds;              // world
     const MeshBvh *bvh;
     const Eigen::Isometry3d *exactPose;
@@ -63,14 +70,19 @@ const Eigen::Isometry3d &identityPose()
 
 // Stage: vertices of a solid in the world frame, and its triangles whose projection meets the
 // image rectangle grown by `margin` (every triangle a ray of the image can cross: parity stays exact).
-const Vec3<float> *worldVertices(const Solid &solid, std::vector<Vec3<float>> &buffer)
+const Vec3<float> *worldVertices(const Solid &solid, CpuWorkspace &ws)
 {
     const Vec3<float> *local = reinterpret_cast<const Vec3<float> *>(solid.vertices);
     if (!solid.pose)
         return local;
-    buffer.resize(solid.slice->numVertices);
-    for (std::uint32_t i = 0; i < solid.slice->numVertices; ++i)
-        buffer[i] = device::transformPoint(*solid.pose, local[i]);
+    std::vector<Vec3<float>> &buffer = ws.componentWorld[solid.component];
+    if (ws.componentWorldState[solid.component] != ws.state)
+    {
+        buffer.resize(solid.slice->numVertices);
+        for (std::uint32_t i = 0; i < solid.slice->numVertices; ++i)
+            buffer[i] = device::transformPoint(*solid.pose, local[i]);
+        ws.componentWorldState[solid.component] = ws.state;
+    }
     return buffer.data();
 }
 
@@ -87,8 +99,8 @@ void cullToImage(const Solid &solid, const Vec3<float> *world, const device::Ras
         const Vec3<float> &a = world[tri[0]], &b = world[tri[1]], &c = world[tri[2]];
         const float au = device::coordinate(a, u), bu = device::coordinate(b, u), cu = device::coordinate(c, u);
         const float av = device::coordinate(a, v), bv = device::coordinate(b, v), cv = device::coordinate(c, v);
-        if (fmaxf(au, fmaxf(bu, cu)) < uLo || fminf(au, fminf(bu, cu)) > uHi || fmaxf(av, fmaxf(bv, cv)) < vLo ||
-            fminf(av, fminf(bv, cv)) > vHi)
+        if (device::maxOf(au, device::maxOf(bu, cu)) < uLo || device::minOf(au, device::minOf(bu, cu)) > uHi || device::maxOf(av, device::maxOf(bv, cv)) < vLo ||
+            device::minOf(av, device::minOf(bv, cv)) > vHi)
             continue;
         candidates.push_back(t);
     }
@@ -232,10 +244,10 @@ bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request
     // Rounding allowance of the float pipeline: a few ulps of the largest coordinate in play.
     float magnitude = 0;
     for (int k = 0; k < 3; ++k)
-        magnitude = fmaxf(magnitude, fmaxf(fabsf(window.min[k]), fabsf(window.max[k])));
+        magnitude = device::maxOf(magnitude, device::maxOf(fabsf(window.min[k]), fabsf(window.max[k])));
     pair.margin = padding + 1e-6f * magnitude + 1e-6f * pair.grid.pixel;
-    pair.worldA = worldVertices(a, ws.worldA);
-    pair.worldB = worldVertices(b, ws.worldB);
+    pair.worldA = worldVertices(a, ws);
+    pair.worldB = worldVertices(b, ws);
     cullToImage(a, pair.worldA, pair.grid, pair.margin, ws.candidatesA);
     cullToImage(b, pair.worldB, pair.grid, pair.margin, ws.candidatesB);
     return true;
@@ -274,6 +286,7 @@ bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &reques
 // Stages: forward kinematics and the hybrid BVH refit (component OBBs, layer AABBs).
 void refit(const CollisionModel &model, const double *q, CpuWorkspace &ws)
 {
+    ++ws.state;
     forwardKinematics(*model.robot, ws.data, q);
     const std::size_t m = model.numComponents();
     for (std::size_t c = 0; c < m; ++c)
@@ -299,6 +312,7 @@ Solid componentSolid(const CollisionModel &model, CpuWorkspace &ws, std::size_t 
                  model.componentVertices.data() + 3 * model.components[c].firstVertex,
                  model.componentTriangles.data() + 3 * model.components[c].firstTriangle,
                  &ws.componentPose[c],
+                 static_cast<int>(c),
                  ws.componentBounds[c],
                  model.componentBvhs[c].get(),
                  &ws.componentExactPose[c]};
@@ -310,6 +324,7 @@ Solid objectSolid(const CollisionModel &model, std::size_t o)
                  model.objectVertices.data() + 3 * model.objects[o].firstVertex,
                  model.objectTriangles.data() + 3 * model.objects[o].firstTriangle,
                  nullptr,
+                 -1,
                  model.objectBoxes[o],
                  model.objectBvhs[o].get(),
                  &identityPose()};

@@ -28,8 +28,8 @@ RC_HD void extend(Box &box, const Box &other)
 {
     for (int k = 0; k < 3; ++k)
     {
-        box.min[k] = fminf(box.min[k], other.min[k]);
-        box.max[k] = fmaxf(box.max[k], other.max[k]);
+        box.min[k] = minOf(box.min[k], other.min[k]);
+        box.max[k] = maxOf(box.max[k], other.max[k]);
     }
 }
 
@@ -38,8 +38,8 @@ RC_HD void extend(Box &box, const Vec3<float> &p)
     const float c[3] = {p.x, p.y, p.z};
     for (int k = 0; k < 3; ++k)
     {
-        box.min[k] = fminf(box.min[k], c[k]);
-        box.max[k] = fmaxf(box.max[k], c[k]);
+        box.min[k] = minOf(box.min[k], c[k]);
+        box.max[k] = maxOf(box.max[k], c[k]);
     }
 }
 
@@ -57,8 +57,8 @@ RC_HD Box intersection(const Box &a, const Box &b)
     Box c;
     for (int k = 0; k < 3; ++k)
     {
-        c.min[k] = fmaxf(a.min[k], b.min[k]);
-        c.max[k] = fminf(a.max[k], b.max[k]);
+        c.min[k] = maxOf(a.min[k], b.min[k]);
+        c.max[k] = minOf(a.max[k], b.max[k]);
     }
     return c;
 }

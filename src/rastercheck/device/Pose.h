@@ -51,6 +51,11 @@ RC_HD Vec3<T> cross(const Vec3<T> &a, const Vec3<T> &b)
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 
+// fminf/fmaxf are library calls on the host (their NaN rules forbid inlining); coordinates in the
+// pipeline are finite (states are checked first), so plain comparisons serve.
+RC_HD float minOf(float a, float b) { return a < b ? a : b; }
+RC_HD float maxOf(float a, float b) { return a > b ? a : b; }
+
 /** \brief p' = pose * p. */
 template <class T>
 RC_HD Vec3<T> transformPoint(const Pose<T> &pose, const Vec3<T> &p)

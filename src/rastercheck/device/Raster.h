@@ -64,7 +64,7 @@ RC_HD RasterGrid makeGrid(const Box &window, float pixel, int maxSide)
     if (extent[2] < extent[axis])
         axis = 2;
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const float largest = fmaxf(extent[u], extent[v]);
+    const float largest = extent[u] > extent[v] ? extent[u] : extent[v];
     // The 0.1 % slack keeps ceil(extent / pixel) within maxSide despite rounding, so the grid
     // always covers the whole window (the separation proof relies on it).
     if (largest > pixel * static_cast<float>(maxSide))
@@ -95,8 +95,10 @@ struct SnappedVertex
 RC_HD std::int64_t snap(float value)
 {
     const double scaled = static_cast<double>(value) * static_cast<double>(kSubpixel);
-    const double limited = fmin(fmax(scaled, -static_cast<double>(kSnapLimit)), static_cast<double>(kSnapLimit));
-    return static_cast<std::int64_t>(llround(limited));
+    const double limit = static_cast<double>(kSnapLimit);
+    const double limited = scaled < -limit ? -limit : (scaled > limit ? limit : scaled);
+    // Round half away from zero (llround's rule), written out so it inlines on both compilers.
+    return static_cast<std::int64_t>(limited < 0 ? limited - 0.5 : limited + 0.5);
 }
 
 RC_HD SnappedVertex project(const RasterGrid &grid, const Vec3<float> &p)
@@ -253,23 +255,23 @@ RC_HD void coverTriangleRange(const RasterGrid &grid, const Vec3<float> &p0, con
     const float u0 = coordinate(p0, u), u1 = coordinate(p1, u), u2 = coordinate(p2, u);
     const float v0 = coordinate(p0, v), v1 = coordinate(p1, v), v2 = coordinate(p2, v);
     const float z0 = coordinate(p0, grid.axis), z1 = coordinate(p1, grid.axis), z2 = coordinate(p2, grid.axis);
-    const float uMin = (fminf(u0, fminf(u1, u2)) - margin - grid.origin[0]) / grid.pixel;
-    const float uMax = (fmaxf(u0, fmaxf(u1, u2)) + margin - grid.origin[0]) / grid.pixel;
-    const float vMin = (fminf(v0, fminf(v1, v2)) - margin - grid.origin[1]) / grid.pixel;
-    const float vMax = (fmaxf(v0, fmaxf(v1, v2)) + margin - grid.origin[1]) / grid.pixel;
+    const float uMin = (minOf(u0, minOf(u1, u2)) - margin - grid.origin[0]) / grid.pixel;
+    const float uMax = (maxOf(u0, maxOf(u1, u2)) + margin - grid.origin[0]) / grid.pixel;
+    const float vMin = (minOf(v0, minOf(v1, v2)) - margin - grid.origin[1]) / grid.pixel;
+    const float vMax = (maxOf(v0, maxOf(v1, v2)) + margin - grid.origin[1]) / grid.pixel;
     if (uMax < 0 || vMax < 0 || uMin >= grid.width || vMin >= grid.height)
         return;
     const int i0 = uMin < 0 ? 0 : static_cast<int>(uMin);
     const int j0 = vMin < 0 ? 0 : static_cast<int>(vMin);
     const int i1 = uMax >= grid.width ? grid.width - 1 : static_cast<int>(uMax);
     const int j1 = vMax >= grid.height ? grid.height - 1 : static_cast<int>(vMax);
-    const float lo = fminf(z0, fminf(z1, z2)) - margin, hi = fmaxf(z0, fmaxf(z1, z2)) + margin;
+    const float lo = minOf(z0, minOf(z1, z2)) - margin, hi = maxOf(z0, maxOf(z1, z2)) + margin;
     for (int j = j0; j <= j1; ++j)
         for (int i = i0; i <= i1; ++i)
         {
             DepthRange &r = ranges[j * grid.width + i];
-            r.lo = fminf(r.lo, lo);
-            r.hi = fmaxf(r.hi, hi);
+            r.lo = minOf(r.lo, lo);
+            r.hi = maxOf(r.hi, hi);
         }
 }
 }  // namespace rastercheck::device

@@ -316,6 +316,11 @@ bool coplanarTriangles(const Vec *const p[3], const Vec *const q[3], Vec *point)
 bool trianglesIntersect(const Vec &p0, const Vec &p1, const Vec &p2, const Vec &q0, const Vec &q1, const Vec &q2,
                         Vec *point)
 {
+    // Disjoint bounds decide most pairs a BVH leaf offers; comparisons are exact.
+    for (int k = 0; k < 3; ++k)
+        if (std::max({p0[k], p1[k], p2[k]}) < std::min({q0[k], q1[k], q2[k]}) ||
+            std::max({q0[k], q1[k], q2[k]}) < std::min({p0[k], p1[k], p2[k]}))
+            return false;
     // If the triangles meet, their intersection is a segment or convex polygon whose extreme points
     // lie on an edge of one triangle and in the other, so testing edges against triangles decides.
     const Vec *const p[3] = {&p0, &p1, &p2};
