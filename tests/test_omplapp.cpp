@@ -85,21 +85,7 @@ std::string replaceLine(std::string text, const std::string &line, const std::st
     return text.replace(at, line.size(), replacement);
 }
 
-void expectInputError(const std::function<void()> &load, const std::string &file, const std::string &element,
-                      const std::string &what)
-{
-    try
-    {
-        load();
-        ADD_FAILURE() << "expected an InputError (" << element << ": " << what << ")";
-    }
-    catch (const rc::InputError &e)
-    {
-        EXPECT_EQ(e.file(), file) << e.what();
-        EXPECT_NE(e.element().find(element), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-    }
-}
+using rastercheck::test::expectInputError;
 }  // namespace
 
 TEST(OmplApp, ThreeDimensionalProblem)

@@ -14,21 +14,7 @@ namespace rc = rastercheck;
 
 namespace
 {
-void expectInputError(const std::function<void()> &load, const std::string &file, const std::string &element,
-                      const std::string &what)
-{
-    try
-    {
-        load();
-        ADD_FAILURE() << "expected an InputError (" << element << ": " << what << ")";
-    }
-    catch (const rc::InputError &e)
-    {
-        EXPECT_EQ(e.file(), file) << e.what();
-        EXPECT_NE(e.element().find(element), std::string::npos) << e.what();
-        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-    }
-}
+using rastercheck::test::expectInputError;
 
 std::size_t allowedPairs(const rc::RobotModel &model)
 {

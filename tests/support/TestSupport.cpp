@@ -4,6 +4,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "rastercheck/core/Error.h"
+
 namespace rastercheck::test
 {
 std::string makeTempDir(const std::string &tag)
@@ -12,6 +14,22 @@ std::string makeTempDir(const std::string &tag)
     if (!mkdtemp(pattern.data()))
         throw std::runtime_error("cannot create a temporary directory " + pattern);
     return pattern;
+}
+
+void expectInputError(const std::function<void()> &load, const std::string &file, const std::string &element,
+                      const std::string &what)
+{
+    try
+    {
+        load();
+        ADD_FAILURE() << "expected an InputError (" << element << ": " << what << ")";
+    }
+    catch (const InputError &e)
+    {
+        EXPECT_EQ(e.file(), file) << e.what();
+        EXPECT_NE(e.element().find(element), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
 }
 
 std::string writeFile(const std::string &path, const std::string &text)

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -18,6 +19,11 @@ inline std::string sourcePath(const std::string &relative) { return std::string(
 /** \brief A fresh temporary directory for one test (removed at exit of the process is not
     guaranteed; it lives under the system temp folder). */
 std::string makeTempDir(const std::string &tag);
+
+/** \brief Expects \a load to throw InputError naming \a file, an element containing \a element,
+    and a message containing \a what. */
+void expectInputError(const std::function<void()> &load, const std::string &file, const std::string &element,
+                      const std::string &what);
 
 /** \brief Writes \a text to \a path (creating it) and returns the path. */
 std::string writeFile(const std::string &path, const std::string &text);
