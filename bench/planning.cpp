@@ -41,7 +41,7 @@ class FclStateValidityChecker : public ob::StateValidityChecker
 public:
     FclStateValidityChecker(const ob::SpaceInformationPtr &si, rastercheck::ompl::StateMappingConstPtr mapping,
                             rastercheck::ompl::CheckerConstPtr owner)
-      : ob::StateValidityChecker(si), mapping_(std::move(mapping)), owner_(std::move(owner)), id_(nextId_++)
+        : ob::StateValidityChecker(si), mapping_(std::move(mapping)), owner_(std::move(owner)), id_(nextId_++)
     {
     }
 
@@ -146,7 +146,8 @@ std::string solvedText(const Tally &t)
 {
     std::string text = std::to_string(t.solved) + "/" + std::to_string(t.attempts);
     if (t.colliding > 0)
-        text += " (" + std::to_string(t.colliding) + " colliding, " + std::to_string(t.checkerMissed) + " by the checker)";
+        text +=
+            " (" + std::to_string(t.colliding) + " colliding, " + std::to_string(t.checkerMissed) + " by the checker)";
     return text;
 }
 
@@ -181,7 +182,8 @@ int main(int argc, char **argv)
             Problem problem;
             problem.robot = robot;
             problem.scene = loadMoveItScene(bench::mbmProblemPath(root, "panda", scenario, index, "scene"));
-            const MotionPlanRequest request = loadMoveItRequest(bench::mbmProblemPath(root, "panda", scenario, index, "request"));
+            const MotionPlanRequest request =
+                loadMoveItRequest(bench::mbmProblemPath(root, "panda", scenario, index, "request"));
 
             std::map<std::string, og::SimpleSetupPtr> setups;
             for (const std::string &mode : modes)
@@ -214,13 +216,14 @@ int main(int argc, char **argv)
             std::fprintf(stderr, "%s %04d done\n", scenario.c_str(), index);
         }
 
-    std::printf("Panda MotionBenchMaker, RRT-Connect: %d problem(s) per scenario x %d run(s), time limit %g s, "
-                "longest valid segment fraction 0.01; rastercheck batches on %d thread(s), FCL on 1.\n"
-                "Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution; a\n"
-                "colliding path is unsolved ('by the checker': the planning checker itself calls the colliding\n"
-                "state valid; otherwise the planner's resolution stepped over the obstacle). Time ratio: median of\n"
-                "all runs (unsolved at the limit) over FCL's.\n\n",
-                problemsPerScenario, runsPerProblem, timeLimit, threads);
+    std::printf(
+        "Panda MotionBenchMaker, RRT-Connect: %d problem(s) per scenario x %d run(s), time limit %g s, "
+        "longest valid segment fraction 0.01; rastercheck batches on %d thread(s), FCL on 1.\n"
+        "Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution; a\n"
+        "colliding path is unsolved ('by the checker': the planning checker itself calls the colliding\n"
+        "state valid; otherwise the planner's resolution stepped over the obstacle). Time ratio: median of\n"
+        "all runs (unsolved at the limit) over FCL's.\n\n",
+        problemsPerScenario, runsPerProblem, timeLimit, threads);
     std::printf("| scenario | FCL solved | FCL median s |");
     for (const std::string &mode : modes)
         std::printf(" %s solved | %s median s | %s / FCL |", mode.c_str(), mode.c_str(), mode.c_str());
@@ -228,7 +231,8 @@ int main(int argc, char **argv)
     for (std::size_t m = 0; m < modes.size(); ++m)
         std::printf("---:|---:|---:|");
     std::printf("\n");
-    auto row = [&](const std::string &label, const std::map<std::string, Tally> &byMode) {
+    auto row = [&](const std::string &label, const std::map<std::string, Tally> &byMode)
+    {
         const Tally &f = byMode.at("fcl");
         std::printf("| %s | %s | %.4f |", label.c_str(), solvedText(f).c_str(), median(f.times));
         for (const std::string &mode : modes)

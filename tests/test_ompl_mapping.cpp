@@ -51,7 +51,8 @@ rc::RobotModelConstPtr mixedRobot()
     rc::Joint wrist = makeJoint("wrist", rc::JointKind::Revolute, 2, 3, {"wrist"}, {-M_PI}, {M_PI});
     wrist.continuous = true;
     model->joints = {
-        makeJoint("base", rc::JointKind::Planar, 0, 1, {"base/x", "base/y", "base/theta"}, {-3, -4, -M_PI}, {3, 4, M_PI}),
+        makeJoint("base", rc::JointKind::Planar, 0, 1, {"base/x", "base/y", "base/theta"}, {-3, -4, -M_PI},
+                  {3, 4, M_PI}),
         makeJoint("j1", rc::JointKind::Revolute, 1, 2, {"j1"}, {-2}, {2}),
         wrist,
         makeJoint("slide", rc::JointKind::Prismatic, 3, 4, {"slide"}, {0}, {0.5}),
@@ -164,7 +165,8 @@ TEST(OmplMapping, FloatingJointIsSE3WithNormalisedQuaternion)
     rc::Aabb bounds;
     bounds.min = Eigen::Vector3d(-1, -2, -3);
     bounds.max = Eigen::Vector3d(1, 2, 3);
-    const rc::RobotModelConstPtr body = rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.1)), bounds);
+    const rc::RobotModelConstPtr body =
+        rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.1)), bounds);
     const rco::StateMapping mapping(body);
     auto space = std::dynamic_pointer_cast<ob::SE3StateSpace>(mapping.getStateSpace());
     ASSERT_TRUE(space);
@@ -225,8 +227,8 @@ TEST(OmplMapping, HeldCoordinatesAreNotPlanned)
 {
     const rc::RobotModelConstPtr robot = mixedRobot();
     rco::StateMappingOptions options;
-    options.heldCoordinates = {{"base/x", 1.5}, {"base/y", -2.5}, {"free/qx", 0.0}, {"free/qy", 0.0},
-                               {"free/qz", 0.0}, {"free/qw", 1.0}};
+    options.heldCoordinates = {{"base/x", 1.5},  {"base/y", -2.5}, {"free/qx", 0.0},
+                               {"free/qy", 0.0}, {"free/qz", 0.0}, {"free/qw", 1.0}};
     const rco::StateMapping mapping(robot, options);
     auto compound = std::dynamic_pointer_cast<ob::CompoundStateSpace>(mapping.getStateSpace());
     ASSERT_TRUE(compound);
@@ -270,7 +272,7 @@ TEST(OmplMapping, CraneWithHeldBase)
     ASSERT_TRUE(compound);
     ASSERT_EQ(compound->getSubspaceCount(), 2u);
     EXPECT_TRUE(std::dynamic_pointer_cast<ob::SO2StateSpace>(compound->getSubspace(0)));  // slew
-    EXPECT_EQ(compound->getSubspace(1)->getDimension(), 3u);                                // luff, telescope_1, hoist
+    EXPECT_EQ(compound->getSubspace(1)->getDimension(), 3u);                              // luff, telescope_1, hoist
     expectRoundTrips(mapping, 30);
     ob::ScopedState<> state(mapping.getStateSpace());
     state.random();

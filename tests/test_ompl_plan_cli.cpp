@@ -36,9 +36,15 @@ CliRun runCommand(const std::string &command)
     return run;
 }
 
-CliRun runCli(const std::string &arguments) { return runCommand(std::string(RASTERCHECK_CLI) + " " + arguments); }
+CliRun runCli(const std::string &arguments)
+{
+    return runCommand(std::string(RASTERCHECK_CLI) + " " + arguments);
+}
 
-bool contains(const std::string &text, const std::string &part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string &text, const std::string &part)
+{
+    return text.find(part) != std::string::npos;
+}
 
 const char *kStatisticsTool = "/usr/bin/ompl_benchmark_statistics";
 
@@ -55,16 +61,20 @@ std::string objBox(const std::string &name, double x0, double y0, double z0, dou
     const int faces[12][3] = {{1, 4, 3}, {1, 3, 2}, {5, 6, 7}, {5, 7, 8}, {1, 2, 6}, {1, 6, 5},
                               {4, 8, 7}, {4, 7, 3}, {1, 5, 8}, {1, 8, 4}, {2, 3, 7}, {2, 7, 6}};
     for (const auto &f : faces)
-        obj += "f " + std::to_string(base + f[0]) + " " + std::to_string(base + f[1]) + " " + std::to_string(base + f[2]) + "\n";
+        obj += "f " + std::to_string(base + f[0]) + " " + std::to_string(base + f[1]) + " " +
+               std::to_string(base + f[2]) + "\n";
     return obj;
 }
 
 std::string cfg(const std::string &planners)
 {
     return "[problem]\nname = boxes\nrobot = robot.obj\nworld = world.obj\n"
-           "start.x = -1.5\nstart.y = 0\nstart.z = 0\nstart.theta = 0\nstart.axis.x = 1\nstart.axis.y = 0\nstart.axis.z = 0\n"
-           "goal.x = 1.5\ngoal.y = 0.2\ngoal.z = 0\ngoal.theta = 1.0\ngoal.axis.x = 0\ngoal.axis.y = 0\ngoal.axis.z = 1\n"
-           "volume.min.x = -2\nvolume.min.y = -2\nvolume.min.z = -2\nvolume.max.x = 2\nvolume.max.y = 2\nvolume.max.z = 2\n"
+           "start.x = -1.5\nstart.y = 0\nstart.z = 0\nstart.theta = 0\nstart.axis.x = 1\nstart.axis.y = "
+           "0\nstart.axis.z = 0\n"
+           "goal.x = 1.5\ngoal.y = 0.2\ngoal.z = 0\ngoal.theta = 1.0\ngoal.axis.x = 0\ngoal.axis.y = 0\ngoal.axis.z = "
+           "1\n"
+           "volume.min.x = -2\nvolume.min.y = -2\nvolume.min.z = -2\nvolume.max.x = 2\nvolume.max.y = 2\nvolume.max.z "
+           "= 2\n"
            "\n[benchmark]\ntime_limit = 2\nmem_limit = 1000\nrun_count = 2\n\n[planner]\n" +
            planners;
 }
@@ -88,8 +98,8 @@ TEST(PlanCli, OmplAppProblemLogIsReadByOmplBenchmarkStatistics)
     // Obstacles beside the straight start-goal line: every planner's simplified path is clear of them
     // by a margin, so the exact re-check passes (paths that graze a corner between two checked states
     // are what the next test is about).
-    writeFile(folder + "/world.obj", objBox("pillar", -0.3, 0.8, -2, 0.3, 1.4, 2, 0) +
-                                         objBox("shelf", -0.8, -1.2, -0.5, 0.8, -0.7, 0.5, 8));
+    writeFile(folder + "/world.obj",
+              objBox("pillar", -0.3, 0.8, -2, 0.3, 1.4, 2, 0) + objBox("shelf", -0.8, -1.2, -0.5, 0.8, -0.7, 0.5, 8));
     writeFile(folder + "/boxes.cfg", cfg("rrtconnect=\nrrtconnect.range=1.5\nkpiece=\n"));
     const std::string log = folder + "/boxes.log";
     const CliRun run = runCli("plan " + folder + "/boxes.cfg --log " + log + " --seed 3");

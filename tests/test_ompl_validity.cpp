@@ -74,8 +74,8 @@ Context pandaScene(const std::string &root, const std::string &scenario)
 {
     rc::RobotModelPtr panda = rc::loadUrdf(root + "/mbm/panda/panda.urdf");
     rc::applySrdf(*panda, rc::loadSrdf(root + "/mbm/panda/panda.srdf"));
-    return makeContext(panda,
-                       rc::loadMoveItScene(root + "/mbm/panda/problems/" + scenario + "_panda/scene0001.yaml"), 0.01);
+    return makeContext(panda, rc::loadMoveItScene(root + "/mbm/panda/problems/" + scenario + "_panda/scene0001.yaml"),
+                       0.01);
 }
 
 // Compares the two validators on \a edges random edges from valid states; returns the number of
@@ -151,17 +151,19 @@ TEST(OmplValidity, EightThreadsAgreeWithOneThread)
     std::vector<std::thread> threads;
     std::atomic<int> disagreements{0};
     for (int t = 0; t < 8; ++t)
-        threads.emplace_back([&, t] {
-            for (int pass = 0; pass < 2; ++pass)
-                for (std::size_t i = (t + pass) % 8; i < n; i += 8)
-                {
-                    const std::uint8_t v = context.validity->isValid(states[i]) ? 1 : 0;
-                    if (pass == 0)
-                        parallel[i] = v;
-                    else if (v != serial[i])
-                        ++disagreements;
-                }
-        });
+        threads.emplace_back(
+            [&, t]
+            {
+                for (int pass = 0; pass < 2; ++pass)
+                    for (std::size_t i = (t + pass) % 8; i < n; i += 8)
+                    {
+                        const std::uint8_t v = context.validity->isValid(states[i]) ? 1 : 0;
+                        if (pass == 0)
+                            parallel[i] = v;
+                        else if (v != serial[i])
+                            ++disagreements;
+                    }
+            });
     for (std::thread &thread : threads)
         thread.join();
     EXPECT_EQ(parallel, serial);
@@ -222,10 +224,12 @@ TEST(OmplValidity, MotionValidatorCountersAreAtomicUnderThreads)
     }
     std::vector<std::thread> threads;
     for (int t = 0; t < 8; ++t)
-        threads.emplace_back([&] {
-            for (const auto &edge : edges)
-                batched.checkMotion(edge.first, edge.second);
-        });
+        threads.emplace_back(
+            [&]
+            {
+                for (const auto &edge : edges)
+                    batched.checkMotion(edge.first, edge.second);
+            });
     for (std::thread &thread : threads)
         thread.join();
     EXPECT_EQ(batched.getValidMotionCount(), 8 * expectedValid);

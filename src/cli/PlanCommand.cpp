@@ -120,12 +120,13 @@ std::string stemOf(const std::string &path)
 /** \brief Checks the start and goal once before benchmarking: a planner cannot fix an invalid one. */
 void reportInvalidEndpoints(og::SimpleSetup &setup, const ompl::StateValidityChecker &checker)
 {
-    auto describe = [&](const char *what, const ob::State *state) {
+    auto describe = [&](const char *what, const ob::State *state)
+    {
         Contact contact;
         if (!checker.isValid(state, contact))
             std::cerr << "rastercheck: warning: the " << what << " state is invalid: "
                       << (contact.kind == Contact::Kind::OutOfBounds ? std::string("outside the bounds")
-                                                                      : checker.getChecker().describe(contact))
+                                                                     : checker.getChecker().describe(contact))
                       << '\n';
     };
     describe("start", setup.getProblemDefinition()->getStartState(0));
@@ -138,7 +139,8 @@ int runPlan(const PlanOptions &options)
     if (options.seed >= 0)
         ::ompl::RNG::setSeed(static_cast<std::uint_fast32_t>(options.seed));
     if (!options.problem.cfgPath.empty() && !options.requestPath.empty())
-        throw ConfigurationError("--request applies to --robot/--scene problems; an OMPL.app .cfg has its own start and goal");
+        throw ConfigurationError(
+            "--request applies to --robot/--scene problems; an OMPL.app .cfg has its own start and goal");
     if (options.problem.cfgPath.empty() && options.requestPath.empty())
         throw ConfigurationError("a --robot/--scene problem needs --request request.yaml (start and goal)");
     const Problem problem = loadProblem(options.problem.source());
@@ -203,13 +205,16 @@ int runPlan(const PlanOptions &options)
             throw ConfigurationError("--param " + text + ": no planner '" + key.substr(0, dot) + "' is run");
     }
 
-    const int runs = options.runs > 0 ? options.runs : (problem.omplApp && problem.omplApp->runCount > 0 ? problem.omplApp->runCount : 10);
+    const int runs = options.runs > 0
+                         ? options.runs
+                         : (problem.omplApp && problem.omplApp->runCount > 0 ? problem.omplApp->runCount : 10);
     const double timeLimit =
         options.timeLimit > 0 ? options.timeLimit
                               : (problem.omplApp && problem.omplApp->timeLimit > 0 ? problem.omplApp->timeLimit : 10.0);
     const double memoryLimit =
-        options.memoryLimit > 0 ? options.memoryLimit
-                                : (problem.omplApp && problem.omplApp->memoryLimit > 0 ? problem.omplApp->memoryLimit : 4096.0);
+        options.memoryLimit > 0
+            ? options.memoryLimit
+            : (problem.omplApp && problem.omplApp->memoryLimit > 0 ? problem.omplApp->memoryLimit : 4096.0);
 
     ot::Benchmark benchmark(*setup, experiment);
     std::vector<std::string> labels;
@@ -228,37 +233,41 @@ int runPlan(const PlanOptions &options)
     int collidingPaths = 0;
     int runIndex = 0;
     ob::PlannerPtr previous;
-    benchmark.setPostRunEvent([&](const ob::PlannerPtr &planner, ot::Benchmark::RunProperties &run) {
-        if (planner != previous)
+    benchmark.setPostRunEvent(
+        [&](const ob::PlannerPtr &planner, ot::Benchmark::RunProperties &run)
         {
-            previous = planner;
-            runIndex = 0;
-        }
-        const int thisRun = runIndex++;
-        const ob::ProblemDefinitionPtr &pdef = planner->getProblemDefinition();
-        if (!pdef->hasSolution())
-            return;
-        auto path = std::dynamic_pointer_cast<og::PathGeometric>(pdef->getSolutionPath());
-        if (!path)
-            return;
-        const ompl::PathCheckResult result = ompl::checkPathDensely(*path, checker->getStateMapping(),
-                                                                     checker->getChecker(), exact, options.recheckFactor);
-        run[kRecheckValid] = result.valid ? "1" : "0";
-        run[kRecheckStates] = std::to_string(result.statesChecked);
-        if (!result.valid)
-        {
-            ++collidingPaths;
-            std::cerr << "rastercheck: ERROR: solution path of " << planner->getName() << " run " << thisRun
-                      << " COLLIDES (exact oracle, " << options.recheckFactor << "x the planner's resolution): segment "
-                      << result.segment << " at t = " << result.time << ": "
-                      << (result.contact.kind == Contact::Kind::OutOfBounds ? std::string("outside the bounds")
-                                                                            : checker->getChecker().describe(result.contact))
-                      << (checker->getChecker().isValid(result.configuration, setupOptions.request)
-                              ? " [the planning checker calls this state valid: a checker false negative]"
-                              : " [the planning checker agrees: the planner's resolution stepped over it]")
-                      << std::endl;
-        }
-    });
+            if (planner != previous)
+            {
+                previous = planner;
+                runIndex = 0;
+            }
+            const int thisRun = runIndex++;
+            const ob::ProblemDefinitionPtr &pdef = planner->getProblemDefinition();
+            if (!pdef->hasSolution())
+                return;
+            auto path = std::dynamic_pointer_cast<og::PathGeometric>(pdef->getSolutionPath());
+            if (!path)
+                return;
+            const ompl::PathCheckResult result = ompl::checkPathDensely(
+                *path, checker->getStateMapping(), checker->getChecker(), exact, options.recheckFactor);
+            run[kRecheckValid] = result.valid ? "1" : "0";
+            run[kRecheckStates] = std::to_string(result.statesChecked);
+            if (!result.valid)
+            {
+                ++collidingPaths;
+                std::cerr << "rastercheck: ERROR: solution path of " << planner->getName() << " run " << thisRun
+                          << " COLLIDES (exact oracle, " << options.recheckFactor
+                          << "x the planner's resolution): segment " << result.segment << " at t = " << result.time
+                          << ": "
+                          << (result.contact.kind == Contact::Kind::OutOfBounds
+                                  ? std::string("outside the bounds")
+                                  : checker->getChecker().describe(result.contact))
+                          << (checker->getChecker().isValid(result.configuration, setupOptions.request)
+                                  ? " [the planning checker calls this state valid: a checker false negative]"
+                                  : " [the planning checker agrees: the planner's resolution stepped over it]")
+                          << std::endl;
+            }
+        });
 
     ot::Benchmark::Request request(timeLimit, memoryLimit, static_cast<unsigned int>(runs), 0.05, false, false,
                                    !options.noSimplify);
@@ -312,10 +321,12 @@ void addPlanCommand(CLI::App &app)
     CLI::App *command = app.add_subcommand(
         "plan", "Benchmark OMPL planners on a problem; every solution path is re-checked by the exact oracle");
     options->problem.addTo(*command);
-    command->add_option("--request", options->requestPath, "MoveIt MotionPlanRequest YAML (start and goal) for --robot problems");
-    command->add_option("--planner", options->planners,
-                        "planner by OMPL.app name (rrtconnect, rrt, prm, kpiece, bkpiece, lbkpiece, est, sbl, stride, "
-                        "pdst, trrt, rrtstar, ...; repeatable); default: the .cfg's [planner] list, else rrtconnect")
+    command->add_option("--request", options->requestPath,
+                        "MoveIt MotionPlanRequest YAML (start and goal) for --robot problems");
+    command
+        ->add_option("--planner", options->planners,
+                     "planner by OMPL.app name (rrtconnect, rrt, prm, kpiece, bkpiece, lbkpiece, est, sbl, stride, "
+                     "pdst, trrt, rrtstar, ...; repeatable); default: the .cfg's [planner] list, else rrtconnect")
         ->allow_extra_args(false);
     command->add_option("--param", options->parameters, "planner parameter PLANNER.PARAM=VALUE (repeatable)")
         ->allow_extra_args(false);
@@ -327,21 +338,25 @@ void addPlanCommand(CLI::App &app)
         ->check(CLI::PositiveNumber);
     command->add_option("--memory-limit", options->memoryLimit, "MB per run (default: the .cfg's mem_limit, else 4096)")
         ->check(CLI::PositiveNumber);
-    command->add_option("--backend", options->backend, "auto, cpu or cuda")->check(CLI::IsMember({"auto", "cpu", "cuda"}));
+    command->add_option("--backend", options->backend, "auto, cpu or cuda")
+        ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
     command->add_option("--mode", options->mode, "collision mode while planning: safe (default), raster or exact")
         ->check(CLI::IsMember({"safe", "raster", "exact"}));
     command->add_option("--threads", options->threads, "worker threads of batch checks (0 = all cores)")
         ->check(CLI::NonNegativeNumber);
     command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
-    command->add_option("--segment-fraction", options->segmentFraction,
-                        "longest valid segment, as a fraction of the space's extent (OMPL default 0.01)")
+    command
+        ->add_option("--segment-fraction", options->segmentFraction,
+                     "longest valid segment, as a fraction of the space's extent (OMPL default 0.01)")
         ->check(CLI::Range(1e-6, 1.0));
-    command->add_option("--recheck-factor", options->recheckFactor,
-                        "solution paths are re-checked at this many times the planner's resolution (default 10)")
+    command
+        ->add_option("--recheck-factor", options->recheckFactor,
+                     "solution paths are re-checked at this many times the planner's resolution (default 10)")
         ->check(CLI::PositiveNumber);
     command->add_option("--log", options->logPath, "OMPL benchmark log (for ompl_benchmark_statistics)");
     command->add_option("--seed", options->seed, "OMPL random seed")->check(CLI::NonNegativeNumber);
-    command->add_flag("--no-simplify", options->noSimplify, "do not simplify solutions (the re-check sees the raw path)");
+    command->add_flag("--no-simplify", options->noSimplify,
+                      "do not simplify solutions (the re-check sees the raw path)");
     command->callback([options]() { throw CommandResult{runPlan(*options)}; });
 }
 }  // namespace rastercheck::cli

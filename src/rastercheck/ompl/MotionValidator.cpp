@@ -55,12 +55,12 @@ void rakeOrder(unsigned int nd, Scratch &w)
 
 MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, StateMappingConstPtr mapping,
                                  CheckerConstPtr checker, const CollisionRequest &request, unsigned int rakeWidth)
-  : ob::MotionValidator(si)
-  , mapping_(std::move(mapping))
-  , checker_(std::move(checker))
-  , request_(request)
-  , rakeWidth_(rakeWidth)
-  , space_(si->getStateSpace().get())
+    : ob::MotionValidator(si),
+      mapping_(std::move(mapping)),
+      checker_(std::move(checker)),
+      request_(request),
+      rakeWidth_(rakeWidth),
+      space_(si->getStateSpace().get())
 {
     if (!mapping_ || !checker_)
         throw ConfigurationError("MotionValidator needs a state mapping and a checker");
@@ -74,8 +74,8 @@ MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, StateMapping
 
 MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, const StateValidityChecker &validityChecker,
                                  unsigned int rakeWidth)
-  : MotionValidator(si, validityChecker.getStateMappingPtr(), validityChecker.getCheckerPtr(),
-                    validityChecker.getRequest(), rakeWidth)
+    : MotionValidator(si, validityChecker.getStateMappingPtr(), validityChecker.getCheckerPtr(),
+                      validityChecker.getRequest(), rakeWidth)
 {
 }
 

@@ -37,7 +37,8 @@ PathCheckResult checkPathDensely(const ::ompl::geometric::PathGeometric &path, c
     std::vector<Sample> samples;
     std::vector<double> rows;
     ob::State *test = si->allocState();
-    auto add = [&](const ob::State *state, std::size_t segment, double time) {
+    auto add = [&](const ob::State *state, std::size_t segment, double time)
+    {
         const bool inBounds = si->satisfiesBounds(state);
         rows.resize(rows.size() + dof);
         mapping.toConfiguration(state, rows.data() + rows.size() - dof);

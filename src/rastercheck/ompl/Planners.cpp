@@ -91,7 +91,8 @@ const std::map<std::string, Allocator> &registry()
 
 const std::vector<std::string> &knownPlannerNames()
 {
-    static const std::vector<std::string> names = [] {
+    static const std::vector<std::string> names = []
+    {
         std::vector<std::string> result;
         for (const auto &entry : registry())
             result.push_back(entry.first);
@@ -103,7 +104,8 @@ const std::vector<std::string> &knownPlannerNames()
 ob::PlannerPtr allocatePlanner(const std::string &name, const ob::SpaceInformationPtr &si)
 {
     std::string key = name;
-    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    std::transform(key.begin(), key.end(), key.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     const auto found = registry().find(key);
     if (found == registry().end())
     {

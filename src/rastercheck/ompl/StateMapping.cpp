@@ -71,14 +71,16 @@ StateMapping::StateMapping(RobotModelConstPtr robot, const StateMappingOptions &
     {
         const int c = model.coordinateIndex(name);
         if (c < 0)
-            throw ConfigurationError("held coordinate '" + name + "' is not a coordinate of robot '" + model.name + "'");
+            throw ConfigurationError("held coordinate '" + name + "' is not a coordinate of robot '" + model.name +
+                                     "'");
         if (!std::isfinite(value))
             throw ConfigurationError("held coordinate '" + name + "' has a non-finite value");
         held_[c] = true;
         base_[c] = value;
     }
 
-    auto addReal = [this](int c) {
+    auto addReal = [this](int c)
+    {
         if (blocks_.empty() || blocks_.back().kind != BlockKind::RealVector)
             blocks_.push_back({BlockKind::RealVector, {}});
         blocks_.back().coordinates.push_back(c);
@@ -127,8 +129,8 @@ StateMapping::StateMapping(RobotModelConstPtr robot, const StateMappingOptions &
                                              "': hold all of its quaternion coordinates or none");
                 if (planned == 7)
                 {
-                    blocks_.push_back({BlockKind::SE3, {first, first + 1, first + 2, first + 3, first + 4, first + 5,
-                                                        first + 6}});
+                    blocks_.push_back(
+                        {BlockKind::SE3, {first, first + 1, first + 2, first + 3, first + 4, first + 5, first + 6}});
                     break;
                 }
                 for (int k = 0; k < 3; ++k)
@@ -153,7 +155,8 @@ StateMapping::StateMapping(RobotModelConstPtr robot, const StateMappingOptions &
         {
             case BlockKind::RealVector:
             {
-                auto space = std::make_shared<ob::RealVectorStateSpace>(static_cast<unsigned int>(block.coordinates.size()));
+                auto space =
+                    std::make_shared<ob::RealVectorStateSpace>(static_cast<unsigned int>(block.coordinates.size()));
                 space->setBounds(boundsOf(model, block.coordinates));
                 for (std::size_t k = 0; k < block.coordinates.size(); ++k)
                     space->setDimensionName(static_cast<unsigned int>(k), model.coordinateNames[block.coordinates[k]]);

@@ -10,7 +10,10 @@ namespace rastercheck::ompl
 {
 StateValidityChecker::StateValidityChecker(const ::ompl::base::SpaceInformationPtr &si, StateMappingConstPtr mapping,
                                            CheckerConstPtr checker, const CollisionRequest &request)
-  : ::ompl::base::StateValidityChecker(si), mapping_(std::move(mapping)), checker_(std::move(checker)), request_(request)
+    : ::ompl::base::StateValidityChecker(si),
+      mapping_(std::move(mapping)),
+      checker_(std::move(checker)),
+      request_(request)
 {
     if (!mapping_ || !checker_)
         throw ConfigurationError("StateValidityChecker needs a state mapping and a checker");
@@ -43,7 +46,10 @@ bool StateValidityChecker::decide(const ::ompl::base::State *state, Contact *con
     return valid;
 }
 
-bool StateValidityChecker::isValid(const ::ompl::base::State *state) const { return decide(state, nullptr); }
+bool StateValidityChecker::isValid(const ::ompl::base::State *state) const
+{
+    return decide(state, nullptr);
+}
 
 bool StateValidityChecker::isValid(const ::ompl::base::State *state, Contact &contact) const
 {
