@@ -35,4 +35,7 @@ struct ProblemArguments
 void addInfoCommand(CLI::App &app);
 /** \brief `rastercheck check PROBLEM --states IN.csv ...`: one verdict per state. */
 void addCheckCommand(CLI::App &app);
+/** \brief `rastercheck plan PROBLEM [--request R] [--planner NAME]... [--runs N] [--time-limit S] [--log F]
+    ...`: OMPL planners through ompl::tools::Benchmark; solution paths re-checked by the exact oracle. */
+void addPlanCommand(CLI::App &app);
 }  // namespace rastercheck::cli

@@ -1,0 +1,266 @@
+// Planning with RRT-Connect on the Panda MotionBenchMaker problems: rastercheck's validity checker and
+// batched motion validator against FCL (BVHModel<OBBRSS>, as MoveIt and OMPL.app use it) with OMPL's
+// DiscreteMotionValidator. Same state space, edge resolution, planner settings and time limit, in
+// one run, problem by problem. Prints per scenario and overall: success rates, median solve times
+// and their ratio (rastercheck / FCL; below 1 means rastercheck plans faster).
+//
+// usage: rastercheck_bench_planning [problems_per_scenario=3] [time_limit_s=5] [runs_per_problem=1]
+//                                   [modes=safe,exact] [threads=1]
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <unordered_map>
+
+#include <ompl/base/ScopedState.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/geometric/SimpleSetup.h>
+#include <ompl/geometric/planners/rrt/RRTConnect.h>
+#include <ompl/util/Console.h>
+
+#include "BenchSupport.h"
+#include "Reference.h"
+#include "rastercheck/ompl/PathCheck.h"
+#include "rastercheck/ompl/Setup.h"
+
+using namespace rastercheck;
+namespace ob = ::ompl::base;
+namespace og = ::ompl::geometric;
+
+namespace
+{
+/** \brief FCL as an OMPL validity checker. FclReference is not thread-safe, so each thread gets its
+    own instance (keyed by a per-checker id, not by address, so that a new checker never reuses an
+    old one's). */
+class FclStateValidityChecker : public ob::StateValidityChecker
+{
+public:
+    FclStateValidityChecker(const ob::SpaceInformationPtr &si, rastercheck::ompl::StateMappingConstPtr mapping,
+                            rastercheck::ompl::CheckerConstPtr owner)
+        : ob::StateValidityChecker(si), mapping_(std::move(mapping)), owner_(std::move(owner)), id_(nextId_++)
+    {
+    }
+
+    bool isValid(const ob::State *state) const override
+    {
+        if (!si_->satisfiesBounds(state))
+            return false;
+        thread_local std::unordered_map<std::uint64_t, std::unique_ptr<test::FclReference>> references;
+        thread_local std::vector<double> q;
+        std::unique_ptr<test::FclReference> &fcl = references[id_];
+        if (!fcl)
+            fcl = std::make_unique<test::FclReference>(owner_->collisionModel());
+        q.resize(mapping_->numCoordinates());
+        mapping_->toConfiguration(state, q.data());
+        for (double v : q)
+            if (!std::isfinite(v))
+                return false;
+        return !fcl->collides(q.data());
+    }
+
+private:
+    rastercheck::ompl::StateMappingConstPtr mapping_;
+    rastercheck::ompl::CheckerConstPtr owner_;  ///< only for its collision model (robot, scene, ACM)
+    std::uint64_t id_;
+    static std::atomic<std::uint64_t> nextId_;
+};
+std::atomic<std::uint64_t> FclStateValidityChecker::nextId_{0};
+
+struct Outcome
+{
+    bool solved = false;
+    double seconds = 0.0;
+    bool recheckValid = true;
+    /** \brief For a colliding path: the planning checker calls the first colliding dense state valid
+        (a checker miss rather than a resolution miss between the planner's samples). */
+    bool checkerMissed = false;
+};
+
+Outcome solve(og::SimpleSetup &setup, double timeLimit, const rastercheck::ompl::StateValidityChecker &oracle)
+{
+    setup.clear();
+    setup.setPlanner(std::make_shared<og::RRTConnect>(setup.getSpaceInformation()));
+    const ob::PlannerStatus status = setup.solve(timeLimit);
+    Outcome outcome;
+    outcome.solved = status == ob::PlannerStatus::EXACT_SOLUTION;
+    outcome.seconds = setup.getLastPlanComputationTime();
+    if (outcome.solved)
+    {
+        CollisionRequest exact;
+        exact.mode = CollisionMode::Exact;
+        const rastercheck::ompl::PathCheckResult recheck = rastercheck::ompl::checkPathDensely(
+            setup.getSolutionPath(), oracle.getStateMapping(), oracle.getChecker(), exact, 10);
+        outcome.recheckValid = recheck.valid;
+        if (!recheck.valid)
+        {
+            // Ask the planning checker (rastercheck or FCL) about the colliding state itself.
+            ob::ScopedState<> state(setup.getStateSpace());
+            oracle.getStateMapping().fromConfiguration(recheck.configuration, state.get());
+            outcome.checkerMissed = setup.getSpaceInformation()->isValid(state.get());
+        }
+    }
+    return outcome;
+}
+
+double median(std::vector<double> values)
+{
+    if (values.empty())
+        return std::nan("");
+    std::sort(values.begin(), values.end());
+    const std::size_t n = values.size();
+    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+struct Tally
+{
+    int attempts = 0;
+    int solved = 0;
+    int colliding = 0;
+    int checkerMissed = 0;
+    std::vector<double> times;  ///< solve times of the solved runs (s)
+    std::vector<double> all;    ///< every run's time (s), unsolved at the time limit
+
+    void add(const Outcome &outcome)
+    {
+        ++attempts;
+        all.push_back(outcome.seconds);
+        if (!outcome.solved)
+            return;
+        if (!outcome.recheckValid)
+        {
+            ++colliding;
+            checkerMissed += outcome.checkerMissed ? 1 : 0;
+            return;
+        }
+        ++solved;
+        times.push_back(outcome.seconds);
+    }
+};
+
+/** \brief "solved/attempts", then "(c colliding, m by the checker)" when paths failed the re-check. */
+std::string solvedText(const Tally &t)
+{
+    std::string text = std::to_string(t.solved) + "/" + std::to_string(t.attempts);
+    if (t.colliding > 0)
+        text +=
+            " (" + std::to_string(t.colliding) + " colliding, " + std::to_string(t.checkerMissed) + " by the checker)";
+    return text;
+}
+
+std::vector<std::string> split(const std::string &text)
+{
+    std::vector<std::string> parts;
+    std::stringstream in(text);
+    std::string part;
+    while (std::getline(in, part, ','))
+        if (!part.empty())
+            parts.push_back(part);
+    return parts;
+}
+}  // namespace
+
+int main(int argc, char **argv)
+{
+    const int problemsPerScenario = argc > 1 ? std::atoi(argv[1]) : 3;
+    const double timeLimit = argc > 2 ? std::atof(argv[2]) : 5.0;
+    const int runsPerProblem = argc > 3 ? std::atoi(argv[3]) : 1;
+    const std::vector<std::string> modes = split(argc > 4 ? argv[4] : "safe,exact");
+    const int threads = argc > 5 ? std::atoi(argv[5]) : 1;
+    ::ompl::msg::setLogLevel(::ompl::msg::LOG_WARN);
+    const std::string root = bench::sharedDataOrExit();
+    const RobotModelConstPtr robot = bench::loadMbmRobot(root, "panda");
+
+    // tallies[mode][scenario]; mode "fcl" is the reference.
+    std::map<std::string, std::map<std::string, Tally>> tallies;
+    for (const std::string &scenario : bench::mbmScenarios())
+        for (int index = 1; index <= problemsPerScenario; ++index)
+        {
+            Problem problem;
+            problem.robot = robot;
+            problem.scene = loadMoveItScene(bench::mbmProblemPath(root, "panda", scenario, index, "scene"));
+            const MotionPlanRequest request =
+                loadMoveItRequest(bench::mbmProblemPath(root, "panda", scenario, index, "request"));
+
+            std::map<std::string, og::SimpleSetupPtr> setups;
+            for (const std::string &mode : modes)
+            {
+                rastercheck::ompl::SetupOptions options;
+                options.request.mode = parseCollisionMode(mode);
+                options.checker.backend = BackendChoice::Cpu;
+                options.checker.threads = threads;
+                setups[mode] = rastercheck::ompl::makeSimpleSetup(problem, options);
+                rastercheck::ompl::setStartAndGoal(*setups[mode], request);
+            }
+            // FCL: a setup of its own (same robot, scene, space and resolution), OMPL's default
+            // DiscreteMotionValidator, the FCL checker.
+            rastercheck::ompl::SetupOptions fclOptions;
+            fclOptions.batchMotionValidator = false;
+            fclOptions.checker.backend = BackendChoice::Cpu;
+            og::SimpleSetupPtr fcl = rastercheck::ompl::makeSimpleSetup(problem, fclOptions);
+            rastercheck::ompl::setStartAndGoal(*fcl, request);
+            const rastercheck::ompl::StateValidityCheckerPtr oracle = rastercheck::ompl::getStateValidityChecker(*fcl);
+            fcl->setStateValidityChecker(std::make_shared<FclStateValidityChecker>(
+                fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
+
+            for (int run = 0; run < runsPerProblem; ++run)
+            {
+                tallies["fcl"][scenario].add(solve(*fcl, timeLimit, *oracle));
+                for (const std::string &mode : modes)
+                    tallies[mode][scenario].add(
+                        solve(*setups[mode], timeLimit, *rastercheck::ompl::getStateValidityChecker(*setups[mode])));
+            }
+            std::fprintf(stderr, "%s %04d done\n", scenario.c_str(), index);
+        }
+
+    std::printf(
+        "Panda MotionBenchMaker, RRT-Connect: %d problem(s) per scenario x %d run(s), time limit %g s, "
+        "longest valid segment fraction 0.01; rastercheck batches on %d thread(s), FCL on 1.\n"
+        "Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution; a\n"
+        "colliding path is unsolved ('by the checker': the planning checker itself calls the colliding\n"
+        "state valid; otherwise the planner's resolution stepped over the obstacle). Time ratio: median of\n"
+        "all runs (unsolved at the limit) over FCL's.\n\n",
+        problemsPerScenario, runsPerProblem, timeLimit, threads);
+    std::printf("| scenario | FCL solved | FCL median s |");
+    for (const std::string &mode : modes)
+        std::printf(" %s solved | %s median s | %s / FCL |", mode.c_str(), mode.c_str(), mode.c_str());
+    std::printf("\n|---|---:|---:|");
+    for (std::size_t m = 0; m < modes.size(); ++m)
+        std::printf("---:|---:|---:|");
+    std::printf("\n");
+    auto row = [&](const std::string &label, const std::map<std::string, Tally> &byMode)
+    {
+        const Tally &f = byMode.at("fcl");
+        std::printf("| %s | %s | %.4f |", label.c_str(), solvedText(f).c_str(), median(f.times));
+        for (const std::string &mode : modes)
+        {
+            const Tally &t = byMode.at(mode);
+            // Ratio of medians over every run (unsolved runs count at their time), so a mode that
+            // solves less is not flattered by the runs it dropped.
+            std::printf(" %s | %.4f | %.2f |", solvedText(t).c_str(), median(t.times), median(t.all) / median(f.all));
+        }
+        std::printf("\n");
+    };
+    std::map<std::string, Tally> overall;
+    for (const std::string &scenario : bench::mbmScenarios())
+    {
+        std::map<std::string, Tally> byMode;
+        for (auto &[mode, perScenario] : tallies)
+        {
+            const Tally &t = perScenario[scenario];
+            byMode[mode] = t;
+            Tally &o = overall[mode];
+            o.attempts += t.attempts;
+            o.solved += t.solved;
+            o.colliding += t.colliding;
+            o.times.insert(o.times.end(), t.times.begin(), t.times.end());
+            o.all.insert(o.all.end(), t.all.begin(), t.all.end());
+        }
+        row(scenario, byMode);
+    }
+    row("**overall**", overall);
+    return 0;
+}

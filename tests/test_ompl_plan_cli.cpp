@@ -1,0 +1,170 @@
+// `rastercheck plan` end to end: an OMPL.app problem written here and a MotionBenchMaker problem,
+// the benchmark log read by ompl_benchmark_statistics, a colliding solution reported loudly, and
+// errors.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "TestSupport.h"
+
+using rastercheck::test::makeTempDir;
+using rastercheck::test::writeFile;
+
+namespace
+{
+struct CliRun
+{
+    int status = -1;
+    std::string output;  // stdout and stderr
+};
+
+CliRun runCommand(const std::string &command)
+{
+    CliRun run;
+    FILE *pipe = popen((command + " 2>&1").c_str(), "r");
+    if (!pipe)
+        return run;
+    char buffer[4096];
+    std::size_t read = 0;
+    while ((read = fread(buffer, 1, sizeof buffer, pipe)) > 0)
+        run.output.append(buffer, read);
+    const int status = pclose(pipe);
+    run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return run;
+}
+
+CliRun runCli(const std::string &arguments)
+{
+    return runCommand(std::string(RASTERCHECK_CLI) + " " + arguments);
+}
+
+bool contains(const std::string &text, const std::string &part)
+{
+    return text.find(part) != std::string::npos;
+}
+
+const char *kStatisticsTool = "/usr/bin/ompl_benchmark_statistics";
+
+// An axis-aligned box as OBJ text, outward faces, vertex indices starting at \a base + 1.
+std::string objBox(const std::string &name, double x0, double y0, double z0, double x1, double y1, double z1, int base)
+{
+    char text[1024];
+    std::snprintf(text, sizeof text,
+                  "o %s\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g "
+                  "%g\n",
+                  name.c_str(), x0, y0, z0, x1, y0, z0, x1, y1, z0, x0, y1, z0, x0, y0, z1, x1, y0, z1, x1, y1, z1, x0,
+                  y1, z1);
+    std::string obj = text;
+    const int faces[12][3] = {{1, 4, 3}, {1, 3, 2}, {5, 6, 7}, {5, 7, 8}, {1, 2, 6}, {1, 6, 5},
+                              {4, 8, 7}, {4, 7, 3}, {1, 5, 8}, {1, 8, 4}, {2, 3, 7}, {2, 7, 6}};
+    for (const auto &f : faces)
+        obj += "f " + std::to_string(base + f[0]) + " " + std::to_string(base + f[1]) + " " +
+               std::to_string(base + f[2]) + "\n";
+    return obj;
+}
+
+std::string cfg(const std::string &planners)
+{
+    return "[problem]\nname = boxes\nrobot = robot.obj\nworld = world.obj\n"
+           "start.x = -1.5\nstart.y = 0\nstart.z = 0\nstart.theta = 0\nstart.axis.x = 1\nstart.axis.y = "
+           "0\nstart.axis.z = 0\n"
+           "goal.x = 1.5\ngoal.y = 0.2\ngoal.z = 0\ngoal.theta = 1.0\ngoal.axis.x = 0\ngoal.axis.y = 0\ngoal.axis.z = "
+           "1\n"
+           "volume.min.x = -2\nvolume.min.y = -2\nvolume.min.z = -2\nvolume.max.x = 2\nvolume.max.y = 2\nvolume.max.z "
+           "= 2\n"
+           "\n[benchmark]\ntime_limit = 2\nmem_limit = 1000\nrun_count = 2\n\n[planner]\n" +
+           planners;
+}
+
+// Rows of the runs table of an sqlite database, by python3 (which ompl_benchmark_statistics needs
+// anyway); -1 when it cannot be read.
+int countRows(const std::string &database, const std::string &where)
+{
+    const CliRun run = runCommand("python3 -c \"import sqlite3; print(sqlite3.connect('" + database +
+                                  "').execute('select count(*) from runs " + where + "').fetchone()[0])\"");
+    if (run.status != 0)
+        return -1;
+    return std::atoi(run.output.c_str());
+}
+}  // namespace
+
+TEST(PlanCli, OmplAppProblemLogIsReadByOmplBenchmarkStatistics)
+{
+    const std::string folder = makeTempDir("plan_cli");
+    writeFile(folder + "/robot.obj", objBox("robot", -0.1, -0.1, -0.1, 0.1, 0.1, 0.1, 0));
+    // Obstacles beside the straight start-goal line: every planner's simplified path is clear of them
+    // by a margin, so the exact re-check passes (paths that graze a corner between two checked states
+    // are what the next test is about).
+    writeFile(folder + "/world.obj",
+              objBox("pillar", -0.3, 0.8, -2, 0.3, 1.4, 2, 0) + objBox("shelf", -0.8, -1.2, -0.5, 0.8, -0.7, 0.5, 8));
+    writeFile(folder + "/boxes.cfg", cfg("rrtconnect=\nrrtconnect.range=1.5\nkpiece=\n"));
+    const std::string log = folder + "/boxes.log";
+    const CliRun run = runCli("plan " + folder + "/boxes.cfg --log " + log + " --seed 3");
+    ASSERT_EQ(run.status, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "experiment boxes: 2 run(s) per planner, time limit 2 s")) << run.output;
+    EXPECT_TRUE(contains(run.output, "rrtconnect         2/2         0")) << run.output;
+    EXPECT_TRUE(contains(run.output, "kpiece")) << run.output;
+    EXPECT_FALSE(contains(run.output, "COLLIDES")) << run.output;
+
+    if (access(kStatisticsTool, X_OK) != 0)
+        GTEST_SKIP() << kStatisticsTool << " is not installed (package ompl-demos)";
+    const std::string database = folder + "/boxes.db";
+    const CliRun statistics = runCommand(std::string(kStatisticsTool) + " " + log + " -d " + database);
+    ASSERT_EQ(statistics.status, 0) << statistics.output;
+    EXPECT_EQ(countRows(database, ""), 4);
+    EXPECT_EQ(countRows(database, "where exact_recheck_collision_free = 1"), countRows(database, "where solved = 1"));
+    EXPECT_GE(countRows(database, "where solved = 1"), 2);
+}
+
+TEST(PlanCli, CollidingSolutionIsReportedLoudly)
+{
+    // A thin wall across the whole volume: no path exists, but with coarse edge checks (a 0.69 m
+    // resolution against a 2 cm wall) the planner steps through it. The exact re-check at 10x the
+    // resolution must catch every such path.
+    const std::string folder = makeTempDir("plan_cli_wall");
+    writeFile(folder + "/robot.obj", objBox("robot", -0.05, -0.05, -0.05, 0.05, 0.05, 0.05, 0));
+    writeFile(folder + "/world.obj", objBox("wall", -0.01, -3, -3, 0.01, 3, 3, 0));
+    writeFile(folder + "/wall.cfg", cfg("rrtconnect=\n"));
+    const CliRun run =
+        runCli("plan " + folder + "/wall.cfg --runs 1 --time-limit 5 --segment-fraction 0.1 --seed 5 --log " + folder +
+               "/wall.log");
+    EXPECT_EQ(run.status, 3) << run.output;
+    EXPECT_TRUE(contains(run.output, "rastercheck: ERROR: solution path of RRTConnect run 0 COLLIDES")) << run.output;
+    EXPECT_TRUE(contains(run.output, "the planner's resolution stepped over it")) << run.output;
+    EXPECT_TRUE(contains(run.output, "wall")) << run.output;
+    EXPECT_TRUE(contains(run.output, "rrtconnect         0/1         1")) << run.output;
+    EXPECT_TRUE(contains(run.output, "1 solution path(s) collide")) << run.output;
+}
+
+TEST(PlanCli, MotionBenchMakerProblem)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const std::string panda = root + "/mbm/panda";
+    const std::string problems = panda + "/problems/table_pick_panda";
+    const CliRun run = runCli("plan --robot " + panda + "/panda.urdf --srdf " + panda + "/panda.srdf --scene " +
+                              problems + "/scene0001.yaml --request " + problems +
+                              "/request0001.yaml --planner rrtconnect --runs 2 --time-limit 10 --seed 1 --mode exact");
+    ASSERT_EQ(run.status, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "experiment scene0001_request0001")) << run.output;
+    EXPECT_TRUE(contains(run.output, "rrtconnect         2/2         0")) << run.output;
+}
+
+TEST(PlanCli, BadArgumentsAreErrors)
+{
+    const std::string folder = makeTempDir("plan_cli_bad");
+    writeFile(folder + "/robot.obj", objBox("robot", -0.1, -0.1, -0.1, 0.1, 0.1, 0.1, 0));
+    writeFile(folder + "/world.obj", objBox("pillar", -0.3, -0.3, -2, 0.3, 0.3, 2, 0));
+    writeFile(folder + "/p.cfg", cfg("rrt=\n"));
+    CliRun run = runCli("plan " + folder + "/p.cfg --planner warpdrive");
+    EXPECT_EQ(run.status, 1) << run.output;
+    EXPECT_TRUE(contains(run.output, "unknown planner 'warpdrive'")) << run.output;
+    run = runCli("plan " + folder + "/p.cfg --param rrt.no_such_thing=3");
+    EXPECT_EQ(run.status, 1) << run.output;
+    EXPECT_TRUE(contains(run.output, "no parameter 'no_such_thing'")) << run.output;
+    run = runCli("plan --robot " + folder + "/none.urdf");
+    EXPECT_EQ(run.status, 1) << run.output;
+    EXPECT_TRUE(contains(run.output, "--request")) << run.output;
+}
