@@ -11,9 +11,12 @@ namespace rastercheck
     self-collision with the allowed-collision matrix, and honours padding exactly. */
 enum class CollisionMode
 {
-    /** \brief Default. The raster pipeline, made safe: a pair whose per-pixel depth ranges are
-        disjoint is proven free, a parity hit is a collision, anything else is decided by the exact
-        narrow phase. Never calls a colliding state valid (up to the float tolerance in DESIGN.md). */
+    /** \brief Default: never calls a colliding state valid. Every pair that survives the paper's
+        culls is decided exactly. The CPU backend decides such pairs with the exact narrow phase
+        directly, because on a CPU that is faster than rasterizing them (docs/benchmarks.md); a
+        GPU backend, which rasterizes a whole batch in one pass, may settle pairs by the raster
+        first (a parity hit is an overlap; disjoint per-pixel depth ranges prove separation) and
+        must confirm every other pair exactly. */
     Safe,
     /** \brief The paper's method alone: rays through pixel centres only, so overlaps thinner than a
         pixel or seen edge-on can be missed (measured in docs/accuracy.md). Pairs of two open meshes
