@@ -35,4 +35,7 @@ struct ProblemArguments
 void addInfoCommand(CLI::App &app);
 /** \brief `rastercheck check PROBLEM --states IN.csv ...`: one verdict per state. */
 void addCheckCommand(CLI::App &app);
+/** \brief `rastercheck render PROBLEM (--states IN.csv | --request R.yaml) --out-dir DIR`: top and side
+    views of the scene and the path, and the raster image of the first colliding state. */
+void addRenderCommand(CLI::App &app);
 }  // namespace rastercheck::cli

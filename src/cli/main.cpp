@@ -13,6 +13,7 @@ int main(int argc, char **argv)
     app.require_subcommand(1);
     rastercheck::cli::addInfoCommand(app);
     rastercheck::cli::addCheckCommand(app);
+    rastercheck::cli::addRenderCommand(app);
     try
     {
         app.parse(argc, argv);
