@@ -1,0 +1,98 @@
+#include "rastercheck/ompl/Setup.h"
+
+#include <cmath>
+
+#include <ompl/base/ScopedState.h>
+
+#include "rastercheck/core/Error.h"
+#include "rastercheck/core/Log.h"
+#include "rastercheck/ompl/MotionValidator.h"
+
+namespace ob = ::ompl::base;
+namespace og = ::ompl::geometric;
+
+namespace rastercheck::ompl
+{
+og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &options)
+{
+    if (!problem.robot)
+        throw ConfigurationError("makeSimpleSetup: the problem has no robot");
+    if (!(options.longestValidSegmentFraction > 0.0 && options.longestValidSegmentFraction <= 1.0))
+        throw ConfigurationError("longest valid segment fraction must be in (0, 1]");
+    StateMappingOptions mappingOptions;
+    mappingOptions.heldCoordinates = options.heldCoordinates;
+    auto mapping = std::make_shared<const StateMapping>(problem.robot, mappingOptions);
+    auto checker = std::make_shared<const Checker>(problem.robot, problem.scene, options.checker);
+
+    const ob::StateSpacePtr &space = mapping->getStateSpace();
+    space->setLongestValidSegmentFraction(options.longestValidSegmentFraction);
+    auto setup = std::make_shared<og::SimpleSetup>(space);
+    const ob::SpaceInformationPtr &si = setup->getSpaceInformation();
+    auto validityChecker = std::make_shared<StateValidityChecker>(si, mapping, checker, options.request);
+    setup->setStateValidityChecker(validityChecker);
+    if (options.batchMotionValidator)
+        si->setMotionValidator(std::make_shared<MotionValidator>(si, *validityChecker, options.rakeWidth));
+    return setup;
+}
+
+StateValidityCheckerPtr getStateValidityChecker(const og::SimpleSetup &setup)
+{
+    auto checker = std::dynamic_pointer_cast<StateValidityChecker>(setup.getStateValidityChecker());
+    if (!checker)
+        throw ConfigurationError("this SimpleSetup was not made by rastercheck::ompl::makeSimpleSetup");
+    return checker;
+}
+
+std::vector<double> configurationFromJoints(const StateMapping &mapping, const std::map<std::string, double> &joints,
+                                            const std::string &what)
+{
+    const RobotModel &robot = mapping.robot();
+    std::vector<double> q = mapping.baseConfiguration();
+    for (const auto &[name, value] : joints)
+    {
+        const int index = robot.jointIndex(name);
+        if (index < 0)
+            throw ConfigurationError(what + " names joint '" + name + "', which robot '" + robot.name + "' lacks");
+        const Joint &joint = robot.joints[index];
+        if (joint.firstCoordinate < 0)
+            continue;  // fixed or mimic: nothing to plan
+        if (joint.coordinateNames.size() != 1)
+            throw ConfigurationError(what + " sets joint '" + name + "' by one position, but it has " +
+                                     std::to_string(joint.coordinateNames.size()) + " coordinates");
+        if (!std::isfinite(value))
+            throw ConfigurationError(what + " gives joint '" + name + "' a non-finite position");
+        const int c = joint.firstCoordinate;
+        if (mapping.isHeld(c))
+        {
+            if (std::abs(value - q[c]) > 1e-9)
+                logWarning(what + " sets held coordinate '" + name + "' to " + std::to_string(value) +
+                           "; it stays at its held value " + std::to_string(q[c]));
+            continue;
+        }
+        q[c] = value;
+    }
+    return q;
+}
+
+void setStartAndGoal(og::SimpleSetup &setup, const std::vector<double> &start, const std::vector<double> &goal)
+{
+    const StateValidityCheckerPtr checker = getStateValidityChecker(setup);
+    const StateMapping &mapping = checker->getStateMapping();
+    ob::ScopedState<> startState(setup.getStateSpace()), goalState(setup.getStateSpace());
+    mapping.fromConfiguration(start, startState.get());
+    mapping.fromConfiguration(goal, goalState.get());
+    setup.setStartAndGoalStates(startState, goalState);
+}
+
+void setStartAndGoal(og::SimpleSetup &setup, const OmplAppProblem &problem)
+{
+    setStartAndGoal(setup, problem.start, problem.goal);
+}
+
+void setStartAndGoal(og::SimpleSetup &setup, const MotionPlanRequest &request)
+{
+    const StateMapping &mapping = getStateValidityChecker(setup)->getStateMapping();
+    setStartAndGoal(setup, configurationFromJoints(mapping, request.startJoints, "start"),
+                    configurationFromJoints(mapping, request.goalJoints, "goal"));
+}
+}  // namespace rastercheck::ompl

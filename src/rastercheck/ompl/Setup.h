@@ -1,0 +1,65 @@
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <ompl/geometric/SimpleSetup.h>
+
+#include "rastercheck/collision/Checker.h"
+#include "rastercheck/io/MoveItYaml.h"
+#include "rastercheck/io/OmplAppProblem.h"
+#include "rastercheck/io/Problem.h"
+#include "rastercheck/ompl/StateValidityChecker.h"
+
+namespace rastercheck::ompl
+{
+/** \brief How makeSimpleSetup builds a planning context. */
+struct SetupOptions
+{
+    /** \brief Backend and threads of the Checker (threads are used by batch calls: the motion
+        validator's batches). */
+    CheckerOptions checker;
+    /** \brief Mode, padding, ... of every state check. */
+    CollisionRequest request;
+    /** \brief Coordinates held fixed (StateMappingOptions::heldCoordinates). */
+    std::map<std::string, double> heldCoordinates;
+    /** \brief StateSpace::setLongestValidSegmentFraction: edge resolution as a fraction of the space's
+        maximum extent (OMPL's default is 0.01). */
+    double longestValidSegmentFraction = 0.01;
+    /** \brief true: edges are checked by rastercheck::ompl::MotionValidator (batches, same verdicts);
+        false: by OMPL's DiscreteMotionValidator (one state at a time). */
+    bool batchMotionValidator = true;
+    /** \brief First batch size of the batched motion validator. */
+    unsigned int rakeWidth = 8;
+};
+
+/** \brief A SimpleSetup for \a problem: the StateMapping's space (bounds = the model bounds; for an
+    OMPL.app problem those are its volume bounds), a StateValidityChecker over a new Checker of the
+    problem's robot and scene, and the motion validator chosen in \a options. Start and goal are
+    not set (see setStartAndGoal). Throws ConfigurationError on bad options. */
+::ompl::geometric::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &options = {});
+
+/** \brief The rastercheck validity checker of \a setup (its mapping, checker and request). Throws
+    ConfigurationError when \a setup's checker is not one. */
+StateValidityCheckerPtr getStateValidityChecker(const ::ompl::geometric::SimpleSetup &setup);
+
+/** \brief \a base with the joints of \a joints (name -> position, rad or m) written in. Joints that
+    consume no coordinate (fixed, mimic) are skipped; held coordinates keep their value in \a base
+    (a warning when the request disagrees by more than 1e-9). Throws ConfigurationError naming the
+    joint when \a joints names a joint the robot lacks or a joint with several coordinates.
+    \a what names the configuration in messages ("start", "goal"). */
+std::vector<double> configurationFromJoints(const StateMapping &mapping, const std::map<std::string, double> &joints,
+                                            const std::string &what);
+
+/** \brief Start and goal of an OMPL.app problem (its start / goal configurations). */
+void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
+
+/** \brief Start (start_state.joint_state) and goal (goal_constraints[0] joint positions) of a MoveIt
+    request; coordinates a request does not name keep their neutral (or held) values. */
+void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const MotionPlanRequest &request);
+
+/** \brief Start and goal from two configurations (robot coordinate order). */
+void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const std::vector<double> &start,
+                     const std::vector<double> &goal);
+}  // namespace rastercheck::ompl
