@@ -1,0 +1,152 @@
+// makeSimpleSetup on a MotionBenchMaker Panda problem: space, start and goal from the MoveIt request,
+// unknown joints, and a short RRT-Connect solve whose path the exact oracle re-checks densely.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include <ompl/base/goals/GoalState.h>
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/geometric/planners/rrt/RRTConnect.h>
+
+#include "Reference.h"
+#include "TestSupport.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/geometry/Primitives.h"
+#include "rastercheck/model/RigidBody.h"
+#include "rastercheck/io/MoveItYaml.h"
+#include "rastercheck/ompl/MotionValidator.h"
+#include "rastercheck/ompl/PathCheck.h"
+#include "rastercheck/ompl/Planners.h"
+#include "rastercheck/ompl/Setup.h"
+
+namespace rc = rastercheck;
+namespace rco = rastercheck::ompl;
+namespace ob = ::ompl::base;
+namespace og = ::ompl::geometric;
+
+namespace
+{
+rc::Problem pandaProblem(const std::string &root, const std::string &scenario, const std::string &index)
+{
+    rc::ProblemSource source;
+    source.urdfPath = root + "/mbm/panda/panda.urdf";
+    source.srdfPath = root + "/mbm/panda/panda.srdf";
+    source.scenePath = root + "/mbm/panda/problems/" + scenario + "_panda/scene" + index + ".yaml";
+    return rc::loadProblem(source);
+}
+}  // namespace
+
+TEST(OmplSetup, MbmProblemStartAndGoal)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = pandaProblem(root, "table_pick", "0001");
+    const rc::MotionPlanRequest request =
+        rc::loadMoveItRequest(root + "/mbm/panda/problems/table_pick_panda/request0001.yaml");
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(problem);
+    ASSERT_TRUE(std::dynamic_pointer_cast<ob::RealVectorStateSpace>(setup->getStateSpace()));
+    EXPECT_EQ(setup->getStateSpace()->getDimension(), 7u);
+    rco::setStartAndGoal(*setup, request);
+    setup->setup();
+    EXPECT_TRUE(std::dynamic_pointer_cast<rco::MotionValidator>(setup->getSpaceInformation()->getMotionValidator()));
+
+    const rco::StateValidityCheckerPtr checker = rco::getStateValidityChecker(*setup);
+    const ob::State *start = setup->getProblemDefinition()->getStartState(0);
+    const std::vector<double> q = checker->getStateMapping().toConfiguration(start);
+    EXPECT_DOUBLE_EQ(q[1], -0.785);  // panda_joint2 of start_state
+    EXPECT_DOUBLE_EQ(q[6], 0.785);
+    EXPECT_TRUE(checker->isValid(start));
+    const ob::State *goal = setup->getGoal()->as<ob::GoalState>()->getState();
+    EXPECT_DOUBLE_EQ(checker->getStateMapping().toConfiguration(goal)[0], request.goalJoints.at("panda_joint1"));
+    EXPECT_TRUE(checker->isValid(goal));
+
+    // A request naming a joint the robot lacks is refused, naming the joint.
+    rc::MotionPlanRequest bad = request;
+    bad.startJoints["elbow_of_another_robot"] = 0.0;
+    try
+    {
+        rco::setStartAndGoal(*setup, bad);
+        ADD_FAILURE() << "unknown joint accepted";
+    }
+    catch (const rc::ConfigurationError &e)
+    {
+        EXPECT_NE(std::string(e.what()).find("elbow_of_another_robot"), std::string::npos) << e.what();
+    }
+    // Coordinates the request does not name keep their neutral values.
+    rc::MotionPlanRequest partial;
+    partial.startJoints = {{"panda_joint1", 0.5}};
+    partial.goalJoints = {{"panda_joint2", 0.25}};
+    rco::setStartAndGoal(*setup, partial);
+    const std::vector<double> neutral = problem.robot->neutralConfiguration();
+    const std::vector<double> s =
+        checker->getStateMapping().toConfiguration(setup->getProblemDefinition()->getStartState(0));
+    EXPECT_EQ(s[0], 0.5);
+    EXPECT_EQ(s[3], neutral[3]);
+}
+
+TEST(OmplSetup, RrtConnectSolvesTablePickAndTheOracleAgrees)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = pandaProblem(root, "table_pick", "0001");
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(problem);
+    rco::setStartAndGoal(*setup, rc::loadMoveItRequest(root + "/mbm/panda/problems/table_pick_panda/request0001.yaml"));
+    setup->setPlanner(rco::allocatePlanner("rrtconnect", setup->getSpaceInformation()));
+    const ob::PlannerStatus status = setup->solve(10.0);
+    ASSERT_EQ(status, ob::PlannerStatus::EXACT_SOLUTION);
+    og::PathGeometric path = setup->getSolutionPath();
+    ASSERT_GE(path.getStateCount(), 2u);
+
+    const rco::StateValidityCheckerPtr checker = rco::getStateValidityChecker(*setup);
+    rc::CollisionRequest exact;
+    exact.mode = rc::CollisionMode::Exact;
+    const rco::PathCheckResult dense =
+        rco::checkPathDensely(path, checker->getStateMapping(), checker->getChecker(), exact, 10);
+    EXPECT_TRUE(dense.valid) << "segment " << dense.segment << " at t = " << dense.time << ": "
+                             << checker->getChecker().describe(dense.contact);
+    EXPECT_GT(dense.statesChecked, 10 * (path.getStateCount() - 1));
+    // The waypoints once more by the brute-force oracle (no culling at all).
+    for (std::size_t i = 0; i < path.getStateCount(); ++i)
+    {
+        const std::vector<double> q = checker->getStateMapping().toConfiguration(path.getState(i));
+        EXPECT_FALSE(rc::test::bruteForceCollides(checker->getChecker().collisionModel(), q.data(), 0.0)) << i;
+    }
+}
+
+TEST(OmplSetup, DensePathCheckFindsACollisionTheCoarseCheckSkips)
+{
+    // A 0.1 m cube crossing a 2 cm wall at x = 0 in 5 segments of 0.4 m (x = -0.6, -0.2, 0.2, ...):
+    // the planner's resolution steps over the wall, ten times finer does not.
+    rc::Aabb bounds;
+    bounds.min = Eigen::Vector3d::Constant(-2);
+    bounds.max = Eigen::Vector3d::Constant(2);
+    rc::Problem problem;
+    problem.robot = rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.1)), bounds);
+    auto scene = std::make_shared<rc::Scene>();
+    scene->addObject("wall", rc::makeBox(Eigen::Vector3d(0.02, 3.0, 3.0)));
+    problem.scene = scene;
+    rco::SetupOptions options;
+    // SE(3) counts segments per subspace (the largest count wins): 0.45 m steps on the position,
+    // whose extent is the diagonal of the 4 m cube.
+    options.longestValidSegmentFraction = 0.45 / (4.0 * std::sqrt(3.0));
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(problem, options);
+    setup->getSpaceInformation()->setup();  // SimpleSetup::setup() without a goal crashes in OMPL 1.5
+    const rco::StateValidityCheckerPtr checker = rco::getStateValidityChecker(*setup);
+    ob::ScopedState<> a(setup->getStateSpace()), b(setup->getStateSpace());
+    checker->getStateMapping().fromConfiguration(std::vector<double>{-1, 0, 0, 0, 0, 0, 1}, a.get());
+    checker->getStateMapping().fromConfiguration(std::vector<double>{1, 0, 0, 0, 0, 0, 1}, b.get());
+    ASSERT_EQ(setup->getStateSpace()->validSegmentCount(a.get(), b.get()), 5u);
+    EXPECT_TRUE(setup->getSpaceInformation()->checkMotion(a.get(), b.get()));
+
+    og::PathGeometric path(setup->getSpaceInformation(), a.get(), b.get());
+    rc::CollisionRequest exact;
+    exact.mode = rc::CollisionMode::Exact;
+    const rco::PathCheckResult dense =
+        rco::checkPathDensely(path, checker->getStateMapping(), checker->getChecker(), exact, 10);
+    EXPECT_FALSE(dense.valid);
+    EXPECT_EQ(dense.statesChecked, 51u);
+    EXPECT_EQ(dense.segment, 0u);
+    EXPECT_NEAR(dense.time, 0.48, 1e-12);  // x = -0.04: the cube's face reaches the wall at -0.01
+    EXPECT_EQ(dense.contact.kind, rc::Contact::Kind::Environment);
+    EXPECT_FALSE(checker->getChecker().isValid(dense.configuration, exact));
+    // Coarser than the planner never finds more than it.
+    EXPECT_TRUE(rco::checkPathDensely(path, checker->getStateMapping(), checker->getChecker(), exact, 1).valid);
+}
