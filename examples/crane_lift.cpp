@@ -3,7 +3,7 @@
 // it down on a foundation behind a pipe rack. RRT-Connect plans through rastercheck's checker, the
 // path is re-checked densely by the exact oracle, and the lift is drawn.
 //
-//   crane_lift [--robots DIR] [--out DIR] [--time SECONDS] [--seed N] [--padding METRES]
+//   crane_lift [--robots DIR] [--out DIR] [--time SECONDS] [--seed N] [--padding METRES] [--step METRES]
 //
 // DIR defaults to the source tree's robots/ folder; pictures go to out/crane_lift/.
 #include <algorithm>
@@ -47,6 +47,8 @@ struct Options
     // and no two crane parts closer to each other. The skid is picked and set down 0.3 m above its
     // supports, so the clearance must stay below that.
     double padding = 0.25;
+    // Largest motion of any point of the crane between two states the planner checks on an edge.
+    double step = 0.25;
 };
 
 Options parseArguments(int argc, char **argv)
@@ -57,8 +59,8 @@ Options parseArguments(int argc, char **argv)
         const std::string flag = argv[i];
         if (flag == "--help" || flag == "-h")
         {
-            std::cout
-                << "usage: crane_lift [--robots DIR] [--out DIR] [--time SECONDS] [--seed N] [--padding METRES]\n";
+            std::cout << "usage: crane_lift [--robots DIR] [--out DIR] [--time SECONDS] [--seed N] [--padding METRES] "
+                         "[--step METRES]\n";
             std::exit(0);
         }
         if (i + 1 >= argc)
@@ -74,11 +76,13 @@ Options parseArguments(int argc, char **argv)
             options.seed = static_cast<unsigned>(std::stoul(value));
         else if (flag == "--padding")
             options.padding = std::stod(value);
+        else if (flag == "--step")
+            options.step = std::stod(value);
         else
             throw rc::ConfigurationError("unknown option " + flag + " (see --help)");
     }
-    if (!(options.time > 0) || !(options.padding >= 0))
-        throw rc::ConfigurationError("--time must be > 0 and --padding >= 0");
+    if (!(options.time > 0) || !(options.padding >= 0) || !(options.step > 0))
+        throw rc::ConfigurationError("--time and --step must be > 0, --padding >= 0");
     return options;
 }
 
@@ -214,6 +218,17 @@ int run(const Options &options)
     const og::SimpleSetupPtr setup = rc::ompl::makeSimpleSetup(problem, setupOptions);
     setup->setPlanner(std::make_shared<og::RRTConnect>(setup->getSpaceInformation()));
     rc::ompl::setStartAndGoal(*setup, lift);
+    // Edge resolution in metres of crane motion. The state metric adds radians of slew to metres of
+    // hoist, and one radian of slew or luff moves the boom tip and the load up to 41 m (the longest
+    // boom's reach from the slew axis and the luff pivot), so OMPL's default of 1 % of the space's
+    // extent would let the load jump about 15 m between checked states. With at most kMetresPerUnit
+    // metres per unit of the metric, no point of the crane moves more than options.step between two
+    // checked states: between them the crane keeps padding - step from the plant (so with step <=
+    // padding the swept lift is collision-free, not only its samples) and padding - 2 step between
+    // its own parts (both may move); the exact re-check below samples ten times finer.
+    constexpr double kMetresPerUnit = 45.0;
+    const ::ompl::base::StateSpacePtr &space = setup->getStateSpace();
+    space->setLongestValidSegmentFraction(options.step / kMetresPerUnit / space->getMaximumExtent());
     const rc::ompl::StateValidityCheckerPtr validity = rc::ompl::getStateValidityChecker(*setup);
     const rc::ompl::StateMapping &mapping = validity->getStateMapping();
     const rc::Checker &checker = validity->getChecker();
@@ -230,7 +245,9 @@ int run(const Options &options)
                 countIds(checker.scene()), checker.scene().numObjects(), checker.scene().numTriangles());
     std::printf("  checker  %s backend, %s mode, %.2f m safety clearance (padding)\n", checker.backendName().c_str(),
                 rc::toString(setupOptions.request.mode).c_str(), options.padding);
-    std::printf("  planned  slew, luff, telescope_1, hoist (base_x, base_y, base_yaw held at 0)\n\n");
+    std::printf("  planned  slew, luff, telescope_1, hoist (base_x, base_y, base_yaw held at 0)\n");
+    std::printf("  edges    checked every %.2f m of crane motion (a %.1e fraction of the space's extent)\n\n",
+                options.step, space->getLongestValidSegmentFraction());
 
     std::printf("start and goal (plant_lift.yaml)\n");
     printCraneState("start: pick", crane, layout, start,

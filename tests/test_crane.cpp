@@ -1,10 +1,12 @@
 // The crawler crane (robots/crane) behaves as a crane, and the plant lift (robots/sites) is a sound
 // planning problem: its start and goal are valid, the straight line between them is not, and a short
 // planned lift is collision-free by the exact oracle with the hook hanging plumb throughout.
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
+#include <ompl/base/ScopedState.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/RandomNumbers.h>
@@ -16,6 +18,7 @@
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/model/Kinematics.h"
 #include "rastercheck/ompl/PathCheck.h"
+#include "rastercheck/ompl/StateMapping.h"
 #include "rastercheck/ompl/Setup.h"
 
 namespace rc = rastercheck;
@@ -208,6 +211,69 @@ TEST(Crane, HookBlockStaysVertical)
         const double heading = q[2] + q[3];  // base_yaw + slew
         EXPECT_NEAR((hook.linear().col(0) - Eigen::Vector3d(std::cos(heading), std::sin(heading), 0)).norm(), 0.0,
                     kTight);
+    }
+}
+
+TEST(Crane, NoPointMovesMoreThan45MetresPerUnitOfTheStateMetric)
+{
+    // examples/crane_lift.cpp sets the planner's edge resolution in metres of crane motion from this
+    // bound: one unit of OMPL's distance (radians of slew + euclidean over luff, telescope, hoist)
+    // moves no vertex of the crane more than 45 m.
+    rc::ompl::StateMappingOptions options;
+    options.heldCoordinates = {{"base_x", 0.0}, {"base_y", 0.0}, {"base_yaw", 0.0}};
+    const rc::ompl::StateMapping mapping(plant().robot, options);
+    const ::ompl::base::StateSpacePtr &space = mapping.getStateSpace();
+    ::ompl::base::ScopedState<> a(space), b(space);
+    const rc::RobotModel &robot = crane();
+    rc::RobotData dataA(robot), dataB(robot);
+    // Largest vertex displacement from qa to qb over their distance in the state space.
+    auto metresPerUnit = [&](const std::vector<double> &qa, const std::vector<double> &qb)
+    {
+        mapping.fromConfiguration(qa, a.get());
+        mapping.fromConfiguration(qb, b.get());
+        rc::forwardKinematics(robot, dataA, qa);
+        rc::forwardKinematics(robot, dataB, qb);
+        double moved = 0.0;
+        for (const rc::Component &component : robot.components)
+            for (const Eigen::Vector3d &v : component.mesh.vertices)
+            {
+                const auto l = static_cast<std::size_t>(component.link);
+                moved = std::max(moved, (dataA.oMl[l] * v - dataB.oMl[l] * v).norm());
+            }
+        return moved / space->distance(a.get(), b.get());
+    };
+    // The worst cases: the longest boom, horizontal, slewing or luffing (the tip is 38 to 40 m out).
+    const std::vector<double> reach =
+        configuration({{"slew", 0.3}, {"luff", 0.0}, {"telescope_1", 9.3}, {"hoist", 1.0}});
+    std::vector<double> slewed = reach, luffed = reach;
+    slewed[3] += 1e-4;
+    luffed[4] += 1e-4;
+    EXPECT_GT(metresPerUnit(reach, slewed), 38.0);
+    EXPECT_LT(metresPerUnit(reach, slewed), 45.0);
+    EXPECT_GT(metresPerUnit(reach, luffed), 38.0);
+    EXPECT_LT(metresPerUnit(reach, luffed), 45.0);
+
+    std::mt19937 random(45);
+    for (int trial = 0; trial < 300; ++trial)
+    {
+        std::vector<double> qa = mapping.baseConfiguration();
+        for (int c : mapping.plannedCoordinates())
+        {
+            const auto i = static_cast<std::size_t>(c);
+            qa[i] = std::uniform_real_distribution<double>(robot.lowerBounds[i], robot.upperBounds[i])(random);
+        }
+        // A short step in a random direction, kept inside the bounds.
+        std::vector<double> qb = qa;
+        for (int c : mapping.plannedCoordinates())
+        {
+            const auto i = static_cast<std::size_t>(c);
+            qb[i] = std::clamp(qa[i] + std::uniform_real_distribution<double>(-1e-3, 1e-3)(random),
+                               robot.lowerBounds[i], robot.upperBounds[i]);
+        }
+        if (qa != qb)
+        {
+            EXPECT_LT(metresPerUnit(qa, qb), 45.0);
+        }
     }
 }
 
