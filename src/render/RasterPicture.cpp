@@ -135,9 +135,9 @@ RasterPictureLayout writeRasterPicture(const std::string &pngPath, const RasterI
                      18, Anchor::Left, true);
     std::ostringstream caption;
     caption.precision(3);
-    caption << "seen from +" << axisName(grid.axis) << ", rays along +" << axisName(grid.axis) << " (toward the viewer), " << grid.width << " x " << grid.height
-            << " pixels of " << grid.pixel << " m; " << hits << " pixel" << (hits == 1 ? "" : "s")
-            << " where Sort_Search_Pair finds the solids overlapping";
+    caption << "seen from +" << axisName(grid.axis) << ", rays along +" << axisName(grid.axis)
+            << " (toward the viewer), " << grid.width << " x " << grid.height << " pixels of " << grid.pixel << " m; "
+            << hits << " pixel" << (hits == 1 ? "" : "s") << " where Sort_Search_Pair finds the solids overlapping";
     detail::drawText(cr, options.subtitle.empty() ? caption.str() : options.subtitle, kLeftMargin, 50, 12);
     if (!options.subtitle.empty())
         detail::drawText(cr, caption.str(), kLeftMargin, 66, 11);
