@@ -38,4 +38,7 @@ void addCheckCommand(CLI::App &app);
 /** \brief `rastercheck plan PROBLEM [--request R] [--planner NAME]... [--runs N] [--time-limit S] [--log F]
     ...`: OMPL planners through ompl::tools::Benchmark; solution paths re-checked by the exact oracle. */
 void addPlanCommand(CLI::App &app);
+/** \brief `rastercheck render PROBLEM (--states IN.csv | --request R.yaml) --out-dir DIR`: top and side
+    views of the scene and the path, and the raster image of the first colliding state. */
+void addRenderCommand(CLI::App &app);
 }  // namespace rastercheck::cli

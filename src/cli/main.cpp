@@ -14,6 +14,7 @@ int main(int argc, char **argv)
     rastercheck::cli::addInfoCommand(app);
     rastercheck::cli::addCheckCommand(app);
     rastercheck::cli::addPlanCommand(app);
+    rastercheck::cli::addRenderCommand(app);
     try
     {
         app.parse(argc, argv);
