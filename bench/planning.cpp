@@ -24,6 +24,7 @@
 
 #include "BenchSupport.h"
 #include "Reference.h"
+#include "rastercheck/core/Statistics.h"
 #include "rastercheck/ompl/PathCheck.h"
 #include "rastercheck/ompl/Setup.h"
 
@@ -104,15 +105,6 @@ Outcome solve(og::SimpleSetup &setup, double timeLimit, const rastercheck::ompl:
         }
     }
     return outcome;
-}
-
-double median(std::vector<double> values)
-{
-    if (values.empty())
-        return std::nan("");
-    std::sort(values.begin(), values.end());
-    const std::size_t n = values.size();
-    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 struct Tally

@@ -10,27 +10,8 @@
 
 namespace
 {
-struct CliRun
-{
-    int status = -1;
-    std::string output;  // stdout and stderr
-};
-
-CliRun runCli(const std::string &arguments)
-{
-    CliRun run;
-    const std::string command = std::string(RASTERCHECK_CLI) + " " + arguments + " 2>&1";
-    FILE *pipe = popen(command.c_str(), "r");
-    if (!pipe)
-        return run;
-    char buffer[4096];
-    std::size_t read = 0;
-    while ((read = fread(buffer, 1, sizeof buffer, pipe)) > 0)
-        run.output.append(buffer, read);
-    const int status = pclose(pipe);
-    run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return run;
-}
+using CliRun = rastercheck::test::CommandRun;
+using rastercheck::test::runCli;
 
 bool contains(const std::string &text, const std::string &part)
 {

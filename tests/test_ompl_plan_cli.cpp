@@ -15,31 +15,9 @@ using rastercheck::test::writeFile;
 
 namespace
 {
-struct CliRun
-{
-    int status = -1;
-    std::string output;  // stdout and stderr
-};
-
-CliRun runCommand(const std::string &command)
-{
-    CliRun run;
-    FILE *pipe = popen((command + " 2>&1").c_str(), "r");
-    if (!pipe)
-        return run;
-    char buffer[4096];
-    std::size_t read = 0;
-    while ((read = fread(buffer, 1, sizeof buffer, pipe)) > 0)
-        run.output.append(buffer, read);
-    const int status = pclose(pipe);
-    run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return run;
-}
-
-CliRun runCli(const std::string &arguments)
-{
-    return runCommand(std::string(RASTERCHECK_CLI) + " " + arguments);
-}
+using CliRun = rastercheck::test::CommandRun;
+using rastercheck::test::runCli;
+using rastercheck::test::runCommand;
 
 bool contains(const std::string &text, const std::string &part)
 {

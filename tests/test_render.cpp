@@ -103,18 +103,9 @@ std::vector<double> liftStates(int between)
 
 std::string runCli(const std::string &arguments, int &status)
 {
-    const std::string command = std::string(RASTERCHECK_CLI) + " " + arguments + " 2>&1";
-    FILE *pipe = popen(command.c_str(), "r");
-    std::string output;
-    if (!pipe)
-        return output;
-    char buffer[4096];
-    std::size_t read = 0;
-    while ((read = fread(buffer, 1, sizeof buffer, pipe)) > 0)
-        output.append(buffer, read);
-    const int raw = pclose(pipe);
-    status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    return output;
+    const rc::test::CommandRun run = rc::test::runCli(arguments);
+    status = run.status;
+    return run.output;
 }
 }  // namespace
 

@@ -17,6 +17,7 @@
 #include <ompl/util/RandomNumbers.h>
 
 #include "Commands.h"
+#include "rastercheck/core/Statistics.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/ompl/PathCheck.h"
@@ -72,15 +73,6 @@ double parseNumber(const std::string &text, const std::string &what)
     if (!in || !in.eof() || !std::isfinite(value))
         throw ConfigurationError(what + ": '" + text + "' is not a finite number");
     return value;
-}
-
-double median(std::vector<double> values)
-{
-    if (values.empty())
-        return std::nan("");
-    std::sort(values.begin(), values.end());
-    const std::size_t n = values.size();
-    return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 double mean(const std::vector<double> &values)

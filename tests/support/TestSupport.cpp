@@ -2,7 +2,9 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <cstdio>
 #include <stdexcept>
+#include <sys/wait.h>
 
 #include "rastercheck/core/Error.h"
 
@@ -14,6 +16,21 @@ std::string makeTempDir(const std::string &tag)
     if (!mkdtemp(pattern.data()))
         throw std::runtime_error("cannot create a temporary directory " + pattern);
     return pattern;
+}
+
+CommandRun runCommand(const std::string &command)
+{
+    CommandRun run;
+    FILE *pipe = popen((command + " 2>&1").c_str(), "r");
+    if (!pipe)
+        return run;
+    char buffer[4096];
+    std::size_t read = 0;
+    while ((read = fread(buffer, 1, sizeof buffer, pipe)) > 0)
+        run.output.append(buffer, read);
+    const int status = pclose(pipe);
+    run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return run;
 }
 
 void expectInputError(const std::function<void()> &load, const std::string &file, const std::string &element,

@@ -20,6 +20,18 @@ inline std::string sourcePath(const std::string &relative) { return std::string(
     guaranteed; it lives under the system temp folder). */
 std::string makeTempDir(const std::string &tag);
 
+/** \brief What a command printed (stdout and stderr) and its exit status (-1 when it did not exit). */
+struct CommandRun
+{
+    int status = -1;
+    std::string output;
+};
+
+/** \brief Runs a shell command and collects its output. */
+CommandRun runCommand(const std::string &command);
+/** \brief Runs the rastercheck command line with \a arguments. */
+inline CommandRun runCli(const std::string &arguments) { return runCommand(std::string(RASTERCHECK_CLI) + " " + arguments); }
+
 /** \brief Expects \a load to throw InputError naming \a file, an element containing \a element,
     and a message containing \a what. */
 void expectInputError(const std::function<void()> &load, const std::string &file, const std::string &element,

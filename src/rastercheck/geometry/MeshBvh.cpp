@@ -1,4 +1,5 @@
 #include "rastercheck/geometry/MeshBvh.h"
+#include "rastercheck/geometry/MeshTopology.h"
 
 #include <algorithm>
 #include <cmath>
@@ -132,28 +133,16 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles) : mesh_(&mesh)
     depth_ = build(0, static_cast<std::uint32_t>(n), 0, centroids, leafSize);
     if (depth_ > kMaxDepth)  // cannot happen for a median split of fewer than 2^31 triangles
         throw ConfigurationError("MeshBvh: tree depth " + std::to_string(depth_) + " exceeds the query stacks");
-    // One vertex per connected shell (union-find over triangles sharing vertices).
-    std::vector<std::uint32_t> parent(mesh.vertices.size());
-    std::iota(parent.begin(), parent.end(), 0u);
-    const auto root = [&parent](std::uint32_t i)
-    {
-        while (parent[i] != i)
-            i = parent[i] = parent[parent[i]];
-        return i;
-    };
-    for (const Mesh::Triangle &t : mesh.triangles)
-        for (int k = 1; k < 3; ++k)
-            parent[root(t[k])] = root(t[0]);
-    std::vector<bool> seen(mesh.vertices.size(), false);
-    for (const Mesh::Triangle &t : mesh.triangles)
-    {
-        const std::uint32_t r = root(t[0]);
-        if (!seen[r])
+    // One vertex per connected shell, for containment probes.
+    std::size_t shells = 0;
+    const std::vector<std::uint32_t> shellOf = triangleShells(mesh, shells);
+    std::vector<bool> seeded(shells, false);
+    for (std::size_t i = 0; i < n; ++i)
+        if (!seeded[shellOf[i]])
         {
-            seen[r] = true;
-            shellSeeds_.push_back(t[0]);
+            seeded[shellOf[i]] = true;
+            shellSeeds_.push_back(mesh.triangles[i][0]);
         }
-    }
     corners_.resize(n);
     for (std::size_t slot = 0; slot < n; ++slot)
     {

@@ -27,6 +27,29 @@ std::string MeshTopology::summary() const
     return text + ")";
 }
 
+std::vector<std::uint32_t> triangleShells(const Mesh &mesh, std::size_t &shells)
+{
+    // Union-find over vertices joined by triangles.
+    std::vector<std::uint32_t> parent(mesh.vertices.size());
+    for (std::uint32_t i = 0; i < parent.size(); ++i)
+        parent[i] = i;
+    auto root = [&](std::uint32_t i) {
+        while (parent[i] != i)
+            i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    for (const Mesh::Triangle &t : mesh.triangles)
+        for (int k = 1; k < 3; ++k)
+            parent[root(t[k])] = root(t[0]);
+    std::map<std::uint32_t, std::uint32_t> shellOfRoot;
+    std::vector<std::uint32_t> shellOf(mesh.triangles.size());
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
+        shellOf[i] = shellOfRoot.emplace(root(mesh.triangles[i][0]), static_cast<std::uint32_t>(shellOfRoot.size()))
+                         .first->second;
+    shells = shellOfRoot.size();
+    return shellOf;
+}
+
 double signedVolume(const Mesh &mesh)
 {
     double volume = 0.0;
@@ -140,32 +163,13 @@ MeshTopology cleanMesh(Mesh &mesh, double weldTolerance)
     topology.closed = !mesh.triangles.empty() && topology.boundaryEdges == 0 && topology.nonManifoldEdges == 0 &&
                       topology.misorientedEdges == 0;
 
-    // Shells: union-find over vertices joined by triangles.
-    std::vector<std::uint32_t> parent(mesh.vertices.size());
-    for (std::uint32_t i = 0; i < parent.size(); ++i)
-        parent[i] = i;
-    auto root = [&](std::uint32_t i) {
-        while (parent[i] != i)
-            i = parent[i] = parent[parent[i]];
-        return i;
-    };
-    for (const Mesh::Triangle &t : mesh.triangles)
-        for (int k = 1; k < 3; ++k)
-            parent[root(t[k])] = root(t[0]);
-    std::map<std::uint32_t, std::size_t> shellOfRoot;
-    std::vector<double> shellVolume;
-    std::vector<std::size_t> shellOfTriangle(mesh.triangles.size());
+    const std::vector<std::uint32_t> shellOfTriangle = triangleShells(mesh, topology.shells);
+    std::vector<double> shellVolume(topology.shells, 0.0);
     for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
     {
         const Mesh::Triangle &t = mesh.triangles[i];
-        auto [it, added] = shellOfRoot.emplace(root(t[0]), shellVolume.size());
-        if (added)
-            shellVolume.push_back(0.0);
-        shellOfTriangle[i] = it->second;
-        shellVolume[it->second] +=
-            mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]])) / 6.0;
+        shellVolume[shellOfTriangle[i]] += mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]])) / 6.0;
     }
-    topology.shells = shellVolume.size();
     if (topology.closed)
         for (std::size_t i = 0; i < mesh.triangles.size(); ++i)
             if (shellVolume[shellOfTriangle[i]] < 0)

@@ -39,6 +39,10 @@ MeshTopology cleanMesh(Mesh &mesh, double weldTolerance = 1e-9);
     would make their shared edges non-manifold). The result is closed when every part is. */
 MeshTopology cleanAndMerge(std::vector<Mesh> parts, Mesh &merged, double weldTolerance = 1e-9);
 
+/** \brief The connected shell of every triangle (triangles linked through shared vertices),
+    numbered 0..shells-1 in order of first appearance. */
+std::vector<std::uint32_t> triangleShells(const Mesh &mesh, std::size_t &shells);
+
 /** \brief Signed volume (positive for outward-oriented closed meshes). */
 double signedVolume(const Mesh &mesh);
 }  // namespace rastercheck
