@@ -27,18 +27,7 @@ namespace
 {
 constexpr double kTight = 1e-9;
 
-const rc::Problem &plant()
-{
-    static const rc::Problem problem = []
-    {
-        rc::ProblemSource source;
-        source.urdfPath = rc::test::sourcePath("robots/crane/crane.urdf");
-        source.srdfPath = rc::test::sourcePath("robots/crane/crane.srdf");
-        source.scenePath = rc::test::sourcePath("robots/sites/plant.yaml");
-        return rc::loadProblem(source);
-    }();
-    return problem;
-}
+using rastercheck::test::plant;
 
 const rc::RobotModel &crane()
 {

@@ -73,18 +73,7 @@ rc::RasterImage knownImage()
     return image;
 }
 
-const rc::Problem &plant()
-{
-    static const rc::Problem problem = []
-    {
-        rc::ProblemSource source;
-        source.urdfPath = rc::test::sourcePath("robots/crane/crane.urdf");
-        source.srdfPath = rc::test::sourcePath("robots/crane/crane.srdf");
-        source.scenePath = rc::test::sourcePath("robots/sites/plant.yaml");
-        return rc::loadProblem(source);
-    }();
-    return problem;
-}
+using rastercheck::test::plant;
 
 /** \brief Start and goal of the plant lift, with \a between states linearly between them. */
 std::vector<double> liftStates(int between)

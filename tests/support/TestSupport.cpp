@@ -18,6 +18,18 @@ std::string makeTempDir(const std::string &tag)
     return pattern;
 }
 
+const Problem &plant()
+{
+    static const Problem problem = [] {
+        ProblemSource source;
+        source.urdfPath = sourcePath("robots/crane/crane.urdf");
+        source.srdfPath = sourcePath("robots/crane/crane.srdf");
+        source.scenePath = sourcePath("robots/sites/plant.yaml");
+        return loadProblem(source);
+    }();
+    return problem;
+}
+
 CommandRun runCommand(const std::string &command)
 {
     CommandRun run;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "rastercheck/io/DataPath.h"
+#include "rastercheck/io/Problem.h"
 
 namespace rastercheck::test
 {
@@ -15,6 +16,10 @@ inline std::string sharedData() { return dataRoot(RASTERCHECK_DEFAULT_DATA); }
 
 /** \brief Path of a file inside the source tree. */
 inline std::string sourcePath(const std::string &relative) { return std::string(RASTERCHECK_SOURCE_DIR) + "/" + relative; }
+
+/** \brief The crawler crane (robots/crane, URDF + SRDF) in the plant (robots/sites/plant.yaml),
+    loaded once per test program. */
+const Problem &plant();
 
 /** \brief A fresh temporary directory for one test (removed at exit of the process is not
     guaranteed; it lives under the system temp folder). */
