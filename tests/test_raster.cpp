@@ -201,17 +201,6 @@ TEST(Raster, ClosedSphereIsEnteredThenLeftOnEveryRay)
     }
 }
 
-TEST(Raster, DepthRangesProveSeparationOnlyWhenDisjoint)
-{
-    rd::RasterGrid grid{2, {0.0f, 0.0f}, 0.25f, 4, 4};
-    std::vector<rd::DepthRange> ranges(16, rd::DepthRange{INFINITY, -INFINITY});
-    rd::coverTriangleRange(grid, V{0.1f, 0.1f, 1.0f}, V{0.3f, 0.1f, 1.2f}, V{0.1f, 0.3f, 1.1f}, 0.0f, ranges.data());
-    EXPECT_FLOAT_EQ(ranges[0].lo, 1.0f);
-    EXPECT_FLOAT_EQ(ranges[0].hi, 1.2f);
-    EXPECT_FLOAT_EQ(ranges[5].lo, 1.0f);  // pixel (1,1) touched by the triangle's bounds
-    EXPECT_GT(ranges[15].lo, ranges[15].hi);  // far corner untouched
-}
-
 TEST(Boxes, OrientedBoxTestsAgreeWithSeparationByHand)
 {
     rd::OrientedBox unit{{0, 0, 0}, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {1, 1, 1}};

@@ -15,8 +15,7 @@ enum class CollisionMode
         culls is decided exactly. The CPU backend decides such pairs with the exact narrow phase
         directly, because on a CPU that is faster than rasterizing them (docs/benchmarks.md); a
         GPU backend, which rasterizes a whole batch in one pass, may settle pairs by the raster
-        first (a parity hit is an overlap; disjoint per-pixel depth ranges prove separation) and
-        must confirm every other pair exactly. */
+        first (a parity hit is an overlap) and must confirm every other pair exactly. */
     Safe,
     /** \brief The paper's method alone: rays through pixel centres only, so overlaps thinner than a
         pixel or seen edge-on can be missed (measured in docs/accuracy.md). Pairs of two open meshes

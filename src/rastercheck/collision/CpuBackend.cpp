@@ -198,17 +198,23 @@ struct PreparedPair
     const Vec3<float> *worldB;
 };
 
-bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
-                 PreparedPair &pair)
+/** \brief Where the pair can meet: A's bounds grown by the padding, cut by B's (may be empty). */
+device::Box pairWindow(const Solid &a, const Solid &b, float padding)
 {
-    const float padding = static_cast<float>(request.padding);
     device::Box grownA = a.bounds;
     for (int k = 0; k < 3; ++k)
     {
         grownA.min[k] -= padding;
         grownA.max[k] += padding;
     }
-    const device::Box window = device::intersection(grownA, b.bounds);
+    return device::intersection(grownA, b.bounds);
+}
+
+bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
+                 PreparedPair &pair)
+{
+    const float padding = static_cast<float>(request.padding);
+    const device::Box window = pairWindow(a, b, padding);
     if (device::isEmpty(window))
         return false;
     pair.grid = device::makeGrid(window, static_cast<float>(pixel), request.maxImageSide);
@@ -236,13 +242,7 @@ bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &reques
     if (request.mode != CollisionMode::Raster || !rasterUsable)
     {
         // The box culls already passed; the window test is the last cheap exit before the oracle.
-        device::Box grownA = a.bounds;
-        for (int k = 0; k < 3; ++k)
-        {
-            grownA.min[k] -= static_cast<float>(request.padding);
-            grownA.max[k] += static_cast<float>(request.padding);
-        }
-        return !device::isEmpty(device::intersection(grownA, b.bounds)) &&
+        return !device::isEmpty(pairWindow(a, b, static_cast<float>(request.padding))) &&
                exactOverlap(a, b, request.padding, contact);
     }
     PreparedPair pair;

@@ -237,41 +237,4 @@ RC_HD int sortSearchPair(const Fragment *sorted, int count, bool closedA, bool c
     return -1;
 }
 
-/** \brief Conservative depth range of one party in one pixel column, for the separation proof:
-    if for every pixel the ranges of the two parties are disjoint, the solids cannot overlap
-    (a shared point x would put both parties' surfaces above and below x on x's ray). */
-struct DepthRange
-{
-    float lo;
-    float hi;
-};
-
-/** \brief Widens the ranges of every pixel touched by the triangle's bounds, grown by \a margin
-    (padding plus rounding allowance) in all directions. Conservative: a superset of the triangle. */
-RC_HD void coverTriangleRange(const RasterGrid &grid, const Vec3<float> &p0, const Vec3<float> &p1,
-                              const Vec3<float> &p2, float margin, DepthRange *ranges)
-{
-    const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
-    const float u0 = coordinate(p0, u), u1 = coordinate(p1, u), u2 = coordinate(p2, u);
-    const float v0 = coordinate(p0, v), v1 = coordinate(p1, v), v2 = coordinate(p2, v);
-    const float z0 = coordinate(p0, grid.axis), z1 = coordinate(p1, grid.axis), z2 = coordinate(p2, grid.axis);
-    const float uMin = (minOf(u0, minOf(u1, u2)) - margin - grid.origin[0]) / grid.pixel;
-    const float uMax = (maxOf(u0, maxOf(u1, u2)) + margin - grid.origin[0]) / grid.pixel;
-    const float vMin = (minOf(v0, minOf(v1, v2)) - margin - grid.origin[1]) / grid.pixel;
-    const float vMax = (maxOf(v0, maxOf(v1, v2)) + margin - grid.origin[1]) / grid.pixel;
-    if (uMax < 0 || vMax < 0 || uMin >= grid.width || vMin >= grid.height)
-        return;
-    const int i0 = uMin < 0 ? 0 : static_cast<int>(uMin);
-    const int j0 = vMin < 0 ? 0 : static_cast<int>(vMin);
-    const int i1 = uMax >= grid.width ? grid.width - 1 : static_cast<int>(uMax);
-    const int j1 = vMax >= grid.height ? grid.height - 1 : static_cast<int>(vMax);
-    const float lo = minOf(z0, minOf(z1, z2)) - margin, hi = maxOf(z0, maxOf(z1, z2)) + margin;
-    for (int j = j0; j <= j1; ++j)
-        for (int i = i0; i <= i1; ++i)
-        {
-            DepthRange &r = ranges[j * grid.width + i];
-            r.lo = minOf(r.lo, lo);
-            r.hi = maxOf(r.hi, hi);
-        }
-}
 }  // namespace rastercheck::device
