@@ -1,0 +1,99 @@
+// Every input that once made a fuzzer fail (bench/fuzz.sh), replayed through the same entry point
+// (fuzz/FuzzTargets.h) in the regular build: each file in tests/data/fuzz-regressions/<harness>/
+// must now give the outcome listed below — a clean InputError naming the input, or success — and
+// never a crash, a sanitizer report (CI's sanitizer build runs this too) or another exception.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "FuzzTargets.h"
+#include "TestSupport.h"
+
+namespace fs = std::filesystem;
+namespace fz = rastercheck::fuzz;
+
+namespace
+{
+struct Expected
+{
+    bool accepted;        ///< the loader accepts the input (else: InputError)
+    const char *message;  ///< a part of the InputError's message ("" when accepted)
+    const char *bug;      ///< what went wrong before the fix
+};
+
+// "<harness>/<file>" -> expected outcome. A file without an entry, or an entry without its file,
+// fails the test: every regression input is documented here.
+const std::map<std::string, Expected> &expectations()
+{
+    static const std::map<std::string, Expected> table{
+    };
+    return table;
+}
+
+std::string folder() { return rastercheck::test::sourcePath("tests/data/fuzz-regressions"); }
+
+std::string readBytes(const fs::path &path)
+{
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+}  // namespace
+
+TEST(FuzzRegressions, EveryInputGivesItsDocumentedOutcome)
+{
+    fz::silenceLog();
+    std::set<std::string> seen;
+    for (const std::string &harness : fz::targetNames())
+    {
+        const fs::path directory = fs::path(folder()) / harness;
+        if (!fs::is_directory(directory))
+            continue;
+        std::vector<fs::path> files;
+        for (const fs::directory_entry &entry : fs::directory_iterator(directory))
+            if (entry.is_regular_file())
+                files.push_back(entry.path());
+        std::sort(files.begin(), files.end());
+        for (const fs::path &file : files)
+        {
+            const std::string key = harness + "/" + file.filename().string();
+            SCOPED_TRACE(key);
+            seen.insert(key);
+            const std::string bytes = readBytes(file);
+            fz::Outcome outcome;
+            try
+            {
+                outcome = fz::findTarget(harness)(reinterpret_cast<const std::uint8_t *>(bytes.data()), bytes.size());
+            }
+            catch (const std::exception &e)
+            {
+                ADD_FAILURE() << "unexpected exception: " << e.what();
+                continue;
+            }
+            auto expected = expectations().find(key);
+            if (expected == expectations().end())
+            {
+                ADD_FAILURE() << "no expected outcome listed (loader " << (outcome.accepted ? "accepts it" : "says: ")
+                              << outcome.error << ")";
+                continue;
+            }
+            EXPECT_EQ(outcome.accepted, expected->second.accepted) << outcome.error;
+            EXPECT_NE(outcome.error.find(expected->second.message), std::string::npos)
+                << "message: " << outcome.error << "\nexpected to contain: " << expected->second.message;
+        }
+    }
+    for (const auto &[key, expected] : expectations())
+        EXPECT_TRUE(seen.count(key)) << key << " is listed but its file is missing (" << expected.bug << ")";
+}
+
+TEST(FuzzRegressions, EveryHarnessHasAnEntryPoint)
+{
+    for (const std::string &harness : fz::targetNames())
+        EXPECT_NE(fz::findTarget(harness), nullptr) << harness;
+    EXPECT_THROW(fz::findTarget("no-such-harness"), std::invalid_argument);
+}
