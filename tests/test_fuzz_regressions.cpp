@@ -42,6 +42,8 @@ const std::map<std::string, Expected> &expectations()
         {"scene/quaternion-map-missing-component.yaml",
          {false, "primitive_poses[3].orientation.y: expected a number",
           "Eigen's comma initializer asserted (abort) while the InputError unwound through it"}},
+        {"mesh/stl-ascii-truncated-facet.bin",
+         {false, "STL: unexpected EOF", "assimp leaks the mesh it had built; suppressed (fuzz/FuzzTargets.cpp)"}},
     };
     return table;
 }
