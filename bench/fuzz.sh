@@ -96,9 +96,11 @@ for t in $targets; do
         "$build/fuzz/fuzz_$t" -runs="$runs" -seed="$seed" -max_len="${max_len[$t]}" -timeout=10 \
         -rss_limit_mb=2048 -detect_leaks=1 -print_final_stats=1 "${dict[@]}" \
         -artifact_prefix="$build/fuzz-artifacts/$t/" "$build/fuzz-work/$t" "$corpus/$t" >"$log" 2>&1 || status=$?
-    seconds=$(awk -v ns=$(($(date +%s%N) - start)) 'BEGIN {printf "%.0f", ns / 1e9}')
+    elapsed_ns=$(($(date +%s%N) - start))
     executed=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
-    rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+    seconds=$(awk -v ns=$elapsed_ns 'BEGIN {printf "%.1f", ns / 1e9}')
+    # Over the whole run, start-up and seed corpus included (libFuzzer's own figure is whole seconds).
+    rate=$(awk -v n="${executed:-0}" -v ns=$elapsed_ns 'BEGIN {printf "%.0f", n / (ns / 1e9)}')
     if [[ $status -eq 0 ]]; then
         result=ok
     else
