@@ -18,7 +18,11 @@ namespace rastercheck
 {
 namespace
 {
-constexpr unsigned int kImportFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+// ValidateDataStructure runs first: assimp's importers can return face indices past the vertices
+// on malformed input (a PLY, found by fuzz_mesh), which crashed the later steps inside assimp and
+// would be copied into our meshes. It rejects such scenes with a message naming the index.
+constexpr unsigned int kImportFlags = aiProcess_ValidateDataStructure | aiProcess_Triangulate |
+                                      aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
 
 void configure(Assimp::Importer &importer, ColladaUpAxis upAxis)
 {

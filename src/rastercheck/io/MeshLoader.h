@@ -33,10 +33,13 @@ enum class ColladaUpAxis
 };
 
 /** \brief Reads a mesh file (STL, OBJ, DAE, anything assimp reads) as one node per assimp node
-    that owns meshes (assimp flags Triangulate | JoinIdenticalVertices | SortByPType, as OMPL.app).
+    that owns meshes (assimp flags Triangulate | JoinIdenticalVertices | SortByPType, as OMPL.app, after
+    ValidateDataStructure).
     Units are those of the file (COLLADA <unit> is applied by assimp).
-    Throws InputError naming the file when it is missing, unreadable, or has no triangles, or when
-    a vertex coordinate is not finite. */
+    Throws InputError naming the file when it is missing, unreadable (assimp's validation included),
+    or has no triangles, when a vertex coordinate is not finite, or when a PLY header has no
+    end_header line (in its first 64 KiB) or declares more elements than the file can hold (assimp
+    would hang or allocate them: checked before assimp reads the file). */
 std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxis = ColladaUpAxis::Keep);
 
 /** \brief All triangles of a mesh file merged into one mesh (root frame). */
