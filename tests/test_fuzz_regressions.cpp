@@ -56,6 +56,8 @@ const std::map<std::string, Expected> &expectations()
          {false, "declares 400000000 instances", "assimp allocated 4.8 GB for the declared vertices"}},
         {"mesh/ply-face-index-out-of-range.bin",
          {false, "Validation failed", "assimp's post-processing crashed (SEGV) on a face index past the vertices"}},
+        {"mesh/ply-face-without-vertices.bin",
+         {false, "face 0 has no vertices", "assimp's Triangulate step aborted on an assertion"}},
     };
     return table;
 }

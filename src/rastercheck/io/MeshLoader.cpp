@@ -18,11 +18,12 @@ namespace rastercheck
 {
 namespace
 {
-// ValidateDataStructure runs first: assimp's importers can return face indices past the vertices
-// on malformed input (a PLY, found by fuzz_mesh), which crashed the later steps inside assimp and
-// would be copied into our meshes. It rejects such scenes with a message naming the index.
-constexpr unsigned int kImportFlags = aiProcess_ValidateDataStructure | aiProcess_Triangulate |
-                                      aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+// Files are read with validation only, checked, then post-processed as OMPL.app does. Validation:
+// assimp's importers can return face indices past the vertices on malformed input (a PLY, found by
+// fuzz_mesh), which crashed the later steps and would be copied into our meshes. The check between:
+// see checkFaces.
+constexpr unsigned int kReadFlags = aiProcess_ValidateDataStructure;
+constexpr unsigned int kPostProcessFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
 
 void configure(Assimp::Importer &importer, ColladaUpAxis upAxis)
 {
@@ -185,6 +186,24 @@ void collect(const aiScene *scene, const aiNode *node, const Eigen::Matrix4d &pa
         collect(scene, node->mChildren[c], transform, name, out);
 }
 
+// A face without indices passes assimp's validation but makes its Triangulate step abort on an
+// assertion (Debian builds assimp with them; found by fuzz_mesh with a PLY face list of count 0).
+// Valid files have none, so such a scene is rejected before post-processing.
+const aiScene *checkAndPostProcess(Assimp::Importer &importer, const aiScene *scene, const std::string &name)
+{
+    if (!scene)
+        return nullptr;  // extract reports assimp's error
+    for (unsigned int m = 0; m < scene->mNumMeshes; ++m)
+    {
+        const aiMesh *mesh = scene->mMeshes[m];
+        for (unsigned int f = 0; f < mesh->mNumFaces; ++f)
+            if (mesh->mFaces[f].mNumIndices == 0)
+                throw InputError(name, "mesh '" + std::string(mesh->mName.C_Str()) + "'",
+                                 "face " + std::to_string(f) + " has no vertices");
+    }
+    return importer.ApplyPostProcessing(kPostProcessFlags);
+}
+
 std::vector<MeshNode> extract(const aiScene *scene, const Assimp::Importer &importer, const std::string &name)
 {
     if (!scene || !scene->mRootNode)
@@ -216,7 +235,7 @@ std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxi
         if (startsAsPly(header.data(), header.size()))
             checkPlyHeader(header.data(), header.size(), static_cast<std::size_t>(info.st_size), path);
     }
-    const aiScene *scene = importer.ReadFile(path, kImportFlags);
+    const aiScene *scene = checkAndPostProcess(importer, importer.ReadFile(path, kReadFlags), path);
     return extract(scene, importer, path);
 }
 
@@ -238,7 +257,8 @@ std::vector<MeshNode> loadMeshNodesFromMemory(const void *data, std::size_t size
     const char *bytes = static_cast<const char *>(data);
     if (plyImporterMayRun(importer, formatHint) && startsAsPly(bytes, size))
         checkPlyHeader(bytes, size, size, name);
-    const aiScene *scene = importer.ReadFileFromMemory(data, size, kImportFlags, formatHint.c_str());
+    const aiScene *scene =
+        checkAndPostProcess(importer, importer.ReadFileFromMemory(data, size, kReadFlags, formatHint.c_str()), name);
     return extract(scene, importer, name);
 }
 }  // namespace rastercheck

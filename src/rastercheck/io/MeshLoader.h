@@ -33,8 +33,8 @@ enum class ColladaUpAxis
 };
 
 /** \brief Reads a mesh file (STL, OBJ, DAE, anything assimp reads) as one node per assimp node
-    that owns meshes (assimp flags Triangulate | JoinIdenticalVertices | SortByPType, as OMPL.app, after
-    ValidateDataStructure).
+    that owns meshes (assimp flags Triangulate | JoinIdenticalVertices | SortByPType, as OMPL.app,
+    applied after the file passed assimp's ValidateDataStructure and has no face without vertices).
     Units are those of the file (COLLADA <unit> is applied by assimp).
     Throws InputError naming the file when it is missing, unreadable (assimp's validation included),
     or has no triangles, when a vertex coordinate is not finite, or when a PLY header has no
