@@ -58,6 +58,8 @@ const std::map<std::string, Expected> &expectations()
          {false, "Validation failed", "assimp's post-processing crashed (SEGV) on a face index past the vertices"}},
         {"mesh/ply-face-without-vertices.bin",
          {false, "face 0 has no vertices", "assimp's Triangulate step aborted on an assertion"}},
+        {"mesh/obj-texture-line-before-newmtl.bin",
+         {false, "", "assimp's MTL parser (fed the OBJ's own bytes as the fallback .mtl) crashed (SEGV)"}},
     };
     return table;
 }

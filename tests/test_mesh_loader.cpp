@@ -173,3 +173,17 @@ TEST(MeshLoader, PlyHeaderIsCheckedBeforeAssimpReadsTheFile)
         EXPECT_NE(std::string(e.what()).find("declares 400000000 instances"), std::string::npos) << e.what();
     }
 }
+
+// assimp's MTL parser crashes on a texture line before any `newmtl` (fuzz_mesh); material libraries
+// are never opened, and the OBJ's meshes are the same without them.
+TEST(MeshLoader, ObjMaterialLibraryIsNotOpened)
+{
+    const std::string folder = makeTempDir("mesh");
+    writeFile(folder + "/bad.mtl", "map_Kd texture.png\n");
+    const std::string obj = writeFile(folder + "/two.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                                           "usemtl red\nf 1 2 3\nusemtl blue\nf 2 4 3\n");
+    const std::vector<rc::MeshNode> nodes = rc::loadMeshNodes(obj);
+    ASSERT_EQ(nodes.size(), 1u);
+    EXPECT_EQ(nodes[0].mesh.numTriangles(), 2u);
+    EXPECT_EQ(nodes[0].vertexCount, 6u);  // one mesh per usemtl name, as with the library
+}

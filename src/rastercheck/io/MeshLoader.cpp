@@ -2,12 +2,16 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <sys/stat.h>
+#include <utility>
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
+#include <assimp/MemoryIOWrapper.h>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -21,7 +25,7 @@ namespace
 // Files are read with validation only, checked, then post-processed as OMPL.app does. Validation:
 // assimp's importers can return face indices past the vertices on malformed input (a PLY, found by
 // fuzz_mesh), which crashed the later steps and would be copied into our meshes. The check between:
-// see checkFaces.
+// checkAndPostProcess.
 constexpr unsigned int kReadFlags = aiProcess_ValidateDataStructure;
 constexpr unsigned int kPostProcessFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
 
@@ -29,6 +33,57 @@ void configure(Assimp::Importer &importer, ColladaUpAxis upAxis)
 {
     importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, upAxis == ColladaUpAxis::Keep);
 }
+
+// ---- what assimp may open ----------------------------------------------------------------------
+// assimp 5.2.5's OBJ material-library parser dereferences a null material on a texture line before
+// any `newmtl` (found by fuzz_mesh: for bytes in memory, the fallback "<name>.mtl" assimp tries when
+// `mtllib` cannot be opened is served from the OBJ's own bytes). Only geometry is used here, and an
+// OBJ read without its .mtl has the same meshes (assimp makes a material per `usemtl` name), so .mtl
+// files are never opened.
+bool isMaterialLibrary(const char *file)
+{
+    const std::string name(file ? file : "");
+    if (name.size() < 4)
+        return false;
+    std::string extension = name.substr(name.size() - 4);
+    for (char &c : extension)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return extension == ".mtl";
+}
+
+// Mesh files: the file system, without material libraries.
+class GeometryFiles : public Assimp::DefaultIOSystem
+{
+public:
+    bool Exists(const char *file) const override { return !isMaterialLibrary(file) && DefaultIOSystem::Exists(file); }
+    Assimp::IOStream *Open(const char *file, const char *mode) override
+    {
+        return isMaterialLibrary(file) ? nullptr : DefaultIOSystem::Open(file, mode);
+    }
+};
+
+// Bytes in memory as the only file there is (assimp's own ReadFileFromMemory falls back to the file
+// system, and serves its magic name's .mtl from the same bytes): nothing else is opened.
+class MemoryFile : public Assimp::IOSystem
+{
+public:
+    MemoryFile(std::string name, const void *data, std::size_t size)
+        : name_(std::move(name)), data_(static_cast<const std::uint8_t *>(data)), size_(size)
+    {
+    }
+    bool Exists(const char *file) const override { return file && name_ == file; }
+    char getOsSeparator() const override { return '/'; }
+    Assimp::IOStream *Open(const char *file, const char *) override
+    {
+        return Exists(file) ? new Assimp::MemoryIOStream(data_, size_) : nullptr;
+    }
+    void Close(Assimp::IOStream *stream) override { delete stream; }
+
+private:
+    std::string name_;
+    const std::uint8_t *data_;
+    std::size_t size_;
+};
 
 // ---- PLY pre-check ----------------------------------------------------------------------------
 // assimp 5.2.5's PLY importer never returns on a header without an `end_header` line (it keeps
@@ -226,6 +281,7 @@ std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxi
         throw InputError(path, "", "file not found");
     Assimp::Importer importer;
     configure(importer, upAxis);
+    importer.SetIOHandler(new GeometryFiles);  // the importer owns it
     if (plyImporterMayRun(importer, extensionOf(path)))
     {
         std::ifstream in(path, std::ios::binary);
@@ -257,8 +313,10 @@ std::vector<MeshNode> loadMeshNodesFromMemory(const void *data, std::size_t size
     const char *bytes = static_cast<const char *>(data);
     if (plyImporterMayRun(importer, formatHint) && startsAsPly(bytes, size))
         checkPlyHeader(bytes, size, size, name);
-    const aiScene *scene =
-        checkAndPostProcess(importer, importer.ReadFileFromMemory(data, size, kReadFlags, formatHint.c_str()), name);
+    // The hint is the file's extension, by which assimp picks the importer.
+    const std::string file = formatHint.empty() ? "memory" : "memory." + formatHint;
+    importer.SetIOHandler(new MemoryFile(file, data, size));  // the importer owns it
+    const aiScene *scene = checkAndPostProcess(importer, importer.ReadFile(file, kReadFlags), name);
     return extract(scene, importer, name);
 }
 }  // namespace rastercheck
