@@ -43,7 +43,7 @@ problems() { find "$data/mbm" -path '*/problems/*' -name "$1" | sort; }
 if [[ -d $corpus/urdf ]]; then
     # Mesh references point at the harness's scratch mesh, so the seeds build whole models.
     for f in $(find "$data" -name '*.urdf' | sort); do
-        sed -E 's#filename="[^"]*"#filename="mesh.obj"#g' "$f" >"$corpus/urdf/$(echo "${f#$data/}" | tr / _)"
+        sed -E 's#filename="[^"]*"#filename="mesh.stl"#g' "$f" >"$corpus/urdf/$(echo "${f#$data/}" | tr / _)"
     done
 fi
 if [[ -d $corpus/srdf ]]; then
