@@ -85,7 +85,10 @@ const char *const kSrdfRobot = R"(<robot name="panda">
 </robot>
 )";
 
-std::string text(const std::uint8_t *data, std::size_t size) { return std::string(reinterpret_cast<const char *>(data), size); }
+std::string text(const std::uint8_t *data, std::size_t size)
+{
+    return std::string(reinterpret_cast<const char *>(data), size);
+}
 
 // A per-process folder with the mesh files the URDF and .cfg inputs may name; removed at exit.
 class Scratch
@@ -101,7 +104,8 @@ public:
         const std::pair<const char *, std::string> files[] = {
             {"mesh.stl", asciiStl({{"box", boxAt({0, 0, 0}, {1, 1, 1})}})},
             {"robot.stl", asciiStl({{"tetrahedron", tetrahedron()}})},
-            {"world.stl", asciiStl({{"wallA", boxAt({0, 0, 0}, {1, 1, 1})}, {"wallB", boxAt({10, 0, 0}, {11, 1, 2})}})}};
+            {"world.stl",
+             asciiStl({{"wallA", boxAt({0, 0, 0}, {1, 1, 1})}, {"wallB", boxAt({10, 0, 0}, {11, 1, 2})}})}};
         for (const auto &[name, contents] : files)
         {
             std::ofstream out(folder_ + "/" + name, std::ios::binary);

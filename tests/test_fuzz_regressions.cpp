@@ -38,7 +38,8 @@ const std::map<std::string, Expected> &expectations()
         {"urdf/joint-cycle.urdf",
          {false, "the joints form a cycle through link 'b'", "urdfdom leaked the cycle a -> b -> a"}},
         {"urdf/joint-own-parent.urdf",
-         {false, "joint 'loop': the joints form a cycle through link 'a'", "urdfdom leaked a link that is its own child"}},
+         {false, "joint 'loop': the joints form a cycle through link 'a'",
+          "urdfdom leaked a link that is its own child"}},
         {"scene/quaternion-map-missing-component.yaml",
          {false, "primitive_poses[3].orientation.y: expected a number",
           "Eigen's comma initializer asserted (abort) while the InputError unwound through it"}},
@@ -69,7 +70,10 @@ const std::map<std::string, Expected> &expectations()
     return table;
 }
 
-std::string folder() { return rastercheck::test::sourcePath("tests/data/fuzz-regressions"); }
+std::string folder()
+{
+    return rastercheck::test::sourcePath("tests/data/fuzz-regressions");
+}
 
 std::string readBytes(const fs::path &path)
 {

@@ -27,7 +27,8 @@ namespace
 // fuzz_mesh), which crashed the later steps and would be copied into our meshes. The check between:
 // checkAndPostProcess.
 constexpr unsigned int kReadFlags = aiProcess_ValidateDataStructure;
-constexpr unsigned int kPostProcessFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+constexpr unsigned int kPostProcessFlags =
+    aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
 
 void configure(Assimp::Importer &importer, ColladaUpAxis upAxis)
 {
@@ -179,8 +180,9 @@ void checkPlyHeader(const char *header, std::size_t size, std::size_t fileSize, 
     }
     if (!ended)
         throw InputError(name, "PLY header",
-                         size < fileSize ? "no end_header line in the first " + std::to_string(kPlyHeaderLimit) + " bytes"
-                                         : std::string("no end_header line"));
+                         size < fileSize
+                             ? "no end_header line in the first " + std::to_string(kPlyHeaderLimit) + " bytes"
+                             : std::string("no end_header line"));
     const std::size_t bodyStart = std::min(position, size);
 
     // An ASCII value takes a character and a separator, a binary one its type's size; an element
