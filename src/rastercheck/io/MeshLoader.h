@@ -37,9 +37,9 @@ enum class ColladaUpAxis
     applied after the file passed assimp's ValidateDataStructure and has no face without vertices).
     Units are those of the file (COLLADA <unit> is applied by assimp).
     Throws InputError naming the file when it is missing, unreadable (assimp's validation included),
-    or has no triangles, when a vertex coordinate is not finite, or when a PLY header has no
-    end_header line (in its first 64 KiB) or declares more elements than the file can hold (assimp
-    would hang or allocate them: checked before assimp reads the file). OBJ material libraries
+    or has no triangles, when a vertex coordinate is not finite, or when a PLY file is not in the
+    form detail::checkPly (io/PlyCheck.h) accepts (assimp would hang or allocate what a malformed one
+    declares: checked before assimp reads it). OBJ material libraries
     (.mtl) are not opened: only geometry is used, and assimp's MTL parser crashes on some files. */
 std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxis = ColladaUpAxis::Keep);
 
