@@ -29,6 +29,9 @@ struct CheckerOptions
     BackendChoice backend = BackendChoice::Auto;
     /** \brief Worker threads of batch calls on the CPU backend; 0 = all cores. */
     int threads = 0;
+    /** \brief Smallest batch sent to the GPU backend: a smaller one (a single isValid, a short
+        motion) runs on the CPU backend, where it does not pay the GPU pass's fixed latency. */
+    std::size_t minDeviceBatch = 32;
 };
 
 /** \brief Decides whether robot configurations collide with the scene or themselves, one state or
@@ -55,6 +58,8 @@ public:
 
     /** \brief "cpu" or "cuda (<device>)". */
     std::string backendName() const { return backend_->name(); }
+    /** \brief The backend batches of at least minDeviceBatch states run on. */
+    const Backend &backend() const { return *backend_; }
     const CollisionModel &collisionModel() const { return *model_; }
     const RobotModel &robot() const { return *model_->robot; }
     const Scene &scene() const { return *model_->scene; }
@@ -74,5 +79,6 @@ private:
     std::unique_ptr<Backend> backend_;
     CpuBackend reference_;  // pictures and diagnostics run the CPU pipeline whatever the backend
     int threads_;
+    std::size_t minDeviceBatch_;
 };
 }  // namespace rastercheck

@@ -119,4 +119,22 @@ bool CollisionModel::configurationAdmissible(const double *q) const
     }
     return true;
 }
+
+void CollisionModel::nameParties(std::uint32_t pair, Contact &contact) const
+{
+    const std::size_t environmentPairs = numObjects() * numComponents();
+    if (pair < environmentPairs)
+    {
+        contact.kind = Contact::Kind::Environment;
+        contact.object = static_cast<int>(pair / numComponents());
+        contact.component = static_cast<int>(pair % numComponents());
+        contact.otherComponent = -1;
+        return;
+    }
+    const std::pair<int, int> &self = selfPairs.at(pair - environmentPairs);
+    contact.kind = Contact::Kind::SelfCollision;
+    contact.component = self.first;
+    contact.otherComponent = self.second;
+    contact.object = -1;
+}
 }  // namespace rastercheck

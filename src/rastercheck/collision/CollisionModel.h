@@ -5,7 +5,9 @@
 #include <utility>
 #include <vector>
 
+#include "rastercheck/collision/CollisionRequest.h"
 #include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/Stages.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/model/RobotModel.h"
 #include "rastercheck/model/Scene.h"
@@ -22,15 +24,7 @@ class CollisionModel
 public:
     CollisionModel(RobotModelConstPtr robot, SceneConstPtr scene);
 
-    /** \brief A mesh's slice of the flat buffers. */
-    struct MeshSlice
-    {
-        std::uint32_t firstVertex;
-        std::uint32_t numVertices;
-        std::uint32_t firstTriangle;
-        std::uint32_t numTriangles;
-        bool closed;
-    };
+    using MeshSlice = device::MeshSlice;
 
     RobotModelConstPtr robot;
     SceneConstPtr scene;
@@ -69,6 +63,10 @@ public:
 
     std::size_t numComponents() const { return components.size(); }
     std::size_t numObjects() const { return objects.size(); }
+    /** \brief Size of the pair numbering (device::environmentPair, then the self pairs). */
+    std::size_t numPairs() const { return numObjects() * numComponents() + selfPairs.size(); }
+    /** \brief Sets contact.kind, component and object or otherComponent from a pair's number. */
+    void nameParties(std::uint32_t pair, Contact &contact) const;
 };
 
 using CollisionModelConstPtr = std::shared_ptr<const CollisionModel>;
