@@ -10,6 +10,7 @@
 #include "Reference.h"
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
+#include "rastercheck/core/Log.h"
 #include "rastercheck/geometry/Primitives.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/SrdfLoader.h"
@@ -324,4 +325,24 @@ TEST(Checker, RasterImageMarksTheCollisionPixels)
     EXPECT_GT(hits, pixels / 2);
     EXPECT_EQ(hits, both);
     EXPECT_FALSE(checker.rasterImage(q.data(), rc::Contact{}, request, image));
+}
+
+TEST(Checker, WithoutAUsableDeviceTheCudaChoiceFallsBackToTheCpuWithAWarning)
+{
+    std::vector<std::string> warnings;
+    rc::setLogHandler([&](rc::LogLevel level, const std::string &message) {
+        if (level == rc::LogLevel::Warning)
+            warnings.push_back(message);
+    });
+    rc::CheckerOptions options;
+    options.backend = rc::BackendChoice::Cuda;
+    const rc::Checker checker(cubeRobot(0.2), tableScene(), options);
+    rc::setLogHandler(nullptr);
+    if (checker.backendName() != "cpu")
+        GTEST_SKIP() << "a CUDA device is usable here (" << checker.backendName() << "): nothing falls back";
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("using the CPU backend"), std::string::npos) << warnings[0];
+    // Decisions still come, from the CPU backend.
+    EXPECT_FALSE(checker.isValid(at(0, 0, 0)));
+    EXPECT_TRUE(checker.isValid(at(0, 0, 1)));
 }
