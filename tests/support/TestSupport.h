@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdlib>
 #include <functional>
 #include <string>
 
@@ -14,8 +15,13 @@ namespace rastercheck::test
     when absent. */
 inline std::string sharedData() { return dataRoot(RASTERCHECK_DEFAULT_DATA); }
 
-/** \brief Path of a file inside the source tree. */
-inline std::string sourcePath(const std::string &relative) { return std::string(RASTERCHECK_SOURCE_DIR) + "/" + relative; }
+/** \brief Path of a file inside the source tree: RASTERCHECK_SOURCE when set (a copy of the tree on
+    another machine, such as the GPU machine), else the tree this build came from. */
+inline std::string sourcePath(const std::string &relative)
+{
+    const char *moved = std::getenv("RASTERCHECK_SOURCE");
+    return std::string(moved && *moved ? moved : RASTERCHECK_SOURCE_DIR) + "/" + relative;
+}
 
 /** \brief The crawler crane (robots/crane, URDF + SRDF) in the plant (robots/sites/plant.yaml),
     loaded once per test program. */
