@@ -239,6 +239,13 @@ Solid objectSolid(const CollisionModel &model, std::size_t o)
 }
 }  // namespace
 
+int batchWorkers(std::size_t n, int requested)
+{
+    const std::size_t cap = std::max<std::size_t>(1, n / 16);
+    const std::size_t wanted = static_cast<std::size_t>(requested > 0 ? requested : omp_get_max_threads());
+    return static_cast<int>(std::min(wanted, cap));
+}
+
 CpuBackend::CpuBackend(CollisionModelConstPtr model) : model_(std::move(model)) {}
 
 CpuBackend::~CpuBackend() = default;
@@ -373,7 +380,7 @@ void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Cont
                        const CollisionRequest &request, int threads) const
 {
     const std::size_t dof = model_->robot->numCoordinates();
-    const int workers = threads > 0 ? threads : omp_get_max_threads();
+    const int workers = batchWorkers(n, threads);
     if (workers == 1 || n < 2)
     {
         std::unique_ptr<CpuWorkspace> ws = borrow();

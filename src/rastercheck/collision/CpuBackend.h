@@ -48,6 +48,11 @@ struct CpuWorkspace
     std::vector<device::Fragment> fragments;           // total fragments
 };
 
+/** \brief Worker threads for a batch of \a n states: \a requested (0 = all cores), but at least
+    16 states each. Forking a team for a handful of states (the motion validator's first rakes)
+    costs more than it saves, and far more when the cores are busy (threads spin at the join). */
+int batchWorkers(std::size_t n, int requested);
+
 /** \brief One pair's image plane: coverage per pixel (bit 0: the component, bit 1: the other solid)
     and the pixels whose rays find the solids overlapping. Row-major, grid.width x grid.height. */
 struct RasterImage

@@ -5,7 +5,6 @@
 #include <cstring>
 #include <numeric>
 
-#include <omp.h>
 
 #include "rastercheck/collision/StageChunks.h"
 
@@ -167,7 +166,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
 {
     const CollisionModel &model = *model_;
     const std::size_t dof = model.robot->numCoordinates();
-    const int workers = threads > 0 ? threads : omp_get_max_threads();
+    const int workers = batchWorkers(n, threads);
 
     std::vector<std::uint8_t> admissible(n);
 #pragma omp parallel for num_threads(workers) schedule(static)
