@@ -100,8 +100,15 @@ public:
     {
         Eigen::Vector4d q;
         if (node && node.IsMap())
-            q << number(node["x"], where + ".x"), number(node["y"], where + ".y"), number(node["z"], where + ".z"),
-                number(node["w"], where + ".w");
+        {
+            // One by one, not through Eigen's comma initializer: a component that throws would leave
+            // the initializer incomplete, which Eigen asserts on while the exception unwinds.
+            for (int i = 0; i < 4; ++i)
+            {
+                const std::string key(1, "xyzw"[i]);
+                q[i] = number(node[key], where + "." + key);
+            }
+        }
         else
         {
             const std::vector<double> v = numbers(node, where);
