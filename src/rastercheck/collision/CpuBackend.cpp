@@ -210,6 +210,15 @@ device::Box pairWindow(const Solid &a, const Solid &b, float padding)
     return device::intersection(grownA, b.bounds);
 }
 
+/** \brief Largest coordinate magnitude of a box: float rounding there is about 6e-8 of it. */
+float magnitudeOf(const device::Box &box)
+{
+    float magnitude = 0;
+    for (int k = 0; k < 3; ++k)
+        magnitude = device::maxOf(magnitude, device::maxOf(fabsf(box.min[k]), fabsf(box.max[k])));
+    return magnitude;
+}
+
 bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
                  PreparedPair &pair)
 {
@@ -219,10 +228,7 @@ bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request
         return false;
     pair.grid = device::makeGrid(window, static_cast<float>(pixel), request.maxImageSide);
     // Rounding allowance of the float pipeline: a few ulps of the largest coordinate in play.
-    float magnitude = 0;
-    for (int k = 0; k < 3; ++k)
-        magnitude = device::maxOf(magnitude, device::maxOf(fabsf(window.min[k]), fabsf(window.max[k])));
-    pair.margin = padding + 1e-6f * magnitude + 1e-6f * pair.grid.pixel;
+    pair.margin = padding + 1e-6f * magnitudeOf(window) + 1e-6f * pair.grid.pixel;
     pair.worldA = worldVertices(a, ws);
     pair.worldB = worldVertices(b, ws);
     cullToImage(a, pair.worldA, pair.grid, pair.margin, ws.candidatesA);
@@ -235,21 +241,28 @@ bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request
     the raster stages (measured on the Panda MBM scenes: rasterizing a pair cost about 5x an exact
     BVH query, and the depth-range proof settled only a quarter of the pairs), so safe mode on this
     backend is the exact phase behind the paper's culls. */
-bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
-                  Contact &contact)
+bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel,
+                  const Eigen::Vector3d &origin, CpuWorkspace &ws, Contact &contact)
 {
-    const bool rasterUsable = a.slice->closed || b.slice->closed;
+    // The box culls already passed; the window test is the last cheap exit before the oracle.
+    const device::Box window = pairWindow(a, b, static_cast<float>(request.padding));
+    if (device::isEmpty(window))
+        return false;
+    // Parity needs a closed solid, and fragments placed well within a pixel: far from
+    // CollisionModel::origin (a robot 1e6 m from its scene's centre) float rounding is not, and
+    // the raster would see overlaps that are not there. Such pairs are decided exactly.
+    const bool rasterUsable =
+        (a.slice->closed || b.slice->closed) && 1e-6f * magnitudeOf(window) < 0.1f * static_cast<float>(pixel);
     if (request.mode != CollisionMode::Raster || !rasterUsable)
-    {
-        // The box culls already passed; the window test is the last cheap exit before the oracle.
-        return !device::isEmpty(pairWindow(a, b, static_cast<float>(request.padding))) &&
-               exactOverlap(a, b, request.padding, contact);
-    }
+        return exactOverlap(a, b, request.padding, contact);
     PreparedPair pair;
     if (!preparePair(a, b, request, pixel, ws, pair))
         return false;
     if (rasterHit(a, pair.worldA, ws.candidatesA, b, pair.worldB, ws.candidatesB, pair.grid, ws, contact))
+    {
+        contact.position += origin;  // the raster works relative to CollisionModel::origin
         return true;
+    }
     // Padding is always honoured exactly: the raster sees overlaps, not distances.
     return request.padding > 0 && exactOverlap(a, b, request.padding, contact);
 }
@@ -263,9 +276,7 @@ void refit(const CollisionModel &model, const double *q, CpuWorkspace &ws)
     for (std::size_t c = 0; c < m; ++c)
     {
         ws.componentExactPose[c] = ws.data.oMl[model.componentLink[c]];
-        const device::Pose<double> exact = toDevicePose(ws.componentExactPose[c]);
-        for (int k = 0; k < 12; ++k)
-            ws.componentPose[c].m[k] = static_cast<float>(exact.m[k]);
+        ws.componentPose[c] = model.devicePose(ws.componentExactPose[c]);
         ws.componentBox[c] = device::transformBox(ws.componentPose[c], model.componentLocalBoxes[c]);
         ws.componentBounds[c] = device::boundsOf(ws.componentBox[c]);
     }
@@ -383,7 +394,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     continue;
                 }
                 if (device::orientedBoxOverlapsBox(ws.componentBox[k], objectBox, padding) &&
-                    pairCollides(componentSolid(model, ws, k), object, request, pixel, ws, contact))
+                    pairCollides(componentSolid(model, ws, k), object, request, pixel, model.origin, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -399,7 +410,8 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         {
             if (!device::orientedBoxesOverlap(ws.componentBox[a], ws.componentBox[b], padding))
                 continue;
-            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b), request, pixel, ws, contact))
+            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b), request, pixel,
+                             model.origin, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;
@@ -429,7 +441,12 @@ bool CpuBackend::rasterImage(const double *q, const Contact &contact, const Coll
     Contact scratch;
     const bool made = preparePair(a, b, request, pixel, *ws, pair);
     if (made)
+    {
         rasterHit(a, pair.worldA, ws->candidatesA, b, pair.worldB, ws->candidatesB, pair.grid, *ws, scratch, &image);
+        // Pictures label world coordinates.
+        image.grid.origin[0] += static_cast<float>(model.origin[(pair.grid.axis + 1) % 3]);
+        image.grid.origin[1] += static_cast<float>(model.origin[(pair.grid.axis + 2) % 3]);
+    }
     release(std::move(ws));
     return made;
 }
