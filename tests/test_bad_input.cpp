@@ -1188,10 +1188,11 @@ TEST(BadInput, ZeroPadding)
 
 TEST(BadInput, HugePadding)
 {
-    // Everything within reach collides, and nothing overflows: the float culls see an infinite
-    // margin (1e300 m), the exact phase a finite one.
+    // Everything within reach collides, and nothing overflows: the float culls saturate at the
+    // largest float (1e300 m), the exact phase works with the double. Self pairs too.
     const rc::Checker checker(flyingCube(), tableScene());
     const rc::Checker alone(flyingCube(), nullptr);
+    const rc::Checker arm(rc::loadUrdfString(foldingArm(), ".", {}, "arm.urdf"), nullptr);
     for (double padding : {1e9, 1e300})
         for (rc::CollisionMode mode : kModes)
         {
@@ -1201,6 +1202,8 @@ TEST(BadInput, HugePadding)
             rc::Contact contact;
             EXPECT_FALSE(checker.isValid(at(4.9, -4.9, 4.9), request, &contact)) << padding << rc::toString(mode);
             EXPECT_EQ(contact.kind, rc::Contact::Kind::Environment);
+            EXPECT_FALSE(arm.isValid(std::vector<double>{0.0, 0.0}, request, &contact)) << padding << rc::toString(mode);
+            EXPECT_EQ(contact.kind, rc::Contact::Kind::SelfCollision);
             EXPECT_TRUE(alone.isValid(at(4.9, -4.9, 4.9), request)) << "nothing else to collide with";
         }
 }

@@ -123,9 +123,12 @@ device::Pose<float> CollisionModel::devicePose(const Eigen::Isometry3d &worldPos
     Eigen::Isometry3d shifted = worldPose;
     shifted.translation() -= origin;  // in double, before the rounding to float
     const device::Pose<double> exact = toDevicePose(shifted);
+    // A state far beyond float's range (an unbounded floating joint at 1e300) saturates: the
+    // culls then let the pair through to the exact phase, which works in double.
+    const double largest = std::numeric_limits<float>::max();
     device::Pose<float> pose;
     for (int k = 0; k < 12; ++k)
-        pose.m[k] = static_cast<float>(exact.m[k]);
+        pose.m[k] = static_cast<float>(std::clamp(exact.m[k], -largest, largest));
     return pose;
 }
 

@@ -210,6 +210,13 @@ device::Box pairWindow(const Solid &a, const Solid &b, float padding)
     return device::intersection(grownA, b.bounds);
 }
 
+/** \brief The padding for the float culls: a double beyond float's range (a padding of 1e300 m is
+    allowed: everything collides) saturates instead of overflowing the conversion. */
+float floatPadding(const CollisionRequest &request)
+{
+    return static_cast<float>(std::min(request.padding, static_cast<double>(std::numeric_limits<float>::max())));
+}
+
 /** \brief Largest coordinate magnitude of a box: float rounding there is about 6e-8 of it. */
 float magnitudeOf(const device::Box &box)
 {
@@ -222,7 +229,7 @@ float magnitudeOf(const device::Box &box)
 bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
                  PreparedPair &pair)
 {
-    const float padding = static_cast<float>(request.padding);
+    const float padding = floatPadding(request);
     const device::Box window = pairWindow(a, b, padding);
     if (device::isEmpty(window))
         return false;
@@ -245,7 +252,7 @@ bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &reques
                   const Eigen::Vector3d &origin, CpuWorkspace &ws, Contact &contact)
 {
     // The box culls already passed; the window test is the last cheap exit before the oracle.
-    const device::Box window = pairWindow(a, b, static_cast<float>(request.padding));
+    const device::Box window = pairWindow(a, b, floatPadding(request));
     if (device::isEmpty(window))
         return false;
     // Parity needs a closed solid, and fragments placed well within a pixel: far from
@@ -357,7 +364,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     const std::size_t m = model.numComponents();
 
     const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
-    const float padding = static_cast<float>(request.padding);
+    const float padding = floatPadding(request);
     // Stage: distance set and the Alg. 1 box culls, then the pair pipeline.
     if (request.checkEnvironment && model.numObjects() > 0 && m > 0)
     {
