@@ -89,20 +89,6 @@ TEST(Checker, PaddingIsHonouredExactly)
     }
 }
 
-TEST(Checker, BadStatesAreInvalidNotErrors)
-{
-    const rc::Checker checker(cubeRobot(0.2), tableScene());
-    rc::Contact contact;
-    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
-    EXPECT_FALSE(checker.isValid(std::vector<double>{nan, 0, 3, 0, 0, 0, 1}, {}, &contact));
-    EXPECT_EQ(contact.kind, rc::Contact::Kind::OutOfBounds);
-    EXPECT_FALSE(checker.isValid(std::vector<double>{0, inf, 3, 0, 0, 0, 1}));
-    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 6, 0, 0, 0, 1}));  // z above its bound of 5
-    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 0}));  // zero quaternion
-    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 2}));  // qw outside [-1, 1]
-    EXPECT_TRUE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 0.5}));  // unnormalised: normalised
-}
-
 TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
 {
     // base (cube at origin) -j1-> middle (small cube, adjacent) -j2-> tip (cube 0.6 along its x).

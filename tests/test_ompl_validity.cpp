@@ -174,18 +174,6 @@ TEST(OmplValidity, EightThreadsAgreeWithOneThread)
         space->freeState(state);
 }
 
-TEST(OmplValidity, OutOfBoundsAndNonFiniteStatesAreInvalid)
-{
-    const Context context = cubeAmongBoxes();
-    ob::ScopedState<> state(context.si->getStateSpace());
-    context.mapping->fromConfiguration(std::vector<double>{0, 0, 2.5, 0, 0, 0, 1}, state.get());
-    rc::Contact contact;
-    EXPECT_FALSE(context.validity->isValid(state.get(), contact));
-    EXPECT_EQ(contact.kind, rc::Contact::Kind::OutOfBounds);
-    context.mapping->fromConfiguration(std::vector<double>{0, std::nan(""), 0, 0, 0, 0, 1}, state.get());
-    EXPECT_FALSE(context.validity->isValid(state.get()));
-}
-
 TEST(OmplValidity, MotionValidatorMatchesDiscreteOnSyntheticScene)
 {
     const Context context = cubeAmongBoxes();

@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -50,6 +51,33 @@ void expectInputError(const std::function<void()> &load, const std::string &file
 
 /** \brief Writes \a text to \a path (creating it) and returns the path. */
 std::string writeFile(const std::string &path, const std::string &text);
+
+/** \brief Collects the library's warnings and notices while it lives (setLogHandler), then restores
+    the default handler. */
+struct LogCapture
+{
+    std::vector<std::string> warnings;
+    std::vector<std::string> notices;  // LogLevel::Info
+    LogCapture();
+    ~LogCapture();
+    LogCapture(const LogCapture &) = delete;
+    LogCapture &operator=(const LogCapture &) = delete;
+    /** \brief Whether some warning contains \a text. */
+    bool warned(const std::string &text) const;
+    /** \brief Whether some notice contains \a text. */
+    bool noticed(const std::string &text) const;
+};
+
+/** \brief A closed, outward unit cube centred on the origin, as OBJ text. */
+extern const char *const kCubeObj;
+
+/** \brief Small URDF texts: a robot named "test" around \a body, a link with optional collision XML,
+    a joint (\a extra: origin, axis, limit, mimic XML), a collision element with a mesh. */
+std::string urdfRobot(const std::string &body);
+std::string urdfLink(const std::string &name, const std::string &collision = "");
+std::string urdfJoint(const std::string &name, const std::string &type, const std::string &parent,
+                      const std::string &child, const std::string &extra = "");
+std::string urdfCollisionMesh(const std::string &file, const std::string &extra = "");
 }  // namespace rastercheck::test
 
 /** \brief Skips the current test with a clear message when the shared data is absent. */

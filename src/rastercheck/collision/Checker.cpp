@@ -1,5 +1,6 @@
 #include "rastercheck/collision/Checker.h"
 
+#include <cmath>
 #include <mutex>
 #include <sstream>
 
@@ -86,24 +87,57 @@ Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOpt
 
 Checker::~Checker() = default;
 
+// A NaN usually means a bug upstream (a planner, a CSV column of blanks read as NaN); the verdict
+// alone would hide it among real collisions, so the first one is named.
+void Checker::warnOnceIfNotFinite(const double *q, std::size_t n) const
+{
+    if (warnedNotFinite_.load(std::memory_order_relaxed))
+        return;
+    const std::size_t dof = this->dof();
+    for (std::size_t i = 0; i < n * dof; ++i)
+        if (!std::isfinite(q[i]))
+        {
+            if (!warnedNotFinite_.exchange(true))
+                logWarning((n > 1 ? "state " + std::to_string(i / dof) + " of " + std::to_string(n) : "a state") +
+                           " has coordinate '" + model_->robot->coordinateNames[i % dof] + "' = " +
+                           std::to_string(q[i]) +
+                           ": a state that is not finite is invalid (reported once per checker)");
+            return;
+        }
+}
+
 void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request,
                     Contact *contacts) const
 {
+    validate(request);
+    warnOnceIfNotFinite(q, n);
     const Backend &backend = n >= minDeviceBatch_ ? *backend_ : static_cast<const Backend &>(reference_);
     backend.check(q, n, valid, contacts, request, threads_);
 }
 
 bool Checker::isValid(const double *q, const CollisionRequest &request, Contact *contact) const
 {
+    validate(request);
+    warnOnceIfNotFinite(q, 1);
     std::uint8_t valid = 0;
     const Backend &backend = minDeviceBatch_ <= 1 ? *backend_ : static_cast<const Backend &>(reference_);
     backend.check(q, 1, &valid, contact, request, 1);
     return valid != 0;
 }
 
+bool Checker::isValid(const std::vector<double> &q, const CollisionRequest &request, Contact *contact) const
+{
+    if (q.size() != dof())
+        throw ConfigurationError("Checker::isValid: the configuration has " + std::to_string(q.size()) +
+                                 " values, robot '" + robot().name + "' has " + std::to_string(dof()) +
+                                 " coordinates");
+    return isValid(q.data(), request, contact);
+}
+
 bool Checker::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
                           RasterImage &image) const
 {
+    validate(request);
     return reference_.rasterImage(q, contact, request, image);
 }
 

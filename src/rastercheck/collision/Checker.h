@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -45,16 +46,18 @@ public:
 
     /** \brief Decides \a n states. \a q: n x dof values in the robot's coordinate order (row-major).
         \a valid[i] = 1 when state i is valid. \a contacts (optional, n entries) receives each
-        invalid state's first contact. Never throws for bad states: they are invalid. */
+        invalid state's first contact. Never throws for bad states: they are invalid (a state with a
+        NaN or infinite coordinate is Contact::Kind::OutOfBounds, and the first such state a checker
+        sees is named in one warning). Throws ConfigurationError for a malformed \a request
+        (validate()). With an empty scene only self-collision is checked. */
     void check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request = {},
                Contact *contacts = nullptr) const;
 
     /** \brief One state. */
     bool isValid(const double *q, const CollisionRequest &request = {}, Contact *contact = nullptr) const;
-    bool isValid(const std::vector<double> &q, const CollisionRequest &request = {}, Contact *contact = nullptr) const
-    {
-        return isValid(q.data(), request, contact);
-    }
+    /** \brief One state; throws ConfigurationError when \a q does not have dof() values (reading past
+        a short vector would decide garbage). */
+    bool isValid(const std::vector<double> &q, const CollisionRequest &request = {}, Contact *contact = nullptr) const;
 
     /** \brief "cpu" or "cuda (<device>)". */
     std::string backendName() const { return backend_->name(); }
@@ -75,10 +78,13 @@ public:
     std::string describe(const Contact &contact) const;
 
 private:
+    void warnOnceIfNotFinite(const double *q, std::size_t n) const;
+
     CollisionModelConstPtr model_;
     std::unique_ptr<Backend> backend_;
     CpuBackend reference_;  // pictures and diagnostics run the CPU pipeline whatever the backend
     int threads_;
     std::size_t minDeviceBatch_;
+    mutable std::atomic<bool> warnedNotFinite_{false};  // one warning per checker, not one per state
 };
 }  // namespace rastercheck

@@ -157,7 +157,7 @@ struct PreparedPair
 bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
                  PreparedPair &pair)
 {
-    const float padding = static_cast<float>(request.padding);
+    const float padding = device::floatPadding(request.padding);
     const device::Box window = device::pairWindow(a.bounds, b.bounds, padding);
     if (device::isEmpty(window))
         return false;
@@ -175,21 +175,24 @@ bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request
     the raster stages (measured on the Panda MBM scenes: rasterizing a pair cost about 5x an exact
     BVH query, and the depth-range proof settled only a quarter of the pairs), so safe mode on this
     backend is the exact phase behind the paper's culls. */
-bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
-                  Contact &contact)
+bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel,
+                  const Eigen::Vector3d &origin, CpuWorkspace &ws, Contact &contact)
 {
-    const bool rasterUsable = a.slice->closed || b.slice->closed;
-    if (request.mode != CollisionMode::Raster || !rasterUsable)
-    {
-        // The box culls already passed; the window test is the last cheap exit before the oracle.
-        return !device::isEmpty(device::pairWindow(a.bounds, b.bounds, static_cast<float>(request.padding))) &&
-               exactOverlap(a, b, request.padding, contact);
-    }
+    // The box culls already passed; the window test is the last cheap exit before the oracle.
+    const device::Box window = device::pairWindow(a.bounds, b.bounds, device::floatPadding(request.padding));
+    if (device::isEmpty(window))
+        return false;
+    if (request.mode != CollisionMode::Raster ||
+        !device::rasterUsable(a.slice->closed, b.slice->closed, window, static_cast<float>(pixel)))
+        return exactOverlap(a, b, request.padding, contact);
     PreparedPair pair;
     if (!preparePair(a, b, request, pixel, ws, pair))
         return false;
     if (rasterHit(a, pair.worldA, ws.candidatesA, b, pair.worldB, ws.candidatesB, pair.grid, ws, contact))
+    {
+        contact.position += origin;  // the raster works relative to CollisionModel::origin
         return true;
+    }
     // Padding is always honoured exactly: the raster sees overlaps, not distances.
     return request.padding > 0 && exactOverlap(a, b, request.padding, contact);
 }
@@ -206,7 +209,7 @@ void refit(const CollisionModel &model, const double *q, CpuWorkspace &ws)
     {
         const device::Pose<double> &exact = ws.linkPoses[model.componentLink[c]];
         ws.componentExactPose[c] = fromDevicePose(exact);
-        ws.componentPose[c] = device::toFloatPose(exact);
+        ws.componentPose[c] = device::toFloatPose(exact, model.origin.data());
         ws.componentBox[c] = device::transformBox(ws.componentPose[c], model.componentLocalBoxes[c]);
         ws.componentBounds[c] = device::boundsOf(ws.componentBox[c]);
     }
@@ -303,7 +306,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     const std::size_t m = model.numComponents();
 
     const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
-    const float padding = static_cast<float>(request.padding);
+    const float padding = device::floatPadding(request.padding);
     // Stage: distance set and the Alg. 1 box culls, then the pair pipeline.
     if (request.checkEnvironment && model.numObjects() > 0 && m > 0)
     {
@@ -325,7 +328,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     continue;
                 }
                 if (device::orientedBoxOverlapsBox(ws.componentBox[k], objectBox, padding) &&
-                    pairCollides(componentSolid(model, ws, k), object, request, pixel, ws, contact))
+                    pairCollides(componentSolid(model, ws, k), object, request, pixel, model.origin, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -341,7 +344,8 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         {
             if (!device::orientedBoxesOverlap(ws.componentBox[a], ws.componentBox[b], padding))
                 continue;
-            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b), request, pixel, ws, contact))
+            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b), request, pixel,
+                             model.origin, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;
@@ -371,7 +375,12 @@ bool CpuBackend::rasterImage(const double *q, const Contact &contact, const Coll
     Contact scratch;
     const bool made = preparePair(a, b, request, pixel, *ws, pair);
     if (made)
+    {
         rasterHit(a, pair.worldA, ws->candidatesA, b, pair.worldB, ws->candidatesB, pair.grid, *ws, scratch, &image);
+        // Pictures label world coordinates.
+        image.grid.origin[0] += static_cast<float>(model.origin[(pair.grid.axis + 1) % 3]);
+        image.grid.origin[1] += static_cast<float>(model.origin[(pair.grid.axis + 2) % 3]);
+    }
     giveBack(std::move(ws));
     return made;
 }

@@ -35,7 +35,8 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.objectBoxes.data(),
                                static_cast<int>(model.numObjects()),
                                reinterpret_cast<const int *>(model.selfPairs.data()),
-                               static_cast<int>(model.selfPairs.size())};
+                               static_cast<int>(model.selfPairs.size()),
+                               {model.origin.x(), model.origin.y(), model.origin.z()}};
 }
 
 namespace
@@ -174,7 +175,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
         admissible[i] = model.configurationAdmissible(q + static_cast<std::size_t>(i) * dof) ? 1 : 0;
 
     device::StageSettings settings{};
-    settings.padding = static_cast<float>(request.padding);
+    settings.padding = device::floatPadding(request.padding);
     settings.pixel = static_cast<float>(request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize);
     settings.maxImageSide = request.maxImageSide;
     settings.checkEnvironment = request.checkEnvironment;
@@ -221,7 +222,8 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
                 {
                     model.nameParties(o->pair, contact);
                     contact.triangle = o->triangle;
-                    contact.position = Eigen::Vector3d(o->position[0], o->position[1], o->position[2]);
+                    // The raster works relative to CollisionModel::origin.
+                    contact.position = Eigen::Vector3d(o->position[0], o->position[1], o->position[2]) + model.origin;
                     collides = true;
                 }
                 else if (o->status == device::PairOpen)

@@ -60,6 +60,7 @@ struct ModelArrays
     int numObjects;
     const int *selfPairs;  // numSelfPairs x 2
     int numSelfPairs;
+    double origin[3];  // CollisionModel::origin: world-frame floats are relative to it
 
     RC_HD std::uint32_t numPairs() const
     {
@@ -239,7 +240,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         const int c = static_cast<int>(i % m);
         if (!admissible[s])
             return;
-        poses[i] = toFloatPose(links[s * numLinks + md.componentLink[c]]);
+        poses[i] = toFloatPose(links[s * numLinks + md.componentLink[c]], md.origin);
         boxes[i] = transformBox(poses[i], md.componentLocalBoxes[c]);
         bounds[i] = boundsOf(boxes[i]);
     });
@@ -303,8 +304,8 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
             return;
         }
         status[c] = PairOpen;
-        if (!st.rasterize || !(a.slice.closed || b.slice.closed))
-            return;  // the raster needs a closed party; the exact phase decides
+        if (!st.rasterize || !rasterUsable(a.slice.closed, b.slice.closed, window, st.pixel))
+            return;  // the exact phase decides
         grids[c] = makeGrid(window, st.pixel, st.maxImageSide);
         margins[c] = pairMargin(window, grids[c], st.padding);
         triangleCount[c] = a.slice.numTriangles + b.slice.numTriangles;

@@ -44,12 +44,21 @@ RC_HD void linkPoses(const KinematicJoint *joints, int numJoints, const double *
     }
 }
 
-/** \brief The float pose the pipeline stages use, rounded from the double FK result. */
-RC_HD Pose<float> toFloatPose(const Pose<double> &pose)
+/** \brief The float pose the pipeline stages use: the double FK result with its translation taken
+    relative to \a origin (CollisionModel::origin) before the rounding to float. A state far beyond
+    float's range (an unbounded floating joint at 1e300) saturates: the culls then let the pair
+    through to the exact phase, which works in double. */
+RC_HD Pose<float> toFloatPose(const Pose<double> &pose, const double origin[3])
 {
+    const double largest = 3.4028234663852886e38;  // FLT_MAX
     Pose<float> p;
     for (int k = 0; k < 12; ++k)
-        p.m[k] = static_cast<float>(pose.m[k]);
+    {
+        double value = pose.m[k];
+        if (k % 4 == 3)
+            value -= origin[k / 4];
+        p.m[k] = static_cast<float>(value < -largest ? -largest : (value > largest ? largest : value));
+    }
     return p;
 }
 }  // namespace rastercheck::device

@@ -91,14 +91,37 @@ RC_HD Box pairWindow(const Box &a, const Box &b, float padding)
     return intersection(grownA, b);
 }
 
+/** \brief The padding for the float culls: a double beyond float's range (a padding of 1e300 m is
+    allowed: everything collides) saturates instead of overflowing the conversion. */
+RC_HD float floatPadding(double padding)
+{
+    const double largest = 3.4028234663852886e38;  // FLT_MAX
+    return static_cast<float>(padding < largest ? padding : largest);
+}
+
+/** \brief Largest coordinate magnitude of a box: float rounding there is about 6e-8 of it. */
+RC_HD float magnitudeOf(const Box &box)
+{
+    float magnitude = 0;
+    for (int k = 0; k < 3; ++k)
+        magnitude = maxOf(magnitude, maxOf(fabsf(box.min[k]), fabsf(box.max[k])));
+    return magnitude;
+}
+
+/** \brief Whether the raster can decide a pair: parity needs a closed solid, and fragments placed
+    well within a pixel. Far from CollisionModel::origin (a robot 1e6 m from its scene's centre)
+    float rounding is not, and the raster would see overlaps that are not there: such pairs, like
+    pairs of two open meshes, are decided exactly. */
+RC_HD bool rasterUsable(bool closedA, bool closedB, const Box &window, float pixel)
+{
+    return (closedA || closedB) && 1e-6f * magnitudeOf(window) < 0.1f * pixel;
+}
+
 /** \brief How far outside the image a triangle may lie and still be kept: the padding plus the
     float pipeline's rounding allowance (a few ulps of the largest coordinate in play). */
 RC_HD float pairMargin(const Box &window, const RasterGrid &grid, float padding)
 {
-    float magnitude = 0;
-    for (int k = 0; k < 3; ++k)
-        magnitude = maxOf(magnitude, maxOf(fabsf(window.min[k]), fabsf(window.max[k])));
-    return padding + 1e-6f * magnitude + 1e-6f * grid.pixel;
+    return padding + 1e-6f * magnitudeOf(window) + 1e-6f * grid.pixel;
 }
 
 /** \brief Per-triangle cull: whether the triangle's projection meets the image rectangle grown by
