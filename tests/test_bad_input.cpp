@@ -1300,27 +1300,11 @@ TEST(BadInput, FarFromOrigin)
     // re-centred on the scene, every verdict still matches the oracle, and contacts are reported
     // in world coordinates.
     const Eigen::Vector3d offset(1e6, -2e6, 3e5);
-    for (const rc::test::BlindSpotSuite &suite : rc::test::blindSpotSuites(150))
+    for (const rc::test::BlindSpotSuite &original : rc::test::blindSpotSuites(150))
     {
-        auto robot = std::make_shared<rc::RobotModel>(*suite.robot);
-        for (int k = 0; k < 3; ++k)
-        {
-            robot->joints[0].lower[k] += offset[k];
-            robot->joints[0].upper[k] += offset[k];
-        }
-        robot->finalize();
-        auto scene = std::make_shared<rc::Scene>();
-        for (const rc::SceneObject &object : suite.scene->objects)
-        {
-            rc::Mesh mesh = object.mesh;
-            mesh.transform(Eigen::Isometry3d(Eigen::Translation3d(offset)));
-            scene->addObject(object.name, std::move(mesh));
-        }
-        std::vector<double> states = suite.states;
-        for (std::size_t i = 0; i < suite.numStates(); ++i)
-            for (int k = 0; k < 3; ++k)
-                states[7 * i + k] += offset[k];
-        const rc::Checker checker(robot, scene);
+        const rc::test::BlindSpotSuite suite = rc::test::movedBy(original, offset);
+        const std::vector<double> &states = suite.states;
+        const rc::Checker checker(suite.robot, suite.scene);
         EXPECT_GT(expectModesMatchTheOracle(checker, states, suite.name), suite.numStates() / 10) << suite.name;
 
         for (rc::CollisionMode mode : kModes)

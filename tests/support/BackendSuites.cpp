@@ -32,7 +32,11 @@ std::vector<StateSuite> accuracySuites(std::size_t statesPerSuite)
 {
     std::vector<StateSuite> suites;
     for (const BlindSpotSuite &blind : blindSpotSuites(statesPerSuite))
+    {
         suites.push_back(StateSuite{blind.name, blind.robot, blind.scene, blind.states});
+        const BlindSpotSuite far = movedBy(blind, Eigen::Vector3d(1e6, -2e6, 3e5));
+        suites.push_back(StateSuite{far.name, far.robot, far.scene, far.states});
+    }
     const std::string root = sharedData();
     if (root.empty())
         return suites;

@@ -21,7 +21,7 @@ struct StateSuite
     std::size_t numStates() const { return states.size() / robot->numCoordinates(); }
 };
 
-/** \brief The blind-spot suites, the seven Panda MotionBenchMaker scenes (random states within
+/** \brief The blind-spot suites (also moved 1e6 m from the origin), the seven Panda MotionBenchMaker scenes (random states within
     bounds) and the crane in the plant, \a statesPerSuite each (fixed seeds). The Panda and crane
     suites need the shared data; without it only the blind-spot suites come back. */
 std::vector<StateSuite> accuracySuites(std::size_t statesPerSuite);
