@@ -31,6 +31,15 @@ const Problem &plant()
     return problem;
 }
 
+Problem pandaProblem(const std::string &root, const std::string &scenario)
+{
+    ProblemSource source;
+    source.urdfPath = root + "/mbm/panda/panda.urdf";
+    source.srdfPath = root + "/mbm/panda/panda.srdf";
+    source.scenePath = root + "/mbm/panda/problems/" + scenario + "_panda/scene0001.yaml";
+    return loadProblem(source);
+}
+
 CommandRun runCommand(const std::string &command)
 {
     CommandRun run;

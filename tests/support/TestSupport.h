@@ -28,6 +28,10 @@ inline std::string sourcePath(const std::string &relative)
     loaded once per test program. */
 const Problem &plant();
 
+/** \brief The MotionBenchMaker Panda (URDF + SRDF) in scene0001 of \a scenario ("bookshelf_small",
+    "table_pick", ...) under the shared data root \a root. */
+Problem pandaProblem(const std::string &root, const std::string &scenario);
+
 /** \brief A fresh temporary directory for one test (removed at exit of the process is not
     guaranteed; it lives under the system temp folder). */
 std::string makeTempDir(const std::string &tag);
