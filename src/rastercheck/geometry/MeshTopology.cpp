@@ -68,20 +68,24 @@ std::vector<std::uint32_t> weldVertices(Mesh &mesh, double tolerance, std::size_
     {
         std::size_t operator()(const std::array<std::int64_t, 3> &c) const
         {
-            return static_cast<std::size_t>(c[0] * 73856093) ^ static_cast<std::size_t>(c[1] * 19349663) ^
-                   static_cast<std::size_t>(c[2] * 83492791);
+            // Unsigned: far from the origin (1e6 m in 1e-9 cells) the signed products would overflow.
+            return static_cast<std::size_t>(static_cast<std::uint64_t>(c[0]) * 73856093u) ^
+                   static_cast<std::size_t>(static_cast<std::uint64_t>(c[1]) * 19349663u) ^
+                   static_cast<std::size_t>(static_cast<std::uint64_t>(c[2]) * 83492791u);
         }
     };
     const double cell = tolerance > 0 ? tolerance : 1e-12;
     std::unordered_map<std::array<std::int64_t, 3>, std::vector<std::uint32_t>, CellHash> grid;
     std::vector<Eigen::Vector3d> welded;
     std::vector<std::uint32_t> remap(mesh.vertices.size());
+    // Clamped so that the conversion cannot overflow (beyond 9e9 m cells merge; the distance test
+    // below still decides).
+    auto cellOf = [cell](double x)
+    { return static_cast<std::int64_t>(std::clamp(std::floor(x / cell), -9e18, 9e18)); };
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
     {
         const Eigen::Vector3d &v = mesh.vertices[i];
-        const std::array<std::int64_t, 3> key{static_cast<std::int64_t>(std::floor(v.x() / cell)),
-                                              static_cast<std::int64_t>(std::floor(v.y() / cell)),
-                                              static_cast<std::int64_t>(std::floor(v.z() / cell))};
+        const std::array<std::int64_t, 3> key{cellOf(v.x()), cellOf(v.y()), cellOf(v.z())};
         long found = -1;
         for (int dx = -1; dx <= 1 && found < 0; ++dx)
             for (int dy = -1; dy <= 1 && found < 0; ++dy)
