@@ -32,8 +32,8 @@ cmake --build "$build" -j "${FUZZ_JOBS:-2}" --target $(printf 'fuzz_%s ' $target
 
 # ---- corpora, rebuilt from the data at every run (nothing from the data is committed) ----------
 corpus=$build/fuzz-corpus
-rm -rf "$corpus" "$build/fuzz-work" "$build/fuzz-artifacts" "$build/fuzz-logs"
-mkdir -p "$corpus" "$build/fuzz-work" "$build/fuzz-artifacts" "$build/fuzz-logs"
+rm -rf "$corpus" "$build/fuzz-work" "$build/fuzz-artifacts" "$build/fuzz-logs" "$build/fuzz-tmp"
+mkdir -p "$corpus" "$build/fuzz-work" "$build/fuzz-artifacts" "$build/fuzz-logs" "$build/fuzz-tmp"
 for t in $targets; do
     mkdir -p "$corpus/$t" "$build/fuzz-work/$t" "$build/fuzz-artifacts/$t"
     if [[ $t != mesh && -d fuzz/seeds/$t ]]; then cp fuzz/seeds/$t/* "$corpus/$t/"; fi  # mesh: below
@@ -43,7 +43,7 @@ problems() { find "$data/mbm" -path '*/problems/*' -name "$1" | sort; }
 if [[ -d $corpus/urdf ]]; then
     # Mesh references point at the harness's scratch mesh, so the seeds build whole models.
     for f in $(find "$data" -name '*.urdf' | sort); do
-        sed -E 's#filename="[^"]*"#filename="mesh.obj"#g' "$f" >"$corpus/urdf/$(echo "${f#$data/}" | tr / _)"
+        sed -E 's#filename="[^"]*"#filename="mesh.stl"#g' "$f" >"$corpus/urdf/$(echo "${f#$data/}" | tr / _)"
     done
 fi
 if [[ -d $corpus/srdf ]]; then
@@ -92,7 +92,8 @@ for t in $targets; do
     echo "fuzz.sh: $t: $runs executions (log $log)"
     start=$(date +%s%N)
     status=0
-    ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
+    # TMPDIR: a harness that crashes leaves its scratch folder (fuzz/FuzzTargets.cpp) in the build tree.
+    TMPDIR=$(cd "$build/fuzz-tmp" && pwd) ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
         "$build/fuzz/fuzz_$t" -runs="$runs" -seed="$seed" -max_len="${max_len[$t]}" -timeout=10 \
         -rss_limit_mb=2048 -detect_leaks=1 -print_final_stats=1 "${dict[@]}" \
         -artifact_prefix="$build/fuzz-artifacts/$t/" "$build/fuzz-work/$t" "$corpus/$t" >"$log" 2>&1 || status=$?

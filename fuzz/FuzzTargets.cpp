@@ -4,10 +4,12 @@
 #include <cstdlib>
 #include <fstream>
 #include <memory>
+#include <sstream>
 #include <unistd.h>
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
+#include "rastercheck/geometry/Primitives.h"
 #include "rastercheck/io/MeshLoader.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/OmplAppProblem.h"
@@ -29,16 +31,42 @@ const char *const kCfgName = "fuzz.cfg";
 const char *const kCsvName = "fuzz.csv";
 const char *const kMeshName = "fuzz-mesh";
 
-const char *const kBoxObj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
-                            "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
-                            "f 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
-const char *const kTetrahedronObj = "v 5 5 5\nv 6 5 5\nv 5 6 5\nv 5 5 6\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
-const char *const kTwoBoxesObj =
-    "o wallA\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
-    "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n"
-    "o wallB\nv 10 0 0\nv 11 0 0\nv 11 1 0\nv 10 1 0\nv 10 0 2\nv 11 0 2\nv 11 1 2\nv 10 1 2\n"
-    "f 9 12 11\nf 9 11 10\nf 13 14 15\nf 13 15 16\nf 9 10 14\nf 9 14 13\nf 12 16 15\nf 12 15 11\n"
-    "f 9 13 16\nf 9 16 12\nf 10 11 15\nf 10 15 14\n";
+// The scratch meshes are written as ASCII STL: assimp's OBJ reader sets up a 16 MB line buffer per
+// file, which made loading them the larger part of every URDF and .cfg execution.
+std::string asciiStl(const std::vector<std::pair<std::string, Mesh>> &solids)
+{
+    std::ostringstream out;
+    for (const auto &[name, mesh] : solids)
+    {
+        out << "solid " << name << "\n";
+        for (const Mesh::Triangle &t : mesh.triangles)
+        {
+            out << "facet normal 0 0 0\nouter loop\n";
+            for (std::uint32_t i : t)
+                out << "vertex " << mesh.vertices[i].x() << " " << mesh.vertices[i].y() << " " << mesh.vertices[i].z()
+                    << "\n";
+            out << "endloop\nendfacet\n";
+        }
+        out << "endsolid " << name << "\n";
+    }
+    return out.str();
+}
+
+Mesh boxAt(const Eigen::Vector3d &min, const Eigen::Vector3d &max)
+{
+    Mesh box = makeBox(max - min);
+    box.transform(Eigen::Isometry3d(Eigen::Translation3d((min + max) / 2)));
+    return box;
+}
+
+// Tetrahedron with corners (5,5,5) + {0, e_x, e_y, e_z}, as in tests/test_omplapp.cpp.
+Mesh tetrahedron()
+{
+    Mesh mesh;
+    mesh.vertices = {{5, 5, 5}, {6, 5, 5}, {5, 6, 5}, {5, 5, 6}};
+    mesh.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    return mesh;
+}
 
 // The robot the SRDF harness applies its input to: Panda link names, one link without geometry.
 const char *const kSrdfRobot = R"(<robot name="panda">
@@ -57,7 +85,10 @@ const char *const kSrdfRobot = R"(<robot name="panda">
 </robot>
 )";
 
-std::string text(const std::uint8_t *data, std::size_t size) { return std::string(reinterpret_cast<const char *>(data), size); }
+std::string text(const std::uint8_t *data, std::size_t size)
+{
+    return std::string(reinterpret_cast<const char *>(data), size);
+}
 
 // A per-process folder with the mesh files the URDF and .cfg inputs may name; removed at exit.
 class Scratch
@@ -70,9 +101,12 @@ public:
         if (!mkdtemp(pattern.data()))
             throw std::runtime_error("cannot create a scratch folder from " + pattern);
         folder_ = pattern;
-        for (const auto &[name, contents] : {std::pair<const char *, const char *>{"mesh.obj", kBoxObj},
-                                             {"robot.obj", kTetrahedronObj},
-                                             {"world.obj", kTwoBoxesObj}})
+        const std::pair<const char *, std::string> files[] = {
+            {"mesh.stl", asciiStl({{"box", boxAt({0, 0, 0}, {1, 1, 1})}})},
+            {"robot.stl", asciiStl({{"tetrahedron", tetrahedron()}})},
+            {"world.stl",
+             asciiStl({{"wallA", boxAt({0, 0, 0}, {1, 1, 1})}, {"wallB", boxAt({10, 0, 0}, {11, 1, 2})}})}};
+        for (const auto &[name, contents] : files)
         {
             std::ofstream out(folder_ + "/" + name, std::ios::binary);
             out << contents;

@@ -33,7 +33,7 @@ public:
 
 using Target = Outcome (*)(const std::uint8_t *data, std::size_t size);
 
-/** \brief loadUrdfString; relative mesh paths resolve in a scratch folder holding `mesh.obj` (a
+/** \brief loadUrdfString; relative mesh paths resolve in a scratch folder holding `mesh.stl` (a
     box), so seeds whose mesh file names are rewritten to it build complete models. */
 Outcome urdf(const std::uint8_t *data, std::size_t size);
 /** \brief loadSrdfString, then applySrdf onto a copy of a small fixed robot whose link names are
@@ -43,8 +43,8 @@ Outcome srdf(const std::uint8_t *data, std::size_t size);
 Outcome scene(const std::uint8_t *data, std::size_t size);
 /** \brief loadMoveItRequestString. */
 Outcome request(const std::uint8_t *data, std::size_t size);
-/** \brief loadOmplAppProblemString; meshes resolve in the scratch folder, which holds `robot.obj`
-    (a tetrahedron) and `world.obj` (two boxes). */
+/** \brief loadOmplAppProblemString; meshes resolve in the scratch folder, which holds `robot.stl`
+    (a tetrahedron) and `world.stl` (two boxes). */
 Outcome cfg(const std::uint8_t *data, std::size_t size);
 /** \brief parseStatesCsv with the Panda arm's coordinate names panda_joint1..7. */
 Outcome csv(const std::uint8_t *data, std::size_t size);

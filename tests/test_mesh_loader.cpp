@@ -118,7 +118,8 @@ TEST(MeshLoader, PlyHeaderIsCheckedBeforeAssimpReadsTheFile)
     // No extension assimp knows: it goes by content, so the check applies too.
     for (const char *name : {"/open.ply", "/open.notamesh"})
     {
-        const std::string open = writeFile(folder + name, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n");
+        const std::string open =
+            writeFile(folder + name, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n");
         try
         {
             rc::loadMesh(open);
@@ -130,8 +131,9 @@ TEST(MeshLoader, PlyHeaderIsCheckedBeforeAssimpReadsTheFile)
             EXPECT_EQ(e.element(), "PLY header");
         }
     }
-    const std::string huge = writeFile(folder + "/huge.ply", "ply\nformat binary_little_endian 1.0\n"
-                                                             "element vertex 400000000\nproperty float x\nend_header\n");
+    const std::string huge = writeFile(folder + "/huge.ply",
+                                       "ply\nformat binary_little_endian 1.0\n"
+                                       "element vertex 400000000\nproperty float x\nend_header\n");
     try
     {
         rc::loadMesh(huge);
@@ -150,8 +152,9 @@ TEST(MeshLoader, ObjMaterialLibraryIsNotOpened)
 {
     const std::string folder = makeTempDir("mesh");
     writeFile(folder + "/bad.mtl", "map_Kd texture.png\n");
-    const std::string obj = writeFile(folder + "/two.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
-                                                           "usemtl red\nf 1 2 3\nusemtl blue\nf 2 4 3\n");
+    const std::string obj = writeFile(folder + "/two.obj",
+                                      "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                      "usemtl red\nf 1 2 3\nusemtl blue\nf 2 4 3\n");
     const std::vector<rc::MeshNode> nodes = rc::loadMeshNodes(obj);
     ASSERT_EQ(nodes.size(), 1u);
     EXPECT_EQ(nodes[0].mesh.numTriangles(), 2u);

@@ -126,27 +126,42 @@ void checkPlyHeader(const char *header, std::size_t size, std::size_t fileSize, 
         unsigned long long count = 0;
         std::size_t values = 0, bytes = 0;  // per instance, at least: values (ASCII), bytes (binary)
     };
+    // The header's lines as assimp's IOStreamBuffer::getNextLine reads them: a line ends at \n, \r,
+    // \0 or \f, and where a line would start on one of those, everything up to the next \n is
+    // skipped. `end_header` counts only as the start of such a line, followed by a blank or a line
+    // end, as assimp's token match wants it: an `end_header` assimp skips (after "\r\r") hung it.
+    auto lineEnd = [](char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; };
     std::vector<Element> elements;
-    bool ascii = false;
-    std::size_t position = 0, bodyStart = std::string::npos;
-    while (position < size && bodyStart == std::string::npos)
+    bool ascii = false, ended = false;
+    std::size_t position = 0;
+    for (int lineNumber = 0; position < size && !ended; ++lineNumber)
     {
-        std::size_t end = position;
-        while (end < size && header[end] != '\n' && header[end] != '\r')
-            ++end;
-        std::istringstream line(std::string(header + position, end - position));
-        position = end + 1;
+        if (lineEnd(header[position]))
+        {
+            while (position < size && header[position] != '\n')
+                ++position;
+            if (++position >= size)
+                break;
+        }
+        const std::size_t start = position;
+        while (position < size && !lineEnd(header[position]))
+            ++position;
+        const std::string text(header + start, position - start);
+        ++position;
+        if (lineNumber < 2)  // the magic word and the format line, which assimp reads on their own
+        {
+            ascii = ascii || text.compare(0, 12, "format ascii") == 0;
+            continue;
+        }
+        if (text.compare(0, 10, "end_header") == 0 && (text.size() == 10 || text[10] == ' ' || text[10] == '\t'))
+        {
+            ended = true;
+            break;
+        }
+        std::istringstream line(text);
         std::string keyword;
         line >> keyword;
-        if (keyword == "end_header")
-            bodyStart = std::min(position, size);
-        else if (keyword == "format")
-        {
-            std::string format;
-            line >> format;
-            ascii = format == "ascii";
-        }
-        else if (keyword == "element")
+        if (keyword == "element")
         {
             Element element;
             std::string count;
@@ -164,10 +179,13 @@ void checkPlyHeader(const char *header, std::size_t size, std::size_t fileSize, 
             elements.back().bytes += plyTypeSize(type);
         }
     }
-    if (bodyStart == std::string::npos)
+    if (!ended)
         throw InputError(name, "PLY header",
-                         size < fileSize ? "no end_header line in the first " + std::to_string(kPlyHeaderLimit) + " bytes"
-                                         : std::string("no end_header line"));
+                         size < fileSize
+                             ? "no end_header line in the first " + std::to_string(kPlyHeaderLimit) + " bytes"
+                             : std::string("no end_header line"));
+    const std::size_t bodyStart = std::min(position, size);
+
     // An ASCII value takes a character and a separator, a binary one its type's size; an element
     // without properties is counted a byte per instance (assimp allocates each one all the same).
     const unsigned long long available = fileSize - bodyStart + 1;
