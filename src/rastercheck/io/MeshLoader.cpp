@@ -17,6 +17,7 @@
 #include <assimp/scene.h>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/io/PlyCheck.h"
 
 namespace rastercheck
 {
@@ -86,120 +87,6 @@ private:
     const std::uint8_t *data_;
     std::size_t size_;
 };
-
-// ---- PLY pre-check ----------------------------------------------------------------------------
-// assimp 5.2.5's PLY importer never returns on a header without an `end_header` line (it keeps
-// allocating), and allocates every element the header declares before it reads the body, so ten
-// bytes claiming "element vertex 4000000000" ask for tens of GB. Both found by fuzz_mesh; the
-// header is checked here first, and an element count the file is too short to hold is rejected.
-
-constexpr std::size_t kPlyHeaderLimit = 64 * 1024;  // bytes of a file read for the check
-
-bool startsAsPly(const char *data, std::size_t size)
-{
-    std::size_t i = 0;
-    while (i < size && std::isspace(static_cast<unsigned char>(data[i])))
-        ++i;
-    return size - i >= 3 && std::tolower(static_cast<unsigned char>(data[i])) == 'p' &&
-           std::tolower(static_cast<unsigned char>(data[i + 1])) == 'l' &&
-           std::tolower(static_cast<unsigned char>(data[i + 2])) == 'y';
-}
-
-std::size_t plyTypeSize(const std::string &type)
-{
-    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8")
-        return 1;
-    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16")
-        return 2;
-    if (type == "double" || type == "float64")
-        return 8;
-    return 4;  // int, uint, float and their sized names; assimp rejects unknown types itself
-}
-
-// \a header: the start of the file (all of it, or its first kPlyHeaderLimit bytes); \a fileSize: the
-// whole file's size.
-void checkPlyHeader(const char *header, std::size_t size, std::size_t fileSize, const std::string &name)
-{
-    struct Element
-    {
-        std::string name;
-        unsigned long long count = 0;
-        std::size_t values = 0, bytes = 0;  // per instance, at least: values (ASCII), bytes (binary)
-    };
-    // The header's lines as assimp's IOStreamBuffer::getNextLine reads them: a line ends at \n, \r,
-    // \0 or \f, and where a line would start on one of those, everything up to the next \n is
-    // skipped. `end_header` counts only as the start of such a line, followed by a blank or a line
-    // end, as assimp's token match wants it: an `end_header` assimp skips (after "\r\r") hung it.
-    auto lineEnd = [](char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; };
-    std::vector<Element> elements;
-    bool ascii = false, ended = false;
-    std::size_t position = 0;
-    for (int lineNumber = 0; position < size && !ended; ++lineNumber)
-    {
-        if (lineEnd(header[position]))
-        {
-            while (position < size && header[position] != '\n')
-                ++position;
-            if (++position >= size)
-                break;
-        }
-        const std::size_t start = position;
-        while (position < size && !lineEnd(header[position]))
-            ++position;
-        const std::string text(header + start, position - start);
-        ++position;
-        if (lineNumber < 2)  // the magic word and the format line, which assimp reads on their own
-        {
-            ascii = ascii || text.compare(0, 12, "format ascii") == 0;
-            continue;
-        }
-        if (text.compare(0, 10, "end_header") == 0 && (text.size() == 10 || text[10] == ' ' || text[10] == '\t'))
-        {
-            ended = true;
-            break;
-        }
-        std::istringstream line(text);
-        std::string keyword;
-        line >> keyword;
-        if (keyword == "element")
-        {
-            Element element;
-            std::string count;
-            line >> element.name >> count;
-            element.count = std::strtoull(count.c_str(), nullptr, 10);
-            elements.push_back(element);
-        }
-        else if (keyword == "property" && !elements.empty())
-        {
-            std::string type;
-            line >> type;
-            if (type == "list")
-                line >> type;  // the count's type: an empty list is just its count
-            elements.back().values += 1;
-            elements.back().bytes += plyTypeSize(type);
-        }
-    }
-    if (!ended)
-        throw InputError(name, "PLY header",
-                         size < fileSize
-                             ? "no end_header line in the first " + std::to_string(kPlyHeaderLimit) + " bytes"
-                             : std::string("no end_header line"));
-    const std::size_t bodyStart = std::min(position, size);
-
-    // An ASCII value takes a character and a separator, a binary one its type's size; an element
-    // without properties is counted a byte per instance (assimp allocates each one all the same).
-    const unsigned long long available = fileSize - bodyStart + 1;
-    unsigned long long needed = 0;
-    for (const Element &element : elements)
-    {
-        const unsigned long long each = std::max<std::size_t>(1, ascii ? 2 * element.values : element.bytes);
-        if (element.count > available / each || needed + element.count * each > available)
-            throw InputError(name, "PLY element '" + element.name + "'",
-                             "declares " + std::to_string(element.count) + " instances, more than the " +
-                                 std::to_string(fileSize - bodyStart) + " bytes after the header can hold");
-        needed += element.count * each;
-    }
-}
 
 // The PLY importer is assimp's choice when the extension (or memory hint) says ply, or when no
 // importer claims the extension and assimp goes by content.
@@ -312,12 +199,17 @@ std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxi
     importer.SetIOHandler(new GeometryFiles);  // the importer owns it
     if (plyImporterMayRun(importer, extensionOf(path)))
     {
+        // assimp's PLY reader needs the whole file checked first (io/PlyCheck.h).
         std::ifstream in(path, std::ios::binary);
-        std::string header(kPlyHeaderLimit, '\0');
-        in.read(header.data(), static_cast<std::streamsize>(header.size()));
-        header.resize(static_cast<std::size_t>(in.gcount()));
-        if (startsAsPly(header.data(), header.size()))
-            checkPlyHeader(header.data(), header.size(), static_cast<std::size_t>(info.st_size), path);
+        std::string start(4096, '\0');
+        in.read(start.data(), static_cast<std::streamsize>(start.size()));
+        if (detail::looksLikePly(start.data(), static_cast<std::size_t>(in.gcount())))
+        {
+            std::ostringstream whole;
+            whole << std::ifstream(path, std::ios::binary).rdbuf();
+            const std::string bytes = whole.str();
+            detail::checkPly(bytes.data(), bytes.size(), path);
+        }
     }
     const aiScene *scene = checkAndPostProcess(importer, importer.ReadFile(path, kReadFlags), path);
     return extract(scene, importer, path);
@@ -339,8 +231,8 @@ std::vector<MeshNode> loadMeshNodesFromMemory(const void *data, std::size_t size
     Assimp::Importer importer;
     configure(importer, upAxis);
     const char *bytes = static_cast<const char *>(data);
-    if (plyImporterMayRun(importer, formatHint) && startsAsPly(bytes, size))
-        checkPlyHeader(bytes, size, size, name);
+    if (plyImporterMayRun(importer, formatHint) && detail::looksLikePly(bytes, size))
+        detail::checkPly(bytes, size, name);  // assimp's PLY reader is unsafe on malformed files
     // The hint is the file's extension, by which assimp picks the importer.
     const std::string file = formatHint.empty() ? "memory" : "memory." + formatHint;
     importer.SetIOHandler(new MemoryFile(file, data, size));  // the importer owns it

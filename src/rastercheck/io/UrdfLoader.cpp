@@ -275,6 +275,23 @@ public:
     {
         const XmlScan scan = prescan(xml, file_);
         urdf_ = parseWithUrdfdom(xml, file_);
+        // urdfdom (TinyXML 1) and the pre-scan (TinyXML 2) can read a name differently: a bare '&'
+        // is "&" to one and "" to the other (found by fuzz_urdf). The model is built from both, so
+        // their names must agree.
+        const char *differently = "urdfdom reads this name differently (an '&' that starts no XML entity?)";
+        const std::set<std::string> scannedLinks(scan.linkNames.begin(), scan.linkNames.end());
+        for (const std::string &name : scan.linkNames)
+            if (!urdf_->getLink(name))
+                throw InputError(file_, "link '" + name + "'", differently);
+        for (const std::string &name : scan.jointNames)
+        {
+            const urdf::JointConstSharedPtr joint = urdf_->getJoint(name);
+            if (!joint)
+                throw InputError(file_, "joint '" + name + "'", differently);
+            for (const std::string &link : {joint->parent_link_name, joint->child_link_name})
+                if (!scannedLinks.count(link))
+                    throw InputError(file_, "joint '" + name + "' link '" + link + "'", differently);
+        }
         auto model = std::make_shared<RobotModel>();
         model->name = urdf_->getName();
         for (std::size_t i = 0; i < scan.linkNames.size(); ++i)
