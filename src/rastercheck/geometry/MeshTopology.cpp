@@ -66,22 +66,31 @@ std::vector<std::uint32_t> weldVertices(Mesh &mesh, double tolerance, std::size_
 {
     struct CellHash
     {
+        // Unsigned: the products wrap, where signed ones would overflow (undefined) for cells far
+        // from the origin (a scene object 6 km away, found by fuzz_scene).
         std::size_t operator()(const std::array<std::int64_t, 3> &c) const
         {
-            return static_cast<std::size_t>(c[0] * 73856093) ^ static_cast<std::size_t>(c[1] * 19349663) ^
-                   static_cast<std::size_t>(c[2] * 83492791);
+            return (static_cast<std::size_t>(c[0]) * 73856093u) ^ (static_cast<std::size_t>(c[1]) * 19349663u) ^
+                   (static_cast<std::size_t>(c[2]) * 83492791u);
         }
     };
     const double cell = tolerance > 0 ? tolerance : 1e-12;
+    // Cell coordinates are clamped so the conversion to an integer is defined (and key +- 1 cannot
+    // overflow) for coordinates beyond 2^62 cells, or not finite; vertices in a clamped cell are
+    // still welded only by their distance.
+    auto cellOf = [cell](double coordinate)
+    {
+        constexpr double limit = 4611686018427387904.0;  // 2^62
+        const double c = std::floor(coordinate / cell);
+        return static_cast<std::int64_t>(c > -limit ? (c < limit ? c : limit) : -limit);
+    };
     std::unordered_map<std::array<std::int64_t, 3>, std::vector<std::uint32_t>, CellHash> grid;
     std::vector<Eigen::Vector3d> welded;
     std::vector<std::uint32_t> remap(mesh.vertices.size());
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
     {
         const Eigen::Vector3d &v = mesh.vertices[i];
-        const std::array<std::int64_t, 3> key{static_cast<std::int64_t>(std::floor(v.x() / cell)),
-                                              static_cast<std::int64_t>(std::floor(v.y() / cell)),
-                                              static_cast<std::int64_t>(std::floor(v.z() / cell))};
+        const std::array<std::int64_t, 3> key{cellOf(v.x()), cellOf(v.y()), cellOf(v.z())};
         long found = -1;
         for (int dx = -1; dx <= 1 && found < 0; ++dx)
             for (int dy = -1; dy <= 1 && found < 0; ++dy)

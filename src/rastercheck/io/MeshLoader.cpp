@@ -1,9 +1,17 @@
 #include "rastercheck/io/MeshLoader.h"
 
+#include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <sys/stat.h>
+#include <utility>
 
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/Importer.hpp>
+#include <assimp/MemoryIOWrapper.h>
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -14,11 +22,198 @@ namespace rastercheck
 {
 namespace
 {
-constexpr unsigned int kImportFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+// Files are read without post-processing, checked (checkAndPostProcess), then post-processed as
+// OMPL.app does. assimp's importers can return face indices past the vertices or faces without
+// vertices on malformed input (a PLY, found by fuzz_mesh), which crashed the later steps and would be
+// copied into our meshes. assimp's own ValidateDataStructure would catch them too, but it also
+// rejects what the post-processing repairs (a truncated OBJ's last face read as a line, a file of
+// points only) with messages that do not say what is wrong for us.
+constexpr unsigned int kReadFlags = 0;
+constexpr unsigned int kPostProcessFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
 
 void configure(Assimp::Importer &importer, ColladaUpAxis upAxis)
 {
     importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, upAxis == ColladaUpAxis::Keep);
+}
+
+// ---- what assimp may open ----------------------------------------------------------------------
+// assimp 5.2.5's OBJ material-library parser dereferences a null material on a texture line before
+// any `newmtl` (found by fuzz_mesh: for bytes in memory, the fallback "<name>.mtl" assimp tries when
+// `mtllib` cannot be opened is served from the OBJ's own bytes). Only geometry is used here, and an
+// OBJ read without its .mtl has the same meshes (assimp makes a material per `usemtl` name), so .mtl
+// files are never opened.
+bool isMaterialLibrary(const char *file)
+{
+    const std::string name(file ? file : "");
+    if (name.size() < 4)
+        return false;
+    std::string extension = name.substr(name.size() - 4);
+    for (char &c : extension)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return extension == ".mtl";
+}
+
+// Mesh files: the file system, without material libraries.
+class GeometryFiles : public Assimp::DefaultIOSystem
+{
+public:
+    bool Exists(const char *file) const override { return !isMaterialLibrary(file) && DefaultIOSystem::Exists(file); }
+    Assimp::IOStream *Open(const char *file, const char *mode) override
+    {
+        return isMaterialLibrary(file) ? nullptr : DefaultIOSystem::Open(file, mode);
+    }
+};
+
+// Bytes in memory as the only file there is (assimp's own ReadFileFromMemory falls back to the file
+// system, and serves its magic name's .mtl from the same bytes): nothing else is opened.
+class MemoryFile : public Assimp::IOSystem
+{
+public:
+    MemoryFile(std::string name, const void *data, std::size_t size)
+        : name_(std::move(name)), data_(static_cast<const std::uint8_t *>(data)), size_(size)
+    {
+    }
+    bool Exists(const char *file) const override { return file && name_ == file; }
+    char getOsSeparator() const override { return '/'; }
+    Assimp::IOStream *Open(const char *file, const char *) override
+    {
+        return Exists(file) ? new Assimp::MemoryIOStream(data_, size_) : nullptr;
+    }
+    void Close(Assimp::IOStream *stream) override { delete stream; }
+
+private:
+    std::string name_;
+    const std::uint8_t *data_;
+    std::size_t size_;
+};
+
+// ---- PLY pre-check ----------------------------------------------------------------------------
+// assimp 5.2.5's PLY importer never returns on a header without an `end_header` line (it keeps
+// allocating), and allocates every element the header declares before it reads the body, so ten
+// bytes claiming "element vertex 4000000000" ask for tens of GB. Both found by fuzz_mesh; the
+// header is checked here first, and an element count the file is too short to hold is rejected.
+
+constexpr std::size_t kPlyHeaderLimit = 64 * 1024;  // bytes of a file read for the check
+
+bool startsAsPly(const char *data, std::size_t size)
+{
+    std::size_t i = 0;
+    while (i < size && std::isspace(static_cast<unsigned char>(data[i])))
+        ++i;
+    return size - i >= 3 && std::tolower(static_cast<unsigned char>(data[i])) == 'p' &&
+           std::tolower(static_cast<unsigned char>(data[i + 1])) == 'l' &&
+           std::tolower(static_cast<unsigned char>(data[i + 2])) == 'y';
+}
+
+std::size_t plyTypeSize(const std::string &type)
+{
+    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8")
+        return 1;
+    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16")
+        return 2;
+    if (type == "double" || type == "float64")
+        return 8;
+    return 4;  // int, uint, float and their sized names; assimp rejects unknown types itself
+}
+
+// \a header: the start of the file (all of it, or its first kPlyHeaderLimit bytes); \a fileSize: the
+// whole file's size.
+void checkPlyHeader(const char *header, std::size_t size, std::size_t fileSize, const std::string &name)
+{
+    struct Element
+    {
+        std::string name;
+        unsigned long long count = 0;
+        std::size_t values = 0, bytes = 0;  // per instance, at least: values (ASCII), bytes (binary)
+    };
+    // The header's lines as assimp's IOStreamBuffer::getNextLine reads them: a line ends at \n, \r,
+    // \0 or \f, and where a line would start on one of those, everything up to the next \n is
+    // skipped. `end_header` counts only as the start of such a line, followed by a blank or a line
+    // end, as assimp's token match wants it: an `end_header` assimp skips (after "\r\r") hung it.
+    auto lineEnd = [](char c) { return c == '\n' || c == '\r' || c == '\0' || c == '\f'; };
+    std::vector<Element> elements;
+    bool ascii = false, ended = false;
+    std::size_t position = 0;
+    for (int lineNumber = 0; position < size && !ended; ++lineNumber)
+    {
+        if (lineEnd(header[position]))
+        {
+            while (position < size && header[position] != '\n')
+                ++position;
+            if (++position >= size)
+                break;
+        }
+        const std::size_t start = position;
+        while (position < size && !lineEnd(header[position]))
+            ++position;
+        const std::string text(header + start, position - start);
+        ++position;
+        if (lineNumber < 2)  // the magic word and the format line, which assimp reads on their own
+        {
+            ascii = ascii || text.compare(0, 12, "format ascii") == 0;
+            continue;
+        }
+        if (text.compare(0, 10, "end_header") == 0 && (text.size() == 10 || text[10] == ' ' || text[10] == '\t'))
+        {
+            ended = true;
+            break;
+        }
+        std::istringstream line(text);
+        std::string keyword;
+        line >> keyword;
+        if (keyword == "element")
+        {
+            Element element;
+            std::string count;
+            line >> element.name >> count;
+            element.count = std::strtoull(count.c_str(), nullptr, 10);
+            elements.push_back(element);
+        }
+        else if (keyword == "property" && !elements.empty())
+        {
+            std::string type;
+            line >> type;
+            if (type == "list")
+                line >> type;  // the count's type: an empty list is just its count
+            elements.back().values += 1;
+            elements.back().bytes += plyTypeSize(type);
+        }
+    }
+    if (!ended)
+        throw InputError(name, "PLY header",
+                         size < fileSize
+                             ? "no end_header line in the first " + std::to_string(kPlyHeaderLimit) + " bytes"
+                             : std::string("no end_header line"));
+    const std::size_t bodyStart = std::min(position, size);
+
+    // An ASCII value takes a character and a separator, a binary one its type's size; an element
+    // without properties is counted a byte per instance (assimp allocates each one all the same).
+    const unsigned long long available = fileSize - bodyStart + 1;
+    unsigned long long needed = 0;
+    for (const Element &element : elements)
+    {
+        const unsigned long long each = std::max<std::size_t>(1, ascii ? 2 * element.values : element.bytes);
+        if (element.count > available / each || needed + element.count * each > available)
+            throw InputError(name, "PLY element '" + element.name + "'",
+                             "declares " + std::to_string(element.count) + " instances, more than the " +
+                                 std::to_string(fileSize - bodyStart) + " bytes after the header can hold");
+        needed += element.count * each;
+    }
+}
+
+// The PLY importer is assimp's choice when the extension (or memory hint) says ply, or when no
+// importer claims the extension and assimp goes by content.
+bool plyImporterMayRun(const Assimp::Importer &importer, std::string extension)
+{
+    for (char &c : extension)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return extension == "ply" || !importer.IsExtensionSupported("." + extension);
+}
+
+std::string extensionOf(const std::string &path)
+{
+    const std::size_t dot = path.find_last_of('.'), slash = path.find_last_of('/');
+    return dot == std::string::npos || (slash != std::string::npos && dot < slash) ? "" : path.substr(dot + 1);
 }
 
 Eigen::Matrix4d toEigen(const aiMatrix4x4 &m)
@@ -66,6 +261,32 @@ void collect(const aiScene *scene, const aiNode *node, const Eigen::Matrix4d &pa
         collect(scene, node->mChildren[c], transform, name, out);
 }
 
+// A face without indices passes assimp's validation but makes its Triangulate step abort on an
+// assertion (Debian builds assimp with them; found by fuzz_mesh with a PLY face list of count 0).
+// Valid files have none, so such a scene is rejected before post-processing.
+const aiScene *checkAndPostProcess(Assimp::Importer &importer, const aiScene *scene, const std::string &name)
+{
+    if (!scene)
+        return nullptr;  // extract reports assimp's error
+    for (unsigned int m = 0; m < scene->mNumMeshes; ++m)
+    {
+        const aiMesh *mesh = scene->mMeshes[m];
+        for (unsigned int f = 0; f < mesh->mNumFaces; ++f)
+        {
+            const aiFace &face = mesh->mFaces[f];
+            if (face.mNumIndices == 0 || !face.mIndices)
+                throw InputError(name, "mesh '" + std::string(mesh->mName.C_Str()) + "'",
+                                 "face " + std::to_string(f) + " has no vertices");
+            for (unsigned int k = 0; k < face.mNumIndices; ++k)
+                if (face.mIndices[k] >= mesh->mNumVertices)
+                    throw InputError(name, "mesh '" + std::string(mesh->mName.C_Str()) + "'",
+                                     "face " + std::to_string(f) + " names vertex " + std::to_string(face.mIndices[k]) +
+                                         " of " + std::to_string(mesh->mNumVertices));
+        }
+    }
+    return importer.ApplyPostProcessing(kPostProcessFlags);
+}
+
 std::vector<MeshNode> extract(const aiScene *scene, const Assimp::Importer &importer, const std::string &name)
 {
     if (!scene || !scene->mRootNode)
@@ -88,7 +309,17 @@ std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxi
         throw InputError(path, "", "file not found");
     Assimp::Importer importer;
     configure(importer, upAxis);
-    const aiScene *scene = importer.ReadFile(path, kImportFlags);
+    importer.SetIOHandler(new GeometryFiles);  // the importer owns it
+    if (plyImporterMayRun(importer, extensionOf(path)))
+    {
+        std::ifstream in(path, std::ios::binary);
+        std::string header(kPlyHeaderLimit, '\0');
+        in.read(header.data(), static_cast<std::streamsize>(header.size()));
+        header.resize(static_cast<std::size_t>(in.gcount()));
+        if (startsAsPly(header.data(), header.size()))
+            checkPlyHeader(header.data(), header.size(), static_cast<std::size_t>(info.st_size), path);
+    }
+    const aiScene *scene = checkAndPostProcess(importer, importer.ReadFile(path, kReadFlags), path);
     return extract(scene, importer, path);
 }
 
@@ -107,7 +338,13 @@ std::vector<MeshNode> loadMeshNodesFromMemory(const void *data, std::size_t size
         throw InputError(name, "", "mesh data is empty");
     Assimp::Importer importer;
     configure(importer, upAxis);
-    const aiScene *scene = importer.ReadFileFromMemory(data, size, kImportFlags, formatHint.c_str());
+    const char *bytes = static_cast<const char *>(data);
+    if (plyImporterMayRun(importer, formatHint) && startsAsPly(bytes, size))
+        checkPlyHeader(bytes, size, size, name);
+    // The hint is the file's extension, by which assimp picks the importer.
+    const std::string file = formatHint.empty() ? "memory" : "memory." + formatHint;
+    importer.SetIOHandler(new MemoryFile(file, data, size));  // the importer owns it
+    const aiScene *scene = checkAndPostProcess(importer, importer.ReadFile(file, kReadFlags), name);
     return extract(scene, importer, name);
 }
 }  // namespace rastercheck

@@ -33,17 +33,22 @@ enum class ColladaUpAxis
 };
 
 /** \brief Reads a mesh file (STL, OBJ, DAE, anything assimp reads) as one node per assimp node
-    that owns meshes (assimp flags Triangulate | JoinIdenticalVertices | SortByPType, as OMPL.app).
+    that owns meshes (assimp flags Triangulate | JoinIdenticalVertices | SortByPType, as OMPL.app,
+    applied after the file passed assimp's ValidateDataStructure and has no face without vertices).
     Units are those of the file (COLLADA <unit> is applied by assimp).
-    Throws InputError naming the file when it is missing, unreadable, or has no triangles, or when
-    a vertex coordinate is not finite. */
+    Throws InputError naming the file when it is missing, unreadable (assimp's validation included),
+    or has no triangles, when a vertex coordinate is not finite, or when a PLY header has no
+    end_header line (in its first 64 KiB) or declares more elements than the file can hold (assimp
+    would hang or allocate them: checked before assimp reads the file). OBJ material libraries
+    (.mtl) are not opened: only geometry is used, and assimp's MTL parser crashes on some files. */
 std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxis = ColladaUpAxis::Keep);
 
 /** \brief All triangles of a mesh file merged into one mesh (root frame). */
 Mesh loadMesh(const std::string &path, ColladaUpAxis upAxis = ColladaUpAxis::Keep);
 
 /** \brief As loadMeshNodes, from bytes in memory; \a formatHint is a file extension ("stl").
-    \a name is used in error messages. */
+    \a name is used in error messages. No file is opened (an OBJ's `mtllib` is not read; materials
+    are not used anyway). */
 std::vector<MeshNode> loadMeshNodesFromMemory(const void *data, std::size_t size, const std::string &formatHint,
                                               const std::string &name = "<memory>",
                                               ColladaUpAxis upAxis = ColladaUpAxis::Keep);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/io/MeshLoader.h"
@@ -65,11 +66,9 @@ struct ConfigFile
     static std::string keyName(const std::string &key) { return key.substr(key.find('.') + 1); }
 };
 
-ConfigFile parseConfig(const std::string &path)
+ConfigFile parseConfig(const std::string &text, const std::string &path)
 {
-    std::ifstream in(path);
-    if (!in)
-        throw InputError(path, "", "file not found");
+    std::istringstream in(text);
     ConfigFile config;
     config.path = path;
     std::string line, section;
@@ -141,9 +140,19 @@ std::vector<MeshNode> loadProblemMesh(const ConfigFile &config, const std::strin
 
 OmplAppProblem loadOmplAppProblem(const std::string &cfgPath)
 {
-    const ConfigFile config = parseConfig(cfgPath);
-    const std::string folder = parentDirectory(cfgPath);
-    auto resolve = [&](const std::string &file) { return file.front() == '/' ? file : folder + "/" + file; };
+    std::ifstream in(cfgPath, std::ios::binary);
+    if (!in)
+        throw InputError(cfgPath, "", "file not found");
+    std::ostringstream text;
+    text << in.rdbuf();
+    return loadOmplAppProblemString(text.str(), parentDirectory(cfgPath), cfgPath);
+}
+
+OmplAppProblem loadOmplAppProblemString(const std::string &text, const std::string &baseDirectory,
+                                        const std::string &cfgPath)
+{
+    const ConfigFile config = parseConfig(text, cfgPath);
+    auto resolve = [&](const std::string &file) { return file.front() == '/' ? file : baseDirectory + "/" + file; };
 
     OmplAppProblem problem;
     problem.cfgPath = cfgPath;

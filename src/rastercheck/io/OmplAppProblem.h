@@ -45,4 +45,9 @@ struct OmplAppProblem
     Throws InputError naming the file and key on a missing key, a number that does not parse or is
     not finite, a missing or empty mesh, or min > max in `volume`. */
 OmplAppProblem loadOmplAppProblem(const std::string &cfgPath);
+
+/** \brief As loadOmplAppProblem, from the .cfg's text: mesh paths resolve against \a baseDirectory
+    and \a cfgPath names the input in errors (it becomes OmplAppProblem::cfgPath). */
+OmplAppProblem loadOmplAppProblemString(const std::string &text, const std::string &baseDirectory,
+                                        const std::string &cfgPath = "<cfg>");
 }  // namespace rastercheck

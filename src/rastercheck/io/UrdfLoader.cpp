@@ -142,6 +142,7 @@ XmlScan prescan(const std::string &xml, const std::string &file)
 
     static const std::set<std::string> knownTypes{"revolute", "continuous", "prismatic", "fixed", "floating", "planar"};
     std::set<std::string> joints;
+    std::map<std::string, std::string> parentLink, parentJoint;  // child link -> its parent link, joint
     k = 0;
     for (const tinyxml2::XMLElement *joint = robot->FirstChildElement("joint"); joint;
          joint = joint->NextSiblingElement("joint"), ++k)
@@ -168,6 +169,13 @@ XmlScan prescan(const std::string &xml, const std::string &file)
             if (!links.count(link))
                 throw InputError(file, where + " " + end, "link '" + std::string(link) + "' does not exist");
         }
+        const std::string parent = joint->FirstChildElement("parent")->Attribute("link");
+        const std::string child = joint->FirstChildElement("child")->Attribute("link");
+        if (parentJoint.count(child))
+            throw InputError(file, where + " child",
+                             "link '" + child + "' is already the child of joint '" + parentJoint[child] + "'");
+        parentLink[child] = parent;
+        parentJoint[child] = name;
         if ((std::string(type) == "revolute" || std::string(type) == "prismatic") && !joint->FirstChildElement("limit"))
             throw InputError(file, where, "a " + std::string(type) + " joint needs <limit lower=... upper=...>");
         checkOrigin(joint, file, where);
@@ -177,6 +185,24 @@ XmlScan prescan(const std::string &xml, const std::string &file)
         for (const char *attribute : {"multiplier", "offset"})
             checkNumbers(joint->FirstChildElement("mimic"), attribute, 1, file, where + " mimic");
         scan.jointNames.push_back(name);
+    }
+    // The links must form a tree before urdfdom sees them: it links a cycle into shared_ptr loops
+    // that are never freed (found by fuzz_urdf), and a cycle has no root to hang a model from.
+    std::set<std::string> rooted;  // links whose chain of parents ends at a root
+    for (const std::string &start : scan.linkNames)
+    {
+        std::vector<std::string> chain;
+        std::string link = start;
+        while (!rooted.count(link) && parentLink.count(link))
+        {
+            chain.push_back(link);
+            if (chain.size() > scan.linkNames.size())  // longer than any path to a root: `link` is on a cycle
+                throw InputError(file, "joint '" + parentJoint[link] + "'",
+                                 "the joints form a cycle through link '" + link + "'");
+            link = parentLink[link];
+        }
+        rooted.insert(chain.begin(), chain.end());
+        rooted.insert(link);
     }
     return scan;
 }
