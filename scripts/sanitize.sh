@@ -19,8 +19,7 @@ kinds=("$@")
 configure() {  # build directory, then extra CMake arguments
     local dir=$1
     shift
-    # --no-warn-unused-cli: RASTERCHECK_WITH_CUDA is only known to builds that have the CUDA backend.
-    cmake -S . -B "$dir" -G Ninja --no-warn-unused-cli -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
         -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -D_GLIBCXX_ASSERTIONS" \
         -DRASTERCHECK_BUILD_BENCH=OFF -DRASTERCHECK_BUILD_EXAMPLES=OFF -DRASTERCHECK_WITH_CUDA=OFF "$@" >/dev/null
 }

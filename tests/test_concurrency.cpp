@@ -1,18 +1,19 @@
-// Many threads on one checker. 8 std::threads deciding states through the OMPL validity checker and
-// edges through the batched motion validator get exactly the verdicts of one thread, and the same
-// inputs get the same verdicts and first contacts (kind, component, object, triangle, position)
-// across runs, thread interleavings and OpenMP thread counts. On the Panda in a MotionBenchMaker
-// bookshelf (shared data) and on the crane in the plant (robots/).
+// Many threads on one checker. 8 std::threads deciding states through the OMPL validity checker
+// and, at the same time, edges through the batched motion validator get exactly the verdicts of one
+// thread, and the same inputs get the same verdicts and first contacts (kind, component, object,
+// triangle, position) across runs, thread interleavings and OpenMP thread counts. On the Panda in a
+// MotionBenchMaker bookshelf (shared data) and on the crane in the plant (robots/).
 //
-// Size: RASTERCHECK_CONCURRENCY_STATES states decided by the 8 threads in all (default 100000,
-// half per problem, half of that as single states and half as edge states). ThreadSanitizer slows
-// the checker about tenfold, so scripts/sanitize.sh sets a smaller number there.
+// Size: RASTERCHECK_CONCURRENCY_STATES states decided by the 8 threads in all (default 100000, half
+// per problem, half of that as single states and half as edge states). The sanitizers slow the
+// checker 10 to 50 times, so scripts/sanitize.sh sets a tenth of that.
 //
 // ctest label: concurrency (scripts/sanitize.sh runs these under ThreadSanitizer).
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <functional>
+#include <numeric>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -35,13 +36,6 @@ namespace
 {
 constexpr int kThreads = 8;
 
-/** \brief Who decides: this thread alone, in order, or kThreads std::threads at once. */
-enum class Deciders
-{
-    OneThread,
-    EightThreads
-};
-
 std::size_t totalStates()
 {
     const char *text = std::getenv("RASTERCHECK_CONCURRENCY_STATES");
@@ -53,17 +47,11 @@ std::size_t totalStates()
     return static_cast<std::size_t>(value);
 }
 
-/** \brief Calls body(i) for i in [0, n): in order on this thread, or on kThreads std::threads that
-    take small chunks of indices from a shared counter, so that which thread decides which state,
-    and after which others (what its pooled scratch last held), changes from run to run. */
-void forEach(Deciders deciders, std::size_t n, const std::function<void(std::size_t)> &body)
+/** \brief Calls body(i) for i in [0, n) on kThreads std::threads that take small chunks of indices
+    from a shared counter, so that which thread decides which item, and after which others (what
+    its pooled scratch last held), changes from run to run. */
+void onThreads(std::size_t n, const std::function<void(std::size_t)> &body)
 {
-    if (deciders == Deciders::OneThread)
-    {
-        for (std::size_t i = 0; i < n; ++i)
-            body(i);
-        return;
-    }
     constexpr std::size_t kChunk = 7;
     std::atomic<std::size_t> next{0};
     std::vector<std::thread> threads;
@@ -190,49 +178,62 @@ protected:
         }
     }
 
-    void eightThreadsOnOneValidityCheckerDecideAsOneThread()
+    void eightThreadsOnOneCheckerDecideStatesAndEdgesAsOneThread()
     {
-        // perProblem_ / 4 states, each decided twice (both overloads) by the 8 threads: half the budget.
-        rco::StateValidityChecker &validity = validityOf(*setup_);
-        const std::vector<Verdict> serial = decideStates(Deciders::OneThread);
-        expectMix(serial, "states");
-        const std::size_t invalid = serial.size() - countValid(serial);
-
-        validity.resetCounters();
-        const std::vector<Verdict> parallel = decideStates(Deciders::EightThreads);
-        expectSame(validity.getChecker(), serial, parallel, "8 threads vs 1");
-        // The counters are atomic: no call is lost.
-        EXPECT_EQ(validity.getCallCount(), 2 * serial.size());
-        EXPECT_EQ(validity.getInvalidCount(), 2 * invalid);
-    }
-
-    void eightThreadsOnOneMotionValidatorDecideAsOneThread()
-    {
-        // Edges of about perProblem_ / 4 states, each checked by both overloads: half the budget.
+        // perProblem_ / 4 states and edges of about perProblem_ / 4 states, each decided by both
+        // overloads: about perProblem_ states for the 8 threads.
         sampleEdges(perProblem_ / 4);
-        // The reference: this thread alone, with a validator whose checker runs batches on one thread.
-        const rco::StateValidityChecker &validity = validityOf(*setup_);
-        const rco::MotionValidator oneThread(
+        rco::StateValidityChecker &validity = validityOf(*setup_);
+        const rco::MotionValidator &motion = motionOf(*setup_);
+        const std::size_t n = states_.size(), m = edges_.size();
+
+        // The reference: this thread alone, edges by a validator whose checker runs its batches on
+        // one thread.
+        const rco::MotionValidator oneThreadMotion(
             setup_->getSpaceInformation(), validity.getStateMappingPtr(),
             std::make_shared<const rc::Checker>(problem_.robot, problem_.scene,
                                                 rc::CheckerOptions{rc::BackendChoice::Cpu, 1}),
             validity.getRequest());
-        const std::vector<EdgeVerdict> serial = decideEdges(oneThread, Deciders::OneThread);
-        expectMix(serial, "edges");
+        const std::vector<Verdict> serialStates = decideStatesInOrder();
+        std::vector<EdgeVerdict> serialEdges(m);
+        for (std::size_t j = 0; j < m; ++j)
+            serialEdges[j] = decideEdge(oneThreadMotion, j);
+        expectMix(serialStates, "states");
+        expectMix(serialEdges, "edges");
 
-        const rco::MotionValidator &shared = motionOf(*setup_);
-        const std::vector<EdgeVerdict> parallel = decideEdges(shared, Deciders::EightThreads);
-        expectSame(validity.getChecker(), serial, parallel, "8 threads vs 1");
-        // The counters are atomic: no motion and no state is lost.
-        EXPECT_EQ(shared.getValidMotionCount(), 2 * countValid(serial));
-        EXPECT_EQ(shared.getCheckedMotionCount(), 2 * serial.size());
-        EXPECT_EQ(shared.getCheckedStateCount(), oneThread.getCheckedStateCount());
+        // The 8 threads, on the one checker of the setup: states and edges shuffled together, as
+        // a parallel planner asks for both at once.
+        validity.resetCounters();
+        std::vector<std::size_t> order(n + m);
+        std::iota(order.begin(), order.end(), 0);
+        std::shuffle(order.begin(), order.end(), std::mt19937_64(3));
+        std::vector<Verdict> states(n);
+        std::vector<EdgeVerdict> edges(m);
+        std::atomic<std::size_t> overloadsDisagree{0};
+        onThreads(n + m,
+                  [&](std::size_t k)
+                  {
+                      const std::size_t item = order[k];
+                      if (item >= n)
+                          edges[item - n] = decideEdge(motion, item - n);
+                      else if (!decideState(item, states[item]))
+                          ++overloadsDisagree;
+                  });
+        EXPECT_EQ(overloadsDisagree.load(), 0u);
+        expectSame(validity.getChecker(), serialStates, states, "states, 8 threads vs 1");
+        expectSame(validity.getChecker(), serialEdges, edges, "edges, 8 threads vs 1");
+        // The counters are atomic: no call, motion or state is lost.
+        EXPECT_EQ(validity.getCallCount(), 2 * n);
+        EXPECT_EQ(validity.getInvalidCount(), 2 * (n - countValid(serialStates)));
+        EXPECT_EQ(motion.getValidMotionCount(), 2 * countValid(serialEdges));
+        EXPECT_EQ(motion.getCheckedMotionCount(), 2 * m);
+        EXPECT_EQ(motion.getCheckedStateCount(), oneThreadMotion.getCheckedStateCount());
     }
 
     void sameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts()
     {
         // One state at a time on this thread, in order: the reference.
-        const std::vector<Verdict> reference = decideStates(Deciders::OneThread);
+        const std::vector<Verdict> reference = decideStatesInOrder();
         expectMix(reference, "states");
         const std::vector<double> q = configurations();
         const std::size_t n = states_.size();
@@ -316,45 +317,40 @@ protected:
         }
     }
 
-    /** \brief The verdict and first contact of every state through the shared validity checker;
-        the plain overload must agree. */
-    std::vector<Verdict> decideStates(Deciders deciders) const
+    /** \brief State \a i's verdict and first contact through the shared validity checker; false when
+        the plain overload disagrees. */
+    bool decideState(std::size_t i, Verdict &verdict) const
     {
         const rco::StateValidityChecker &validity = validityOf(*setup_);
+        verdict.valid = validity.isValid(states_[i], verdict.contact);
+        return validity.isValid(states_[i]) == verdict.valid;
+    }
+
+    std::vector<Verdict> decideStatesInOrder() const
+    {
         std::vector<Verdict> verdicts(states_.size());
-        std::atomic<std::size_t> overloadsDisagree{0};
-        auto decide = [&](std::size_t i)
-        {
-            verdicts[i].valid = validity.isValid(states_[i], verdicts[i].contact);
-            if (validity.isValid(states_[i]) != verdicts[i].valid)
-                ++overloadsDisagree;
-        };
-        forEach(deciders, states_.size(), decide);
-        EXPECT_EQ(overloadsDisagree.load(), 0u);
+        std::size_t overloadsDisagree = 0;
+        for (std::size_t i = 0; i < states_.size(); ++i)
+            overloadsDisagree += decideState(i, verdicts[i]) ? 0 : 1;
+        EXPECT_EQ(overloadsDisagree, 0u);
         return verdicts;
     }
 
-    /** \brief Both checkMotion overloads on every edge through \a motion. */
-    std::vector<EdgeVerdict> decideEdges(const rco::MotionValidator &motion, Deciders deciders) const
+    /** \brief Both checkMotion overloads on edge \a j through \a motion. */
+    EdgeVerdict decideEdge(const rco::MotionValidator &motion, std::size_t j) const
     {
         const ob::SpaceInformationPtr &si = setup_->getSpaceInformation();
-        const rco::StateMapping &mapping = validityOf(*setup_).getStateMapping();
-        std::vector<EdgeVerdict> verdicts(edges_.size());
-        auto decide = [&](std::size_t i)
-        {
-            const auto &[from, to] = edges_[i];
-            EdgeVerdict &verdict = verdicts[i];
-            verdict.valid = motion.checkMotion(from, to);
-            ob::State *last = si->allocState();
-            std::pair<ob::State *, double> lastValid(last, -1.0);
-            verdict.validWithLast = motion.checkMotion(from, to, lastValid);
-            verdict.lastValidFraction = lastValid.second;
-            if (!verdict.validWithLast)
-                verdict.lastValidQ = mapping.toConfiguration(last);
-            si->freeState(last);
-        };
-        forEach(deciders, edges_.size(), decide);
-        return verdicts;
+        const auto &[from, to] = edges_[j];
+        EdgeVerdict verdict;
+        verdict.valid = motion.checkMotion(from, to);
+        ob::State *last = si->allocState();
+        std::pair<ob::State *, double> lastValid(last, -1.0);
+        verdict.validWithLast = motion.checkMotion(from, to, lastValid);
+        verdict.lastValidFraction = lastValid.second;
+        if (!verdict.validWithLast)
+            verdict.lastValidQ = validityOf(*setup_).getStateMapping().toConfiguration(last);
+        si->freeState(last);
+        return verdict;
     }
 
     /** \brief The configurations of the states, as the validity checker hands them to the Checker. */
@@ -399,14 +395,9 @@ protected:
 };
 }  // namespace
 
-TEST_F(PandaBookshelf, EightThreadsOnOneValidityCheckerDecideAsOneThread)
+TEST_F(PandaBookshelf, EightThreadsOnOneCheckerDecideStatesAndEdgesAsOneThread)
 {
-    eightThreadsOnOneValidityCheckerDecideAsOneThread();
-}
-
-TEST_F(PandaBookshelf, EightThreadsOnOneMotionValidatorDecideAsOneThread)
-{
-    eightThreadsOnOneMotionValidatorDecideAsOneThread();
+    eightThreadsOnOneCheckerDecideStatesAndEdgesAsOneThread();
 }
 
 TEST_F(PandaBookshelf, SameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts)
@@ -414,14 +405,9 @@ TEST_F(PandaBookshelf, SameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCoun
     sameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts();
 }
 
-TEST_F(CraneInPlant, EightThreadsOnOneValidityCheckerDecideAsOneThread)
+TEST_F(CraneInPlant, EightThreadsOnOneCheckerDecideStatesAndEdgesAsOneThread)
 {
-    eightThreadsOnOneValidityCheckerDecideAsOneThread();
-}
-
-TEST_F(CraneInPlant, EightThreadsOnOneMotionValidatorDecideAsOneThread)
-{
-    eightThreadsOnOneMotionValidatorDecideAsOneThread();
+    eightThreadsOnOneCheckerDecideStatesAndEdgesAsOneThread();
 }
 
 TEST_F(CraneInPlant, SameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts)
