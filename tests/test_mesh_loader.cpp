@@ -1,7 +1,6 @@
 // Mesh files through assimp: node transforms, COLLADA units and up axis, non-triangle primitives,
-// in-memory input and the errors for missing, unreadable and empty files.
+// and in-memory input (unreadable and empty files: test_bad_input.cpp).
 #include <cstring>
-#include <functional>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -104,35 +103,6 @@ TEST(MeshLoader, StlObjAndMemoryGiveTheSameTetrahedron)
         EXPECT_TRUE(mesh->bounds().max.isApprox(Eigen::Vector3d(1, 1, 1)));
         EXPECT_TRUE(mesh->bounds().min.isApprox(Eigen::Vector3d(0, 0, 0)));
     }
-}
-
-TEST(MeshLoader, ErrorsNameTheFile)
-{
-    const std::string folder = makeTempDir("mesh");
-    auto expectError = [](const std::function<void()> &load, const std::string &file, const std::string &what)
-    {
-        try
-        {
-            load();
-            FAIL() << "expected an InputError about " << file;
-        }
-        catch (const rc::InputError &e)
-        {
-            EXPECT_EQ(e.file(), file);
-            EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-        }
-    };
-    const std::string missing = folder + "/missing.stl";
-    expectError([&] { rc::loadMesh(missing); }, missing, "file not found");
-    const std::string empty = writeFile(folder + "/empty.stl", "");
-    expectError([&] { rc::loadMesh(empty); }, empty, "cannot read mesh");
-    const std::string pointsOnly = writeFile(folder + "/points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
-    expectError([&] { rc::loadMesh(pointsOnly); }, pointsOnly, "");
-    const std::string garbage = writeFile(folder + "/garbage.dae", "<COLLADA><not closed");
-    expectError([&] { rc::loadMesh(garbage); }, garbage, "");
-    const std::string nan = writeFile(folder + "/nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
-    expectError([&] { rc::loadMesh(nan); }, nan, "");
-    expectError([&] { rc::loadMeshNodesFromMemory("", 0, "stl", "<bytes>"); }, "<bytes>", "empty");
 }
 
 // assimp's PLY importer hangs without end_header and allocates the declared element counts before

@@ -1,14 +1,12 @@
 // MoveIt scene and request YAML: every MotionBenchMaker Panda problem, known answers for one, pose
-// composition, shape kinds, and the errors of malformed files.
+// composition and shape kinds (malformed files: test_bad_input.cpp).
 #include <dirent.h>
 
 #include <algorithm>
-#include <functional>
 
 #include <gtest/gtest.h>
 
 #include "TestSupport.h"
-#include "rastercheck/core/Error.h"
 #include "rastercheck/io/MoveItYaml.h"
 
 namespace rc = rastercheck;
@@ -28,8 +26,6 @@ std::vector<std::string> listDirectory(const std::string &folder)
     std::sort(names.begin(), names.end());
     return names;
 }
-
-using rastercheck::test::expectInputError;
 }  // namespace
 
 TEST(MoveItYaml, EveryPandaProblemLoads)
@@ -138,75 +134,4 @@ world:
     EXPECT_TRUE(scene->objects[2].topology.closed);
     EXPECT_NEAR(scene->objects[2].bounds.min.z(), -5.0, 1e-12);
     EXPECT_NEAR(scene->objects[3].bounds.max.z(), 0.5, 1e-12);
-}
-
-TEST(MoveItYaml, BadInputNamesTheFileAndElement)
-{
-    expectInputError([] { rc::loadMoveItSceneString("world: {collision_objects: [", "broken.yaml"); }, "broken.yaml",
-                     "line", "malformed YAML");
-    const std::string object = "world:\n  collision_objects:\n    - id: thing\n";
-    expectInputError(
-        [&]
-        {
-            rc::loadMoveItSceneString(object +
-                                          "      primitives: [{type: box, dimensions: [1, .nan, 1]}]\n"
-                                          "      primitive_poses: [{position: [0, 0, 0]}]\n",
-                                      "nan.yaml");
-        },
-        "nan.yaml", "collision object 'thing' primitives[0].dimensions[1]", "not a finite number");
-    expectInputError(
-        [&]
-        {
-            rc::loadMoveItSceneString(object +
-                                          "      primitives: [{type: torus, dimensions: [1, 1]}]\n"
-                                          "      primitive_poses: [{position: [0, 0, 0]}]\n",
-                                      "type.yaml");
-        },
-        "type.yaml", "collision object 'thing' primitives[0].type", "unknown primitive type 'torus'");
-    expectInputError(
-        [&] {
-            rc::loadMoveItSceneString(object + "      primitives: [{type: box, dimensions: [1, 1, 1]}]\n",
-                                      "poses.yaml");
-        },
-        "poses.yaml", "collision object 'thing' primitive_poses", "1 primitives need as many primitive_poses");
-    expectInputError(
-        [&]
-        {
-            rc::loadMoveItSceneString(object +
-                                          "      primitives: [{type: cylinder, dimensions: [1]}]\n"
-                                          "      primitive_poses: [{position: [0, 0, 0]}]\n",
-                                      "dims.yaml");
-        },
-        "dims.yaml", "primitives[0].dimensions", "cylinder needs 2 dimensions");
-    expectInputError(
-        [&] {
-            rc::loadMoveItSceneString(object + "      pose: {position: [0, 0], orientation: [0, 0, 0, 1]}\n",
-                                      "pose.yaml");
-        },
-        "pose.yaml", "collision object 'thing' pose.position", "expected 3 numbers");
-    expectInputError(
-        [] {
-            rc::loadMoveItRequestString("start_state:\n  joint_state:\n    name: [a, b]\n    position: [1]\n",
-                                        "request.yaml");
-        },
-        "request.yaml", "start_state.joint_state", "2 names but 1 positions");
-    expectInputError(
-        []
-        {
-            rc::loadMoveItRequestString(
-                "goal_constraints:\n  - joint_constraints:\n      - {joint_name: a, position: abc}\n", "goal.yaml");
-        },
-        "goal.yaml", "goal_constraints[0].joint_constraints[0].position", "'abc' is not a number");
-    const std::string missing = rc::test::makeTempDir("yaml") + "/none.yaml";
-    expectInputError([&] { rc::loadMoveItScene(missing); }, missing, "", "file not found");
-}
-
-TEST(MoveItYaml, UnexpectedStructureIsAnInputErrorNotACrash)
-{
-    for (const char *text : {"world: 3", "world: {collision_objects: 5}", "world: {collision_objects: [7]}",
-                             "world: {collision_objects: [{id: [1, 2]}]}", "- just\n- a list\n"})
-        EXPECT_THROW(rc::loadMoveItSceneString(text, "odd.yaml"), rc::InputError) << text;
-    for (const char *text : {"goal_constraints: [5]", "goal_constraints: [{joint_constraints: [3]}]",
-                             "start_state: {joint_state: 4}", "start_state: 2", "- just\n- a list\n"})
-        EXPECT_THROW(rc::loadMoveItRequestString(text, "odd.yaml"), rc::InputError) << text;
 }

@@ -1,9 +1,7 @@
-// The OMPL validity checker under 8 threads, and the batched motion validator against OMPL's
+// The OMPL validity checker on bad states, and the batched motion validator against OMPL's
 // DiscreteMotionValidator (both overloads: verdict, last valid fraction and state) on a synthetic
-// SE(3) scene and on a Panda MotionBenchMaker scene.
-#include <atomic>
+// SE(3) scene and on a Panda MotionBenchMaker scene. Both under many threads: test_concurrency.cpp.
 #include <random>
-#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -14,9 +12,6 @@
 
 #include "TestSupport.h"
 #include "rastercheck/geometry/Primitives.h"
-#include "rastercheck/io/MoveItYaml.h"
-#include "rastercheck/io/SrdfLoader.h"
-#include "rastercheck/io/UrdfLoader.h"
 #include "rastercheck/model/RigidBody.h"
 #include "rastercheck/ompl/MotionValidator.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
@@ -72,10 +67,8 @@ Context cubeAmongBoxes()
 
 Context pandaScene(const std::string &root, const std::string &scenario)
 {
-    rc::RobotModelPtr panda = rc::loadUrdf(root + "/mbm/panda/panda.urdf");
-    rc::applySrdf(*panda, rc::loadSrdf(root + "/mbm/panda/panda.srdf"));
-    return makeContext(panda, rc::loadMoveItScene(root + "/mbm/panda/problems/" + scenario + "_panda/scene0001.yaml"),
-                       0.01);
+    const rc::Problem problem = rc::test::pandaProblem(root, scenario);
+    return makeContext(problem.robot, problem.scene, 0.01);
 }
 
 // Compares the two validators on \a edges random edges from valid states; returns the number of
@@ -123,57 +116,6 @@ int compareWithDiscreteMotionValidator(const Context &context, int edges, double
 }
 }  // namespace
 
-TEST(OmplValidity, EightThreadsAgreeWithOneThread)
-{
-    const Context context = cubeAmongBoxes();
-    const ob::StateSpacePtr &space = context.si->getStateSpace();
-    const std::size_t n = 12000;
-    std::vector<ob::State *> states(n);
-    ob::StateSamplerPtr sampler = space->allocDefaultStateSampler();
-    for (ob::State *&state : states)
-    {
-        state = space->allocState();
-        sampler->sampleUniform(state);
-    }
-    std::vector<std::uint8_t> serial(n), parallel(n, 2);
-    for (std::size_t i = 0; i < n; ++i)
-        serial[i] = context.validity->isValid(states[i]) ? 1 : 0;
-    std::size_t invalid = 0;
-    for (std::uint8_t v : serial)
-        invalid += v == 0;
-    EXPECT_GT(invalid, n / 20) << "the scene must make a good share of states invalid";
-    EXPECT_LT(invalid, n - n / 20);
-    EXPECT_EQ(context.validity->getCallCount(), n);
-    EXPECT_EQ(context.validity->getInvalidCount(), invalid);
-
-    context.validity->resetCounters();
-    // 8 threads, interleaved indices, each state decided twice (by different threads).
-    std::vector<std::thread> threads;
-    std::atomic<int> disagreements{0};
-    for (int t = 0; t < 8; ++t)
-        threads.emplace_back(
-            [&, t]
-            {
-                for (int pass = 0; pass < 2; ++pass)
-                    for (std::size_t i = (t + pass) % 8; i < n; i += 8)
-                    {
-                        const std::uint8_t v = context.validity->isValid(states[i]) ? 1 : 0;
-                        if (pass == 0)
-                            parallel[i] = v;
-                        else if (v != serial[i])
-                            ++disagreements;
-                    }
-            });
-    for (std::thread &thread : threads)
-        thread.join();
-    EXPECT_EQ(parallel, serial);
-    EXPECT_EQ(disagreements.load(), 0);
-    EXPECT_EQ(context.validity->getCallCount(), 2 * n);
-    EXPECT_EQ(context.validity->getInvalidCount(), 2 * invalid);
-    for (ob::State *state : states)
-        space->freeState(state);
-}
-
 TEST(OmplValidity, OutOfBoundsAndNonFiniteStatesAreInvalid)
 {
     const Context context = cubeAmongBoxes();
@@ -203,40 +145,4 @@ TEST(OmplValidity, MotionValidatorMatchesDiscreteOnPandaScene)
     const int invalid = compareWithDiscreteMotionValidator(context, 40, 0.5);
     EXPECT_GE(invalid, 5);
     EXPECT_LE(invalid, 35);
-}
-
-TEST(OmplValidity, MotionValidatorCountersAreAtomicUnderThreads)
-{
-    const Context context = cubeAmongBoxes();
-    rco::MotionValidator batched(context.si, *context.validity);
-    ob::DiscreteMotionValidator discrete(context.si);
-    const ob::StateSpacePtr &space = context.si->getStateSpace();
-    std::vector<std::pair<ob::State *, ob::State *>> edges(400);
-    ob::StateSamplerPtr sampler = space->allocDefaultStateSampler();
-    unsigned int expectedValid = 0;
-    for (auto &edge : edges)
-    {
-        edge = {space->allocState(), space->allocState()};
-        sampler->sampleUniform(edge.first);
-        sampler->sampleUniform(edge.second);
-        space->interpolate(edge.first, edge.second, 0.2, edge.second);
-        expectedValid += discrete.checkMotion(edge.first, edge.second) ? 1 : 0;
-    }
-    std::vector<std::thread> threads;
-    for (int t = 0; t < 8; ++t)
-        threads.emplace_back(
-            [&]
-            {
-                for (const auto &edge : edges)
-                    batched.checkMotion(edge.first, edge.second);
-            });
-    for (std::thread &thread : threads)
-        thread.join();
-    EXPECT_EQ(batched.getValidMotionCount(), 8 * expectedValid);
-    EXPECT_EQ(batched.getCheckedMotionCount(), 8 * edges.size());
-    for (auto &edge : edges)
-    {
-        space->freeState(edge.first);
-        space->freeState(edge.second);
-    }
 }

@@ -1,12 +1,11 @@
 // OMPL.app .cfg problems written here (OMPL.app's own files are not redistributable): robot
-// re-centring on the vertex mean, axis-angle starts, 2D problems, planners and bad input.
+// re-centring on the vertex mean, axis-angle starts, 2D problems and planners (bad input:
+// test_bad_input.cpp).
 #include <cmath>
-#include <functional>
 
 #include <gtest/gtest.h>
 
 #include "TestSupport.h"
-#include "rastercheck/core/Error.h"
 #include "rastercheck/io/OmplAppProblem.h"
 
 namespace rc = rastercheck;
@@ -77,15 +76,6 @@ std::string problemFolder()
     writeFile(folder + "/world.obj", kWorldObj);
     return folder;
 }
-
-std::string replaceLine(std::string text, const std::string &line, const std::string &replacement)
-{
-    const std::size_t at = text.find(line);
-    EXPECT_NE(at, std::string::npos) << line;
-    return text.replace(at, line.size(), replacement);
-}
-
-using rastercheck::test::expectInputError;
 }  // namespace
 
 TEST(OmplApp, ThreeDimensionalProblem)
@@ -181,33 +171,4 @@ TEST(OmplApp, WithoutVolumeTheWorldBoundsAreUsed)
     const rc::OmplAppProblem problem = rc::loadOmplAppProblem(writeFile(folder + "/novolume.cfg", text));
     EXPECT_EQ(problem.robot->lowerBounds, (std::vector<double>{0, 0, 0, -1, -1, -1, -1}));
     EXPECT_EQ(problem.robot->upperBounds, (std::vector<double>{11, 1, 2, 1, 1, 1, 1}));
-}
-
-TEST(OmplApp, BadInputNamesTheFileAndKey)
-{
-    const std::string folder = problemFolder();
-    auto check =
-        [&](const std::string &name, const std::string &text, const std::string &element, const std::string &what)
-    {
-        const std::string path = writeFile(folder + "/" + name, text);
-        expectInputError([&] { rc::loadOmplAppProblem(path); }, path, element, what);
-    };
-    check("missing.cfg", replaceLine(kProblem3d, "start.x = 1\n", ""), "[problem] start.x", "missing");
-    check("nan.cfg", replaceLine(kProblem3d, "start.y = 2", "start.y = nan"), "[problem] start.y",
-          "'nan' is not a finite number");
-    check("word.cfg", replaceLine(kProblem3d, "goal.z = 6", "goal.z = six"), "[problem] goal.z", "not a finite number");
-    check("volume.cfg", replaceLine(kProblem3d, "volume.min.y = -20", "volume.min.y = 25"), "[problem] volume.min.y",
-          "above max");
-    check("mesh.cfg", replaceLine(kProblem3d, "robot = robot.obj", "robot = nothing.obj"),
-          "[problem] robot 'nothing.obj'", "file not found");
-    check("line.cfg", replaceLine(kProblem3d, "name = tetra", "this line has no equals sign"), "line 3",
-          "expected 'key = value'");
-    check("section.cfg", replaceLine(kProblem3d, "[benchmark]", "[benchmark"), "line", "malformed section header");
-    check("axis.cfg", replaceLine(kProblem3d, "start.axis.z = 2", "start.axis.z = 0"), "[problem] start.axis",
-          "zero length");
-    writeFile(folder + "/empty.obj", "v 0 0 0\n");
-    check("empty.cfg", replaceLine(kProblem3d, "robot = robot.obj", "robot = empty.obj"), "[problem] robot 'empty.obj'",
-          "");
-    const std::string none = folder + "/none.cfg";
-    expectInputError([&] { rc::loadOmplAppProblem(none); }, none, "", "file not found");
 }

@@ -1,12 +1,8 @@
-// SRDF: disabled pairs and group states of the shared Panda, applying them to the model, and the
-// errors of malformed files.
-#include <functional>
-
+// SRDF: disabled pairs and group states of the shared Panda, and applying them to the model
+// (malformed files and unknown links: test_bad_input.cpp).
 #include <gtest/gtest.h>
 
 #include "TestSupport.h"
-#include "rastercheck/core/Error.h"
-#include "rastercheck/core/Log.h"
 #include "rastercheck/io/SrdfLoader.h"
 #include "rastercheck/io/UrdfLoader.h"
 
@@ -14,8 +10,6 @@ namespace rc = rastercheck;
 
 namespace
 {
-using rastercheck::test::expectInputError;
-
 std::size_t allowedPairs(const rc::RobotModel &model)
 {
     std::size_t count = 0;
@@ -48,49 +42,4 @@ TEST(Srdf, PandaPairsAndGroupState)
     EXPECT_TRUE(panda->isCollisionAllowed(hand, link3));
     EXPECT_TRUE(panda->isCollisionAllowed(link3, hand));
     EXPECT_EQ(allowedPairs(*panda), 35u);  // every SRDF pair is a distinct pair of components
-}
-
-TEST(Srdf, UnknownLinksAreSkippedWithAWarning)
-{
-    RASTERCHECK_REQUIRE_DATA(root);
-    rc::RobotModelPtr panda = rc::loadUrdf(root + "/robots/panda/panda.urdf");
-    const rc::Srdf srdf = rc::loadSrdfString(
-        "<robot name=\"panda\"><disable_collisions link1=\"panda_link0\" link2=\"ghost\" reason=\"x\"/>"
-        "<disable_collisions link1=\"panda_link0\" link2=\"panda_link7\"/></robot>",
-        "test.srdf");
-    std::vector<std::string> warnings;
-    rc::setLogHandler([&](rc::LogLevel, const std::string &message) { warnings.push_back(message); });
-    rc::applySrdf(*panda, srdf);
-    rc::setLogHandler(nullptr);
-    ASSERT_EQ(warnings.size(), 1u);
-    EXPECT_NE(warnings[0].find("'ghost'"), std::string::npos);
-    EXPECT_TRUE(panda->isCollisionAllowed(panda->links[panda->linkIndex("panda_link0")].component,
-                                          panda->links[panda->linkIndex("panda_link7")].component));
-}
-
-TEST(Srdf, BadInputNamesTheFileAndElement)
-{
-    expectInputError([] { rc::loadSrdfString("<robot name=\"r\"><disable_collisions link1=\"a\"", "bad.srdf"); },
-                     "bad.srdf", "line", "malformed XML");
-    expectInputError([] { rc::loadSrdfString("<notrobot/>", "root.srdf"); }, "root.srdf", "", "no <robot>");
-    expectInputError(
-        []
-        {
-            rc::loadSrdfString(
-                "<robot name=\"r\"><disable_collisions link1=\"a\" link2=\"b\"/>"
-                "<disable_collisions link1=\"a\"/></robot>",
-                "pair.srdf");
-        },
-        "pair.srdf", "disable_collisions #1", "missing attribute 'link2'");
-    expectInputError(
-        []
-        {
-            rc::loadSrdfString(
-                "<robot name=\"r\"><group_state name=\"home\" group=\"arm\">"
-                "<joint name=\"j1\" value=\"nan\"/></group_state></robot>",
-                "value.srdf");
-        },
-        "value.srdf", "group_state 'home' joint 'j1'", "not a finite number");
-    const std::string missing = rc::test::makeTempDir("srdf") + "/none.srdf";
-    expectInputError([&] { rc::loadSrdf(missing); }, missing, "", "file not found");
 }

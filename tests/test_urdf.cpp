@@ -1,74 +1,22 @@
 // URDF loading: every robot of the shared data, the Panda's exact layout and triangle counts, joint
-// kinds, mimic chains, package:// resolution, and the errors of malformed input.
+// kinds, mimic chains and package:// resolution (malformed input: test_bad_input.cpp).
 #include <cmath>
 #include <cstdlib>
-#include <functional>
 
 #include <gtest/gtest.h>
 
 #include "TestSupport.h"
 #include "rastercheck/core/Error.h"
-#include "rastercheck/core/Log.h"
 #include "rastercheck/io/UrdfLoader.h"
 
 namespace rc = rastercheck;
+using rc::test::expectInputError;
+using rc::test::kCubeObj;
 using rc::test::makeTempDir;
+using rc::test::urdfJoint;
+using rc::test::urdfLink;
+using rc::test::urdfRobot;
 using rc::test::writeFile;
-
-namespace
-{
-// Collects warnings for the lifetime of the object.
-struct WarningCapture
-{
-    std::vector<std::string> warnings;
-    WarningCapture()
-    {
-        rc::setLogHandler(
-            [this](rc::LogLevel level, const std::string &message)
-            {
-                if (level == rc::LogLevel::Warning)
-                    warnings.push_back(message);
-            });
-    }
-    ~WarningCapture() { rc::setLogHandler(nullptr); }
-    bool contains(const std::string &text) const
-    {
-        for (const std::string &w : warnings)
-            if (w.find(text) != std::string::npos)
-                return true;
-        return false;
-    }
-};
-
-using rastercheck::test::expectInputError;
-
-const char *kCubeObj =
-    "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv 0.5 0.5 -0.5\nv -0.5 0.5 -0.5\n"
-    "v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\n"
-    "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
-
-std::string robot(const std::string &body)
-{
-    return "<?xml version=\"1.0\"?>\n<robot name=\"test\">\n" + body + "</robot>\n";
-}
-
-std::string linkXml(const std::string &name, const std::string &collision = "")
-{
-    return "<link name=\"" + name + "\">" + collision + "</link>\n";
-}
-
-std::string jointXml(const std::string &name, const std::string &type, const std::string &parent,
-                     const std::string &child, const std::string &extra = "")
-{
-    return "<joint name=\"" + name + "\" type=\"" + type + "\"><parent link=\"" + parent + "\"/><child link=\"" +
-           child + "\"/>" + extra + "</joint>\n";
-}
-
-std::string collisionMesh(const std::string &file, const std::string &extra = "")
-{
-    return "<collision><geometry><mesh filename=\"" + file + "\"" + extra + "/></geometry></collision>";
-}
-}  // namespace
 
 TEST(Urdf, EveryRobotOfTheSharedDataLoads)
 {
@@ -89,7 +37,7 @@ TEST(Urdf, EveryRobotOfTheSharedDataLoads)
                                        {"robots/iiwa/model.urdf", 7, 8},
                                        {"robots/crane_public/green_crane.urdf", 1, 0},
                                        {"robots/crane_public/simple_green_crane.urdf", 1, 0}};
-    WarningCapture capture;
+    rc::test::LogCapture capture;
     for (const Expected &expected : robots)
     {
         SCOPED_TRACE(expected.path);
@@ -176,9 +124,9 @@ TEST(Urdf, CraneInvertedLimitsAreSwappedAndVisualsCanStandIn)
 {
     RASTERCHECK_REQUIRE_DATA(root);
     const std::string path = root + "/robots/crane_public/green_crane.urdf";
-    WarningCapture capture;
+    rc::test::LogCapture capture;
     const rc::RobotModelPtr bare = rc::loadUrdf(path);
-    EXPECT_TRUE(capture.contains("base_to_crane_boom")) << "the warning names the joint";
+    EXPECT_TRUE(capture.warned("base_to_crane_boom")) << "the warning names the joint";
     EXPECT_DOUBLE_EQ(bare->lowerBounds[0], -0.6948);
     EXPECT_DOUBLE_EQ(bare->upperBounds[0], 0.3267);
     EXPECT_EQ(bare->numComponents(), 0u);
@@ -189,19 +137,19 @@ TEST(Urdf, CraneInvertedLimitsAreSwappedAndVisualsCanStandIn)
     ASSERT_EQ(crane->numComponents(), 3u);
     EXPECT_EQ(crane->components[0].mesh.numTriangles(), 6444u);  // frame_URDF.STL
     EXPECT_EQ(crane->components[1].mesh.numTriangles(), 1660u);  // boom_URDF.STL
-    EXPECT_TRUE(capture.contains("link 'crane_boom' has no collision geometry"));
+    EXPECT_TRUE(capture.warned("link 'crane_boom' has no collision geometry"));
 }
 
 TEST(Urdf, JointKindsCoordinatesAndBounds)
 {
     const std::string xml =
-        robot(linkXml("base") + linkXml("a") + linkXml("b") + linkXml("c") + linkXml("d") + linkXml("e") +
-              jointXml("spin", "continuous", "base", "a", "<axis xyz=\"0 0 2\"/>") +
-              jointXml("free", "floating", "a", "b") + jointXml("slide", "planar", "b", "c", "<axis xyz=\"0 0 1\"/>") +
-              jointXml("stuck", "revolute", "c", "d",
+        urdfRobot(urdfLink("base") + urdfLink("a") + urdfLink("b") + urdfLink("c") + urdfLink("d") + urdfLink("e") +
+              urdfJoint("spin", "continuous", "base", "a", "<axis xyz=\"0 0 2\"/>") +
+              urdfJoint("free", "floating", "a", "b") + urdfJoint("slide", "planar", "b", "c", "<axis xyz=\"0 0 1\"/>") +
+              urdfJoint("stuck", "revolute", "c", "d",
                        "<axis xyz=\"1 0 0\"/><limit lower=\"0.5\" upper=\"0.5\" effort=\"1\" "
                        "velocity=\"1\"/>") +
-              jointXml("weld", "fixed", "d", "e", "<origin xyz=\"1 2 3\" rpy=\"0 0 1.5707963267948966\"/>"));
+              urdfJoint("weld", "fixed", "d", "e", "<origin xyz=\"1 2 3\" rpy=\"0 0 1.5707963267948966\"/>"));
     const rc::RobotModelPtr model = rc::loadUrdfString(xml, ".", {}, "kinds.urdf");
     const double inf = std::numeric_limits<double>::infinity();
     EXPECT_EQ(model->coordinateNames,
@@ -224,10 +172,10 @@ TEST(Urdf, JointKindsCoordinatesAndBounds)
 TEST(Urdf, MimicChainsResolveToTheSourceJoint)
 {
     const std::string limit = "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>";
-    const std::string xml = robot(
-        linkXml("base") + linkXml("a") + linkXml("b") + linkXml("c") + jointXml("j0", "revolute", "base", "a", limit) +
-        jointXml("j1", "revolute", "a", "b", limit + "<mimic joint=\"j0\" multiplier=\"2\" offset=\"0.5\"/>") +
-        jointXml("j2", "revolute", "b", "c", limit + "<mimic joint=\"j1\" multiplier=\"3\" offset=\"0.25\"/>"));
+    const std::string xml = urdfRobot(
+        urdfLink("base") + urdfLink("a") + urdfLink("b") + urdfLink("c") + urdfJoint("j0", "revolute", "base", "a", limit) +
+        urdfJoint("j1", "revolute", "a", "b", limit + "<mimic joint=\"j0\" multiplier=\"2\" offset=\"0.5\"/>") +
+        urdfJoint("j2", "revolute", "b", "c", limit + "<mimic joint=\"j1\" multiplier=\"3\" offset=\"0.25\"/>"));
     const rc::RobotModelPtr model = rc::loadUrdfString(xml, ".", {}, "mimic.urdf");
     EXPECT_EQ(model->coordinateNames, std::vector<std::string>{"j0"});
     const rc::Joint &j2 = model->joints[model->jointIndex("j2")];
@@ -250,7 +198,7 @@ TEST(Urdf, CollisionElementsMergeWithOriginsScaleAndPackagePaths)
         "<collision><origin xyz=\"0 0 1\"/><geometry><box size=\"1 1 1\"/></geometry></collision>"
         "<collision><origin xyz=\"0 0 -1\"/><geometry>"
         "<mesh filename=\"package://my_robot/meshes/cube.obj\" scale=\"2 -1 1\"/></geometry></collision>";
-    const std::string path = writeFile(folder + "/robot/r.urdf", robot(linkXml("base", collisions)));
+    const std::string path = writeFile(folder + "/robot/r.urdf", urdfRobot(urdfLink("base", collisions)));
     rc::UrdfOptions options;
     options.packagePaths = {packages};
     const rc::RobotModelPtr model = rc::loadUrdf(path, options);
@@ -268,88 +216,4 @@ TEST(Urdf, CollisionElementsMergeWithOriginsScaleAndPackagePaths)
     setenv("RASTERCHECK_PACKAGE_PATH", ("/nonexistent:" + packages).c_str(), 1);
     EXPECT_EQ(rc::loadUrdf(path)->numComponents(), 1u);
     unsetenv("RASTERCHECK_PACKAGE_PATH");
-}
-
-TEST(Urdf, BadInputNamesTheFileAndElement)
-{
-    const std::string folder = makeTempDir("urdf");
-    writeFile(folder + "/cube.obj", kCubeObj);
-    writeFile(folder + "/empty.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
-    const std::string limit = "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>";
-    auto file = [&](const std::string &name, const std::string &text) { return writeFile(folder + "/" + name, text); };
-
-    const std::string malformed = file("malformed.urdf", "<robot name=\"r\"><link name=\"a\"></robot>");
-    expectInputError([&] { rc::loadUrdf(malformed); }, malformed, "line", "malformed XML");
-
-    const std::string unknownType =
-        file("type.urdf", robot(linkXml("a") + linkXml("b") + jointXml("wobble", "spherical", "a", "b")));
-    expectInputError([&] { rc::loadUrdf(unknownType); }, unknownType, "joint 'wobble'",
-                     "unknown joint type 'spherical'");
-
-    const std::string missingMesh = file("missing.urdf", robot(linkXml("panda_link6", collisionMesh("meshes/x.stl"))));
-    expectInputError([&] { rc::loadUrdf(missingMesh); }, missingMesh,
-                     "link 'panda_link6' collision mesh 'meshes/x.stl'", "file not found");
-
-    const std::string emptyMesh = file("empty.urdf", robot(linkXml("a", collisionMesh("empty.obj"))));
-    expectInputError([&] { rc::loadUrdf(emptyMesh); }, emptyMesh, "link 'a' collision mesh 'empty.obj'", "");
-
-    const std::string nanLimit = file(
-        "nan.urdf",
-        robot(linkXml("a") + linkXml("b") +
-              jointXml("j", "revolute", "a", "b", "<limit lower=\"nan\" upper=\"1\" effort=\"1\" velocity=\"1\"/>")));
-    expectInputError([&] { rc::loadUrdf(nanLimit); }, nanLimit, "joint 'j' limit 'lower'", "not a finite number");
-
-    const std::string nanOrigin = file("nan_origin.urdf", robot(linkXml("a",
-                                                                        "<collision><origin xyz=\"0 NaN 0\"/>"
-                                                                        "<geometry><box size=\"1 1 1\"/></geometry>"
-                                                                        "</collision>")));
-    expectInputError([&] { rc::loadUrdf(nanOrigin); }, nanOrigin, "link 'a' collision 0 origin 'xyz'", "NaN");
-
-    const std::string cycle =
-        file("cycle.urdf", robot(linkXml("a") + linkXml("b") + linkXml("c") +
-                                 jointXml("j1", "revolute", "a", "b", limit + "<mimic joint=\"j2\"/>") +
-                                 jointXml("j2", "revolute", "b", "c", limit + "<mimic joint=\"j1\"/>")));
-    expectInputError([&] { rc::loadUrdf(cycle); }, cycle, "mimic", "mimic cycle");
-
-    const std::string unknownMimic = file(
-        "mimic.urdf",
-        robot(linkXml("a") + linkXml("b") + jointXml("j1", "revolute", "a", "b", limit + "<mimic joint=\"nope\"/>")));
-    expectInputError([&] { rc::loadUrdf(unknownMimic); }, unknownMimic, "joint 'j1' mimic", "'nope' does not exist");
-
-    const std::string badLink = file("link.urdf", robot(linkXml("a") + jointXml("j", "fixed", "a", "ghost")));
-    expectInputError([&] { rc::loadUrdf(badLink); }, badLink, "joint 'j' child", "link 'ghost' does not exist");
-
-    const std::string badBox =
-        file("box.urdf", robot(linkXml("a", "<collision><geometry><box size=\"1 0 1\"/></geometry></collision>")));
-    expectInputError([&] { rc::loadUrdf(badBox); }, badBox, "link 'a' collision 0", "box size y must be positive");
-
-    const std::string planar = file(
-        "planar.urdf", robot(linkXml("a") + linkXml("b") + jointXml("p", "planar", "a", "b", "<axis xyz=\"1 0 0\"/>")));
-    expectInputError([&] { rc::loadUrdf(planar); }, planar, "joint 'p' axis", "axis 0 0 1");
-
-    const std::string noLimit =
-        file("limit.urdf", robot(linkXml("a") + linkXml("b") + jointXml("j", "revolute", "a", "b")));
-    expectInputError([&] { rc::loadUrdf(noLimit); }, noLimit, "joint 'j'", "needs <limit");
-
-    const std::string twoRoots = file("roots.urdf", robot(linkXml("a") + linkXml("b")));
-    expectInputError([&] { rc::loadUrdf(twoRoots); }, twoRoots, "robot", "");
-
-    const std::string notFound = folder + "/nothing.urdf";
-    expectInputError([&] { rc::loadUrdf(notFound); }, notFound, "", "file not found");
-}
-
-TEST(Urdf, InvertedLimitsAreSwappedWithAWarningAndEqualLimitsAllowed)
-{
-    const std::string xml = robot(
-        linkXml("a") + linkXml("b") + linkXml("c") +
-        jointXml("backwards", "prismatic", "a", "b",
-                 "<limit lower=\"0.3\" upper=\"-0.2\" effort=\"1\" velocity=\"1\"/>") +
-        jointXml("pinned", "revolute", "b", "c", "<limit lower=\"0.1\" upper=\"0.1\" effort=\"1\" velocity=\"1\"/>"));
-    WarningCapture capture;
-    const rc::RobotModelPtr model = rc::loadUrdfString(xml, ".", {}, "limits.urdf");
-    EXPECT_EQ(model->lowerBounds, (std::vector<double>{-0.2, 0.1}));
-    EXPECT_EQ(model->upperBounds, (std::vector<double>{0.3, 0.1}));
-    ASSERT_EQ(capture.warnings.size(), 1u);
-    EXPECT_NE(capture.warnings[0].find("limits.urdf"), std::string::npos);
-    EXPECT_NE(capture.warnings[0].find("joint 'backwards'"), std::string::npos);
 }

@@ -1,6 +1,7 @@
 // rastercheck check: a states file in, one verdict per state out. A stable interface other tools
 // drive: the OUT.csv columns and the final summary line do not change.
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -54,6 +55,11 @@ void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<
 
 int runCheck(const CheckOptions &options)
 {
+    // Before loading anything: CLI11 lets "nan" and "inf" through its range checks.
+    if (!(std::isfinite(options.padding) && options.padding >= 0))
+        throw ConfigurationError("--padding must be a finite number >= 0");
+    if (!(std::isfinite(options.pixel) && options.pixel >= 0))
+        throw ConfigurationError("--pixel must be a finite number >= 0");
     const Problem problem = loadProblem(options.problem.source());
     CheckerOptions checkerOptions;
     checkerOptions.backend = parseBackendChoice(options.backend);
@@ -63,8 +69,6 @@ int runCheck(const CheckOptions &options)
     request.mode = parseCollisionMode(options.mode);
     request.padding = options.padding;
     request.pixelSize = options.pixel;
-    if (!(request.padding >= 0))
-        throw ConfigurationError("--padding must be a number >= 0");
 
     const StatesTable states = readStatesCsv(options.statesPath, problem.robot->coordinateNames);
     std::vector<std::uint8_t> valid(states.rows);

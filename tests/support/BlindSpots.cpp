@@ -124,4 +124,27 @@ std::vector<BlindSpotSuite> blindSpotSuites(std::size_t n, unsigned seed)
     }
     return suites;
 }
+
+BlindSpotSuite movedBy(const BlindSpotSuite &suite, const Eigen::Vector3d &offset)
+{
+    auto robot = std::make_shared<RobotModel>(*suite.robot);
+    for (int k = 0; k < 3; ++k)
+    {
+        robot->joints[0].lower[k] += offset[k];
+        robot->joints[0].upper[k] += offset[k];
+    }
+    robot->finalize();
+    auto scene = std::make_shared<Scene>();
+    for (const SceneObject &object : suite.scene->objects)
+    {
+        Mesh mesh = object.mesh;
+        mesh.transform(Eigen::Isometry3d(Eigen::Translation3d(offset)));
+        scene->addObject(object.name, std::move(mesh));
+    }
+    std::vector<double> states = suite.states;
+    for (std::size_t i = 0; i < suite.numStates(); ++i)
+        for (int k = 0; k < 3; ++k)
+            states[7 * i + k] += offset[k];
+    return BlindSpotSuite{suite.name + " at 1e6 m", robot, scene, states};
+}
 }  // namespace rastercheck::test

@@ -24,4 +24,8 @@ struct BlindSpotSuite
     wholly inside or around an obstacle, surfaces apart) and "grazing" (penetrations and gaps of
     1e-5 to 1e-3 m). \a statesPerSuite states each, fixed seed. */
 std::vector<BlindSpotSuite> blindSpotSuites(std::size_t statesPerSuite, unsigned seed = 1);
+
+/** \brief \a suite moved by \a offset: scene, robot bounds and states (a plant in site coordinates,
+    where a float resolves centimetres). */
+BlindSpotSuite movedBy(const BlindSpotSuite &suite, const Eigen::Vector3d &offset);
 }  // namespace rastercheck::test

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/core/Log.h"
 
 namespace rastercheck::test
 {
@@ -28,6 +29,15 @@ const Problem &plant()
         return loadProblem(source);
     }();
     return problem;
+}
+
+Problem pandaProblem(const std::string &root, const std::string &scenario)
+{
+    ProblemSource source;
+    source.urdfPath = root + "/mbm/panda/panda.urdf";
+    source.srdfPath = root + "/mbm/panda/panda.srdf";
+    source.scenePath = root + "/mbm/panda/problems/" + scenario + "_panda/scene0001.yaml";
+    return loadProblem(source);
 }
 
 CommandRun runCommand(const std::string &command)
@@ -68,5 +78,55 @@ std::string writeFile(const std::string &path, const std::string &text)
     if (!out)
         throw std::runtime_error("cannot write " + path);
     return path;
+}
+
+LogCapture::LogCapture()
+{
+    setLogHandler(
+        [this](LogLevel level, const std::string &message)
+        { (level == LogLevel::Warning ? warnings : notices).push_back(message); });
+}
+
+LogCapture::~LogCapture() { setLogHandler(nullptr); }
+
+namespace
+{
+bool anyContains(const std::vector<std::string> &messages, const std::string &text)
+{
+    for (const std::string &message : messages)
+        if (message.find(text) != std::string::npos)
+            return true;
+    return false;
+}
+}  // namespace
+
+bool LogCapture::warned(const std::string &text) const { return anyContains(warnings, text); }
+bool LogCapture::noticed(const std::string &text) const { return anyContains(notices, text); }
+
+const char *const kCubeObj =
+    "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv 0.5 0.5 -0.5\nv -0.5 0.5 -0.5\n"
+    "v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0.5 0.5 0.5\nv -0.5 0.5 0.5\n"
+    "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n";
+
+std::string urdfRobot(const std::string &body)
+{
+    return "<?xml version=\"1.0\"?>\n<robot name=\"test\">\n" + body + "</robot>\n";
+}
+
+std::string urdfLink(const std::string &name, const std::string &collision)
+{
+    return "<link name=\"" + name + "\">" + collision + "</link>\n";
+}
+
+std::string urdfJoint(const std::string &name, const std::string &type, const std::string &parent,
+                      const std::string &child, const std::string &extra)
+{
+    return "<joint name=\"" + name + "\" type=\"" + type + "\"><parent link=\"" + parent + "\"/><child link=\"" +
+           child + "\"/>" + extra + "</joint>\n";
+}
+
+std::string urdfCollisionMesh(const std::string &file, const std::string &extra)
+{
+    return "<collision><geometry><mesh filename=\"" + file + "\"" + extra + "/></geometry></collision>";
 }
 }  // namespace rastercheck::test

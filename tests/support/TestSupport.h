@@ -1,7 +1,9 @@
 #pragma once
 
+#include <cstdlib>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -14,12 +16,21 @@ namespace rastercheck::test
     when absent. */
 inline std::string sharedData() { return dataRoot(RASTERCHECK_DEFAULT_DATA); }
 
-/** \brief Path of a file inside the source tree. */
-inline std::string sourcePath(const std::string &relative) { return std::string(RASTERCHECK_SOURCE_DIR) + "/" + relative; }
+/** \brief Path of a file inside the source tree: RASTERCHECK_SOURCE when set (a copy of the tree on
+    another machine, such as the GPU machine), else the tree this build came from. */
+inline std::string sourcePath(const std::string &relative)
+{
+    const char *moved = std::getenv("RASTERCHECK_SOURCE");
+    return std::string(moved && *moved ? moved : RASTERCHECK_SOURCE_DIR) + "/" + relative;
+}
 
 /** \brief The crawler crane (robots/crane, URDF + SRDF) in the plant (robots/sites/plant.yaml),
     loaded once per test program. */
 const Problem &plant();
+
+/** \brief The MotionBenchMaker Panda (URDF + SRDF) in scene0001 of \a scenario ("bookshelf_small",
+    "table_pick", ...) under the shared data root \a root. */
+Problem pandaProblem(const std::string &root, const std::string &scenario);
 
 /** \brief A fresh temporary directory for one test (removed at exit of the process is not
     guaranteed; it lives under the system temp folder). */
@@ -44,6 +55,33 @@ void expectInputError(const std::function<void()> &load, const std::string &file
 
 /** \brief Writes \a text to \a path (creating it) and returns the path. */
 std::string writeFile(const std::string &path, const std::string &text);
+
+/** \brief Collects the library's warnings and notices while it lives (setLogHandler), then restores
+    the default handler. */
+struct LogCapture
+{
+    std::vector<std::string> warnings;
+    std::vector<std::string> notices;  // LogLevel::Info
+    LogCapture();
+    ~LogCapture();
+    LogCapture(const LogCapture &) = delete;
+    LogCapture &operator=(const LogCapture &) = delete;
+    /** \brief Whether some warning contains \a text. */
+    bool warned(const std::string &text) const;
+    /** \brief Whether some notice contains \a text. */
+    bool noticed(const std::string &text) const;
+};
+
+/** \brief A closed, outward unit cube centred on the origin, as OBJ text. */
+extern const char *const kCubeObj;
+
+/** \brief Small URDF texts: a robot named "test" around \a body, a link with optional collision XML,
+    a joint (\a extra: origin, axis, limit, mimic XML), a collision element with a mesh. */
+std::string urdfRobot(const std::string &body);
+std::string urdfLink(const std::string &name, const std::string &collision = "");
+std::string urdfJoint(const std::string &name, const std::string &type, const std::string &parent,
+                      const std::string &child, const std::string &extra = "");
+std::string urdfCollisionMesh(const std::string &file, const std::string &extra = "");
 }  // namespace rastercheck::test
 
 /** \brief Skips the current test with a clear message when the shared data is absent. */

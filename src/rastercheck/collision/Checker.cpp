@@ -1,10 +1,17 @@
 #include "rastercheck/collision/Checker.h"
 
+#include <cmath>
+#include <mutex>
 #include <sstream>
 
+#include "rastercheck/BuildConfig.h"
 #include "rastercheck/collision/CpuBackend.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
+#if RASTERCHECK_WITH_CUDA
+#include "CudaStageRunner.h"
+#endif
 
 namespace rastercheck
 {
@@ -19,36 +26,118 @@ BackendChoice parseBackendChoice(const std::string &text)
     throw ConfigurationError("unknown backend '" + text + "' (expected auto, cpu or cuda)");
 }
 
+namespace
+{
+/** \brief The CUDA backend when the build has it and a device can run it; null otherwise, with
+    the reason in \a why. */
+std::unique_ptr<Backend> makeCudaBackend(const CollisionModelConstPtr &model, std::string &why)
+{
+#if RASTERCHECK_WITH_CUDA
+    std::string device;
+    if (!cuda::deviceUsable(device))
+    {
+        why = device;
+        return nullptr;
+    }
+    try
+    {
+        auto backend = std::make_unique<StagedBackend>(model, cuda::makeStageRunner(hostModelArrays(*model)));
+        logInfo("using the CUDA backend on " + device);
+        return backend;
+    }
+    catch (const std::exception &e)
+    {
+        why = e.what();
+        return nullptr;
+    }
+#else
+    (void)model;
+    why = "this build has no CUDA backend";
+    return nullptr;
+#endif
+}
+}  // namespace
+
 Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOptions &options)
   : model_(std::make_shared<const CollisionModel>(std::move(robot), std::move(scene)))
   , reference_(model_)
   , threads_(options.threads)
+  , minDeviceBatch_(options.minDeviceBatch)
 {
     if (options.threads < 0)
         throw ConfigurationError("CheckerOptions::threads must be >= 0 (0 = all cores)");
-    if (options.backend == BackendChoice::Cuda)
-        logWarning("the CUDA backend is not compiled into this build; using the CPU backend");
-    backend_ = std::make_unique<CpuBackend>(model_);
+    if (options.backend != BackendChoice::Cpu)
+    {
+        std::string why;
+        backend_ = makeCudaBackend(model_, why);
+        if (!backend_)
+        {
+            const std::string notice = why + "; using the CPU backend";
+            // Asked for CUDA: warn every time. Auto: say it once per process, not per checker.
+            static std::once_flag autoNotice;
+            if (options.backend == BackendChoice::Cuda)
+                logWarning(notice);
+            else
+                std::call_once(autoNotice, [&] { logInfo(notice); });
+        }
+    }
+    if (!backend_)
+        backend_ = std::make_unique<CpuBackend>(model_);
 }
 
 Checker::~Checker() = default;
 
+// A NaN usually means a bug upstream (a planner, a CSV column of blanks read as NaN); the verdict
+// alone would hide it among real collisions, so the first one is named.
+void Checker::warnOnceIfNotFinite(const double *q, std::size_t n) const
+{
+    if (warnedNotFinite_.load(std::memory_order_relaxed))
+        return;
+    const std::size_t dof = this->dof();
+    for (std::size_t i = 0; i < n * dof; ++i)
+        if (!std::isfinite(q[i]))
+        {
+            if (!warnedNotFinite_.exchange(true))
+                logWarning((n > 1 ? "state " + std::to_string(i / dof) + " of " + std::to_string(n) : "a state") +
+                           " has coordinate '" + model_->robot->coordinateNames[i % dof] + "' = " +
+                           std::to_string(q[i]) +
+                           ": a state that is not finite is invalid (reported once per checker)");
+            return;
+        }
+}
+
 void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request,
                     Contact *contacts) const
 {
-    backend_->check(q, n, valid, contacts, request, threads_);
+    validate(request);
+    warnOnceIfNotFinite(q, n);
+    const Backend &backend = n >= minDeviceBatch_ ? *backend_ : static_cast<const Backend &>(reference_);
+    backend.check(q, n, valid, contacts, request, threads_);
 }
 
 bool Checker::isValid(const double *q, const CollisionRequest &request, Contact *contact) const
 {
+    validate(request);
+    warnOnceIfNotFinite(q, 1);
     std::uint8_t valid = 0;
-    backend_->check(q, 1, &valid, contact, request, 1);
+    const Backend &backend = minDeviceBatch_ <= 1 ? *backend_ : static_cast<const Backend &>(reference_);
+    backend.check(q, 1, &valid, contact, request, 1);
     return valid != 0;
+}
+
+bool Checker::isValid(const std::vector<double> &q, const CollisionRequest &request, Contact *contact) const
+{
+    if (q.size() != dof())
+        throw ConfigurationError("Checker::isValid: the configuration has " + std::to_string(q.size()) +
+                                 " values, robot '" + robot().name + "' has " + std::to_string(dof()) +
+                                 " coordinates");
+    return isValid(q.data(), request, contact);
 }
 
 bool Checker::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
                           RasterImage &image) const
 {
+    validate(request);
     return reference_.rasterImage(q, contact, request, image);
 }
 

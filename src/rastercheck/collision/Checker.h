@@ -1,5 +1,6 @@
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -29,6 +30,9 @@ struct CheckerOptions
     BackendChoice backend = BackendChoice::Auto;
     /** \brief Worker threads of batch calls on the CPU backend; 0 = all cores. */
     int threads = 0;
+    /** \brief Smallest batch sent to the GPU backend: a smaller one (a single isValid, a short
+        motion) runs on the CPU backend, where it does not pay the GPU pass's fixed latency. */
+    std::size_t minDeviceBatch = 32;
 };
 
 /** \brief Decides whether robot configurations collide with the scene or themselves, one state or
@@ -42,19 +46,23 @@ public:
 
     /** \brief Decides \a n states. \a q: n x dof values in the robot's coordinate order (row-major).
         \a valid[i] = 1 when state i is valid. \a contacts (optional, n entries) receives each
-        invalid state's first contact. Never throws for bad states: they are invalid. */
+        invalid state's first contact. Never throws for bad states: they are invalid (a state with a
+        NaN or infinite coordinate is Contact::Kind::OutOfBounds, and the first such state a checker
+        sees is named in one warning). Throws ConfigurationError for a malformed \a request
+        (validate()). With an empty scene only self-collision is checked. */
     void check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request = {},
                Contact *contacts = nullptr) const;
 
     /** \brief One state. */
     bool isValid(const double *q, const CollisionRequest &request = {}, Contact *contact = nullptr) const;
-    bool isValid(const std::vector<double> &q, const CollisionRequest &request = {}, Contact *contact = nullptr) const
-    {
-        return isValid(q.data(), request, contact);
-    }
+    /** \brief One state; throws ConfigurationError when \a q does not have dof() values (reading past
+        a short vector would decide garbage). */
+    bool isValid(const std::vector<double> &q, const CollisionRequest &request = {}, Contact *contact = nullptr) const;
 
     /** \brief "cpu" or "cuda (<device>)". */
     std::string backendName() const { return backend_->name(); }
+    /** \brief The backend batches of at least minDeviceBatch states run on. */
+    const Backend &backend() const { return *backend_; }
     const CollisionModel &collisionModel() const { return *model_; }
     const RobotModel &robot() const { return *model_->robot; }
     const Scene &scene() const { return *model_->scene; }
@@ -70,9 +78,13 @@ public:
     std::string describe(const Contact &contact) const;
 
 private:
+    void warnOnceIfNotFinite(const double *q, std::size_t n) const;
+
     CollisionModelConstPtr model_;
     std::unique_ptr<Backend> backend_;
     CpuBackend reference_;  // pictures and diagnostics run the CPU pipeline whatever the backend
     int threads_;
+    std::size_t minDeviceBatch_;
+    mutable std::atomic<bool> warnedNotFinite_{false};  // one warning per checker, not one per state
 };
 }  // namespace rastercheck

@@ -5,13 +5,14 @@
 #include <limits>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
 {
 namespace
 {
-CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, std::vector<float> &vertices,
-                                     std::vector<std::uint32_t> &triangles)
+CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, const Eigen::Vector3d &origin,
+                                     std::vector<float> &vertices, std::vector<std::uint32_t> &triangles)
 {
     CollisionModel::MeshSlice slice{static_cast<std::uint32_t>(vertices.size() / 3),
                                     static_cast<std::uint32_t>(mesh.numVertices()),
@@ -19,7 +20,7 @@ CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, std::vector<
                                     static_cast<std::uint32_t>(mesh.numTriangles()), closed};
     for (const Eigen::Vector3d &v : mesh.vertices)
         for (int k = 0; k < 3; ++k)
-            vertices.push_back(static_cast<float>(v[k]));
+            vertices.push_back(static_cast<float>(v[k] - origin[k]));
     for (const Mesh::Triangle &t : mesh.triangles)
         triangles.insert(triangles.end(), t.begin(), t.end());
     return slice;
@@ -47,10 +48,21 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
     if (!scene)
         scene = std::make_shared<Scene>();
 
+    if (!scene->objects.empty())
+        origin = 0.5 * (scene->bounds().min + scene->bounds().max);
+    else if (!robot->components.empty())
+    {
+        RobotData data(*robot);
+        forwardKinematics(*robot, data, robot->neutralConfiguration());
+        for (const Component &component : robot->components)
+            origin += data.oMl[component.link].translation() / static_cast<double>(robot->components.size());
+    }
+
     std::vector<double> diagonals;
     for (const Component &component : robot->components)
     {
-        components.push_back(appendMesh(component.mesh, component.topology.closed, componentVertices, componentTriangles));
+        components.push_back(appendMesh(component.mesh, component.topology.closed, Eigen::Vector3d::Zero(),
+                                        componentVertices, componentTriangles));
         // Float rounding of the transformed box must not cut off geometry: grow by a relative 1e-5.
         Obb box = component.localObb;
         box.halfExtents.array() += 1e-5 * box.halfExtents.norm() + 1e-9;
@@ -63,8 +75,14 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
 
     for (const SceneObject &object : scene->objects)
     {
-        objects.push_back(appendMesh(object.mesh, object.topology.closed, objectVertices, objectTriangles));
-        const Aabb grown = object.bounds.inflated(1e-5 * (object.bounds.max - object.bounds.min).norm() + 1e-9);
+        objects.push_back(appendMesh(object.mesh, object.topology.closed, origin, objectVertices, objectTriangles));
+        // Float rounding must not cut off geometry: grow by a relative 1e-5 of the size and 1e-6 of
+        // the distance from the origin (each vertex was rounded to about 6e-8 of it).
+        Aabb shifted;
+        shifted.min = object.bounds.min - origin;
+        shifted.max = object.bounds.max - origin;
+        const double distance = std::max(shifted.min.cwiseAbs().maxCoeff(), shifted.max.cwiseAbs().maxCoeff());
+        const Aabb grown = shifted.inflated(1e-5 * (shifted.max - shifted.min).norm() + 1e-6 * distance + 1e-9);
         device::Box box;
         for (int k = 0; k < 3; ++k)
         {
@@ -118,5 +136,23 @@ bool CollisionModel::configurationAdmissible(const double *q) const
             return false;
     }
     return true;
+}
+
+void CollisionModel::nameParties(std::uint32_t pair, Contact &contact) const
+{
+    const std::size_t environmentPairs = numObjects() * numComponents();
+    if (pair < environmentPairs)
+    {
+        contact.kind = Contact::Kind::Environment;
+        contact.object = static_cast<int>(pair / numComponents());
+        contact.component = static_cast<int>(pair % numComponents());
+        contact.otherComponent = -1;
+        return;
+    }
+    const std::pair<int, int> &self = selfPairs.at(pair - environmentPairs);
+    contact.kind = Contact::Kind::SelfCollision;
+    contact.component = self.first;
+    contact.otherComponent = self.second;
+    contact.object = -1;
 }
 }  // namespace rastercheck

@@ -5,7 +5,9 @@
 #include <utility>
 #include <vector>
 
+#include "rastercheck/collision/CollisionRequest.h"
 #include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/Stages.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/model/RobotModel.h"
 #include "rastercheck/model/Scene.h"
@@ -16,24 +18,27 @@ namespace rastercheck
     uploaded unchanged to a GPU), plus the oracle's BVHs. Built once per checker.
 
     Shapes are written next to each buffer; "local" means link frame for components and world frame
-    for objects. Triangle indices are local to their mesh's vertex block. */
+    for objects. Triangle indices are local to their mesh's vertex block.
+
+    Float arrays in the world frame (object vertices and boxes, and the component poses a backend
+    computes per state with device::toFloatPose) are relative to \a origin: a float resolves about 1e-7 of
+    a coordinate, so a plant modelled 1e6 m from its origin (site coordinates) would lose
+    centimetres, and the culls would drop real contacts. Re-centred, floats resolve 1e-7 of the
+    distance from the scene's centre. The oracle's BVHs stay in double, in the world frame. */
 class CollisionModel
 {
 public:
     CollisionModel(RobotModelConstPtr robot, SceneConstPtr scene);
 
-    /** \brief A mesh's slice of the flat buffers. */
-    struct MeshSlice
-    {
-        std::uint32_t firstVertex;
-        std::uint32_t numVertices;
-        std::uint32_t firstTriangle;
-        std::uint32_t numTriangles;
-        bool closed;
-    };
+    using MeshSlice = device::MeshSlice;
 
     RobotModelConstPtr robot;
     SceneConstPtr scene;
+
+    /** \brief World point the float world-frame arrays are measured from: the centre of the scene's
+        bounds; without objects, the mean of the component links' positions at the neutral
+        configuration (self-collision only). */
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
 
     std::vector<float> componentVertices;           // n_component_vertices x 3, link frame
     std::vector<std::uint32_t> componentTriangles;  // n_component_triangles x 3
@@ -42,10 +47,10 @@ public:
     std::vector<int> componentLink;                 // n_components
     std::vector<int> componentSubtreeEnd;           // n_components: layer k spans [k, end)
 
-    std::vector<float> objectVertices;           // n_object_vertices x 3, world frame
+    std::vector<float> objectVertices;           // n_object_vertices x 3, world frame - origin
     std::vector<std::uint32_t> objectTriangles;  // n_object_triangles x 3
     std::vector<MeshSlice> objects;              // n_objects
-    std::vector<device::Box> objectBoxes;        // n_objects, world frame
+    std::vector<device::Box> objectBoxes;        // n_objects, world frame - origin
 
     /** \brief Component pairs (a < b) checked for self-collision: those the ACM does not allow. */
     std::vector<std::pair<int, int>> selfPairs;
@@ -69,6 +74,10 @@ public:
 
     std::size_t numComponents() const { return components.size(); }
     std::size_t numObjects() const { return objects.size(); }
+    /** \brief Size of the pair numbering (device::environmentPair, then the self pairs). */
+    std::size_t numPairs() const { return numObjects() * numComponents() + selfPairs.size(); }
+    /** \brief Sets contact.kind, component and object or otherComponent from a pair's number. */
+    void nameParties(std::uint32_t pair, Contact &contact) const;
 };
 
 using CollisionModelConstPtr = std::shared_ptr<const CollisionModel>;

@@ -1,5 +1,7 @@
 #include "rastercheck/collision/CollisionRequest.h"
 
+#include <cmath>
+
 #include "rastercheck/core/Error.h"
 
 namespace rastercheck
@@ -27,5 +29,18 @@ CollisionMode parseCollisionMode(const std::string &text)
     if (text == "exact")
         return CollisionMode::Exact;
     throw ConfigurationError("unknown collision mode '" + text + "' (expected safe, raster or exact)");
+}
+
+void validate(const CollisionRequest &request)
+{
+    if (!std::isfinite(request.padding) || request.padding < 0)
+        throw ConfigurationError("CollisionRequest::padding must be finite and >= 0, got " +
+                                 std::to_string(request.padding));
+    if (!std::isfinite(request.pixelSize) || request.pixelSize < 0)
+        throw ConfigurationError("CollisionRequest::pixelSize must be finite and >= 0 (0 = automatic), got " +
+                                 std::to_string(request.pixelSize));
+    if (request.maxImageSide < 1 || request.maxImageSide > 4096)
+        throw ConfigurationError("CollisionRequest::maxImageSide must be in [1, 4096], got " +
+                                 std::to_string(request.maxImageSide));
 }
 }  // namespace rastercheck

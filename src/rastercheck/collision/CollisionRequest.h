@@ -18,8 +18,9 @@ enum class CollisionMode
         first (a parity hit is an overlap) and must confirm every other pair exactly. */
     Safe,
     /** \brief The paper's method alone: rays through pixel centres only, so overlaps thinner than a
-        pixel or seen edge-on can be missed (measured in docs/accuracy.md). Pairs of two open meshes
-        and padding still go to the exact narrow phase. */
+        pixel or seen edge-on can be missed (measured in docs/accuracy.md). Pairs of two open meshes,
+        pairs so far from CollisionModel::origin that float rounding exceeds a tenth of a pixel, and
+        padding still go to the exact narrow phase. */
     Raster,
     /** \brief The exact narrow phase (triangle-triangle plus point-in-solid) on every pair that
         survives the conservative box culls: the oracle. */
@@ -43,6 +44,13 @@ struct CollisionRequest
     bool checkEnvironment = true;
     bool checkSelfCollision = true;
 };
+
+/** \brief Throws ConfigurationError unless padding is finite and >= 0 (a negative margin has no
+    meaning for a validity check, and NaN would make every box test false), pixelSize is finite and
+    >= 0 (0 = automatic) and maxImageSide is in [1, 4096] (an image is maxImageSide^2 pixels). A
+    huge finite padding is allowed: every solid within that reach collides. Checker::check and
+    isValid call it on every call (a request is not a state: a bad one is a programming error). */
+void validate(const CollisionRequest &request);
 
 /** \brief Why a state is invalid, and where: the first contact found (deterministic: pairs are
     visited in a fixed order). */

@@ -7,43 +7,12 @@
 #include <omp.h>
 
 #include "rastercheck/device/Raster.h"
+#include "rastercheck/device/Kinematics.h"
+#include "rastercheck/device/Stages.h"
 #include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
 {
-/** \brief Scratch of one thread: every buffer the stages write, sized on first use and reused. */
-struct CpuWorkspace
-{
-    explicit CpuWorkspace(const CollisionModel &model)
-      : data(*model.robot)
-      , componentPose(model.numComponents())
-      , componentExactPose(model.numComponents())
-      , componentBox(model.numComponents())
-      , componentBounds(model.numComponents())
-      , layerBounds(model.numComponents())
-      , componentWorld(model.numComponents())
-      , componentWorldState(model.numComponents(), 0)
-    {
-    }
-
-    RobotData data;
-    std::vector<device::Pose<float>> componentPose;        // n_components
-    std::vector<Eigen::Isometry3d> componentExactPose;     // n_components
-    std::vector<device::OrientedBox> componentBox;         // n_components, world
-    std::vector<device::Box> componentBounds;              // n_components, world
-    std::vector<device::Box> layerBounds;                  // n_components: bounds of layer k's subtree
-
-    // World vertices of each component, transformed once per state on first use (a component
-    // meets several objects); componentWorldState says for which state they are current.
-    std::vector<std::vector<device::Vec3<float>>> componentWorld;  // n_components x n_vertices
-    std::vector<std::uint64_t> componentWorldState;                // n_components
-    std::uint64_t state = 0;
-    std::vector<std::uint32_t> candidatesA, candidatesB;
-    std::vector<int> pixelCount;                       // n_pixels
-    std::vector<int> pixelStart;                       // n_pixels + 1
-    std::vector<device::Fragment> fragments;           // total fragments
-};
-
 namespace
 {
 using device::Vec3;
@@ -88,20 +57,12 @@ const Vec3<float> *worldVertices(const Solid &solid, CpuWorkspace &ws)
 void cullToImage(const Solid &solid, const Vec3<float> *world, const device::RasterGrid &grid, float margin,
                  std::vector<std::uint32_t> &candidates)
 {
-    const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
-    const float uLo = grid.origin[0] - margin, uHi = grid.origin[0] + grid.width * grid.pixel + margin;
-    const float vLo = grid.origin[1] - margin, vHi = grid.origin[1] + grid.height * grid.pixel + margin;
     candidates.clear();
     for (std::uint32_t t = 0; t < solid.slice->numTriangles; ++t)
     {
         const std::uint32_t *tri = solid.triangles + 3 * t;
-        const Vec3<float> &a = world[tri[0]], &b = world[tri[1]], &c = world[tri[2]];
-        const float au = device::coordinate(a, u), bu = device::coordinate(b, u), cu = device::coordinate(c, u);
-        const float av = device::coordinate(a, v), bv = device::coordinate(b, v), cv = device::coordinate(c, v);
-        if (device::maxOf(au, device::maxOf(bu, cu)) < uLo || device::minOf(au, device::minOf(bu, cu)) > uHi || device::maxOf(av, device::maxOf(bv, cv)) < vLo ||
-            device::minOf(av, device::minOf(bv, cv)) > vHi)
-            continue;
-        candidates.push_back(t);
+        if (device::triangleMeetsImage(world[tri[0]], world[tri[1]], world[tri[2]], grid, margin))
+            candidates.push_back(t);
     }
 }
 
@@ -164,14 +125,9 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
         if (found)
             continue;
         found = true;
-        int objectFragment = hit;
-        while (objectFragment > 0 && !device::isPartyB(fragments[objectFragment]))
-            --objectFragment;
-        contact.triangle = static_cast<int>(device::triangleOf(fragments[objectFragment]));
-        const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
-        contact.position[grid.axis] = fragments[hit].depth;
-        contact.position[u] = grid.origin[0] + (static_cast<float>(p % grid.width) + 0.5f) * grid.pixel;
-        contact.position[v] = grid.origin[1] + (static_cast<float>(p / grid.width) + 0.5f) * grid.pixel;
+        float position[3];
+        device::hitContact(fragments, hit, grid, p, contact.triangle, position);
+        contact.position = Eigen::Vector3d(position[0], position[1], position[2]);
         if (!image)
             return true;
     }
@@ -198,31 +154,15 @@ struct PreparedPair
     const Vec3<float> *worldB;
 };
 
-/** \brief Where the pair can meet: A's bounds grown by the padding, cut by B's (may be empty). */
-device::Box pairWindow(const Solid &a, const Solid &b, float padding)
-{
-    device::Box grownA = a.bounds;
-    for (int k = 0; k < 3; ++k)
-    {
-        grownA.min[k] -= padding;
-        grownA.max[k] += padding;
-    }
-    return device::intersection(grownA, b.bounds);
-}
-
 bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
                  PreparedPair &pair)
 {
-    const float padding = static_cast<float>(request.padding);
-    const device::Box window = pairWindow(a, b, padding);
+    const float padding = device::floatPadding(request.padding);
+    const device::Box window = device::pairWindow(a.bounds, b.bounds, padding);
     if (device::isEmpty(window))
         return false;
     pair.grid = device::makeGrid(window, static_cast<float>(pixel), request.maxImageSide);
-    // Rounding allowance of the float pipeline: a few ulps of the largest coordinate in play.
-    float magnitude = 0;
-    for (int k = 0; k < 3; ++k)
-        magnitude = device::maxOf(magnitude, device::maxOf(fabsf(window.min[k]), fabsf(window.max[k])));
-    pair.margin = padding + 1e-6f * magnitude + 1e-6f * pair.grid.pixel;
+    pair.margin = device::pairMargin(window, pair.grid, padding);
     pair.worldA = worldVertices(a, ws);
     pair.worldB = worldVertices(b, ws);
     cullToImage(a, pair.worldA, pair.grid, pair.margin, ws.candidatesA);
@@ -235,21 +175,24 @@ bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request
     the raster stages (measured on the Panda MBM scenes: rasterizing a pair cost about 5x an exact
     BVH query, and the depth-range proof settled only a quarter of the pairs), so safe mode on this
     backend is the exact phase behind the paper's culls. */
-bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
-                  Contact &contact)
+bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel,
+                  const Eigen::Vector3d &origin, CpuWorkspace &ws, Contact &contact)
 {
-    const bool rasterUsable = a.slice->closed || b.slice->closed;
-    if (request.mode != CollisionMode::Raster || !rasterUsable)
-    {
-        // The box culls already passed; the window test is the last cheap exit before the oracle.
-        return !device::isEmpty(pairWindow(a, b, static_cast<float>(request.padding))) &&
-               exactOverlap(a, b, request.padding, contact);
-    }
+    // The box culls already passed; the window test is the last cheap exit before the oracle.
+    const device::Box window = device::pairWindow(a.bounds, b.bounds, device::floatPadding(request.padding));
+    if (device::isEmpty(window))
+        return false;
+    if (request.mode != CollisionMode::Raster ||
+        !device::rasterUsable(a.slice->closed, b.slice->closed, window, static_cast<float>(pixel)))
+        return exactOverlap(a, b, request.padding, contact);
     PreparedPair pair;
     if (!preparePair(a, b, request, pixel, ws, pair))
         return false;
     if (rasterHit(a, pair.worldA, ws.candidatesA, b, pair.worldB, ws.candidatesB, pair.grid, ws, contact))
+    {
+        contact.position += origin;  // the raster works relative to CollisionModel::origin
         return true;
+    }
     // Padding is always honoured exactly: the raster sees overlaps, not distances.
     return request.padding > 0 && exactOverlap(a, b, request.padding, contact);
 }
@@ -258,23 +201,20 @@ bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &reques
 void refit(const CollisionModel &model, const double *q, CpuWorkspace &ws)
 {
     ++ws.state;
-    forwardKinematics(*model.robot, ws.data, q);
+    const RobotModel &robot = *model.robot;
+    device::linkPoses(robot.kinematicJoints.data(), static_cast<int>(robot.kinematicJoints.size()), q,
+                      ws.jointValues.data(), ws.linkPoses.data());
     const std::size_t m = model.numComponents();
     for (std::size_t c = 0; c < m; ++c)
     {
-        ws.componentExactPose[c] = ws.data.oMl[model.componentLink[c]];
-        const device::Pose<double> exact = toDevicePose(ws.componentExactPose[c]);
-        for (int k = 0; k < 12; ++k)
-            ws.componentPose[c].m[k] = static_cast<float>(exact.m[k]);
+        const device::Pose<double> &exact = ws.linkPoses[model.componentLink[c]];
+        ws.componentExactPose[c] = fromDevicePose(exact);
+        ws.componentPose[c] = device::toFloatPose(exact, model.origin.data());
         ws.componentBox[c] = device::transformBox(ws.componentPose[c], model.componentLocalBoxes[c]);
         ws.componentBounds[c] = device::boundsOf(ws.componentBox[c]);
     }
-    for (std::size_t k = m; k-- > 0;)
-    {
-        ws.layerBounds[k] = ws.componentBounds[k];
-        for (int j = static_cast<int>(k) + 1; j < model.componentSubtreeEnd[k]; ++j)
-            device::extend(ws.layerBounds[k], ws.componentBounds[j]);
-    }
+    device::computeLayerBounds(ws.componentBounds.data(), model.componentSubtreeEnd.data(), static_cast<int>(m),
+                               ws.layerBounds.data());
 }
 
 Solid componentSolid(const CollisionModel &model, CpuWorkspace &ws, std::size_t c)
@@ -302,13 +242,20 @@ Solid objectSolid(const CollisionModel &model, std::size_t o)
 }
 }  // namespace
 
+int batchWorkers(std::size_t n, int requested)
+{
+    const std::size_t cap = std::max<std::size_t>(1, n / 16);
+    const std::size_t wanted = static_cast<std::size_t>(requested > 0 ? requested : omp_get_max_threads());
+    return static_cast<int>(std::min(wanted, cap));
+}
+
 CpuBackend::CpuBackend(CollisionModelConstPtr model) : model_(std::move(model)) {}
 
 CpuBackend::~CpuBackend() = default;
 
 std::unique_ptr<CpuWorkspace> CpuBackend::makeWorkspace() const { return std::make_unique<CpuWorkspace>(*model_); }
 
-std::unique_ptr<CpuWorkspace> CpuBackend::acquire() const
+std::unique_ptr<CpuWorkspace> CpuBackend::borrow() const
 {
     {
         std::lock_guard<std::mutex> lock(poolMutex_);
@@ -322,10 +269,23 @@ std::unique_ptr<CpuWorkspace> CpuBackend::acquire() const
     return makeWorkspace();
 }
 
-void CpuBackend::release(std::unique_ptr<CpuWorkspace> workspace) const
+void CpuBackend::giveBack(std::unique_ptr<CpuWorkspace> workspace) const
 {
     std::lock_guard<std::mutex> lock(poolMutex_);
     pool_.push_back(std::move(workspace));
+}
+
+void CpuBackend::refitState(const double *q, CpuWorkspace &ws) const { refit(*model_, q, ws); }
+
+bool CpuBackend::exactPair(std::uint32_t pair, double padding, CpuWorkspace &ws, Contact &contact) const
+{
+    const CollisionModel &model = *model_;
+    model.nameParties(pair, contact);
+    const Solid a = componentSolid(model, ws, static_cast<std::size_t>(contact.component));
+    const Solid b = contact.kind == Contact::Kind::Environment
+                        ? objectSolid(model, static_cast<std::size_t>(contact.object))
+                        : componentSolid(model, ws, static_cast<std::size_t>(contact.otherComponent));
+    return exactOverlap(a, b, padding, contact);
 }
 
 bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut) const
@@ -346,33 +306,18 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     const std::size_t m = model.numComponents();
 
     const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
-    const float padding = static_cast<float>(request.padding);
+    const float padding = device::floatPadding(request.padding);
     // Stage: distance set and the Alg. 1 box culls, then the pair pipeline.
     if (request.checkEnvironment && model.numObjects() > 0 && m > 0)
     {
         device::Box robotBounds = device::emptyBox();
         for (std::size_t c = 0; c < m; ++c)
             device::extend(robotBounds, ws.componentBounds[c]);
-        float robotCenter[3], robotRadius = 0;
-        for (int k = 0; k < 3; ++k)
-        {
-            robotCenter[k] = 0.5f * (robotBounds.min[k] + robotBounds.max[k]);
-            const float half = 0.5f * (robotBounds.max[k] - robotBounds.min[k]);
-            robotRadius += half * half;
-        }
-        robotRadius = std::sqrt(robotRadius);
+        const device::Sphere robotSphere = device::boundingSphere(robotBounds);
         for (std::size_t o = 0; o < model.numObjects(); ++o)
         {
             const device::Box &objectBox = model.objectBoxes[o];
-            float distance = 0, objectRadius = 0;
-            for (int k = 0; k < 3; ++k)
-            {
-                const float d = 0.5f * (objectBox.min[k] + objectBox.max[k]) - robotCenter[k];
-                const float half = 0.5f * (objectBox.max[k] - objectBox.min[k]);
-                distance += d * d;
-                objectRadius += half * half;
-            }
-            if (std::sqrt(distance) > robotRadius + std::sqrt(objectRadius) + padding)
+            if (!device::objectWithinReach(robotSphere, objectBox, padding))
                 continue;
             const Solid object = objectSolid(model, o);
             for (std::size_t k = 0; k < m;)
@@ -383,7 +328,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     continue;
                 }
                 if (device::orientedBoxOverlapsBox(ws.componentBox[k], objectBox, padding) &&
-                    pairCollides(componentSolid(model, ws, k), object, request, pixel, ws, contact))
+                    pairCollides(componentSolid(model, ws, k), object, request, pixel, model.origin, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -399,7 +344,8 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         {
             if (!device::orientedBoxesOverlap(ws.componentBox[a], ws.componentBox[b], padding))
                 continue;
-            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b), request, pixel, ws, contact))
+            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b), request, pixel,
+                             model.origin, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;
@@ -419,7 +365,7 @@ bool CpuBackend::rasterImage(const double *q, const Contact &contact, const Coll
     const bool environment = contact.kind == Contact::Kind::Environment;
     if ((!environment && contact.kind != Contact::Kind::SelfCollision) || !model.configurationAdmissible(q))
         return false;
-    std::unique_ptr<CpuWorkspace> ws = acquire();
+    std::unique_ptr<CpuWorkspace> ws = borrow();
     refit(model, q, *ws);
     const Solid a = componentSolid(model, *ws, static_cast<std::size_t>(contact.component));
     const Solid b = environment ? objectSolid(model, static_cast<std::size_t>(contact.object))
@@ -429,8 +375,13 @@ bool CpuBackend::rasterImage(const double *q, const Contact &contact, const Coll
     Contact scratch;
     const bool made = preparePair(a, b, request, pixel, *ws, pair);
     if (made)
+    {
         rasterHit(a, pair.worldA, ws->candidatesA, b, pair.worldB, ws->candidatesB, pair.grid, *ws, scratch, &image);
-    release(std::move(ws));
+        // Pictures label world coordinates.
+        image.grid.origin[0] += static_cast<float>(model.origin[(pair.grid.axis + 1) % 3]);
+        image.grid.origin[1] += static_cast<float>(model.origin[(pair.grid.axis + 2) % 3]);
+    }
+    giveBack(std::move(ws));
     return made;
 }
 
@@ -438,24 +389,24 @@ void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Cont
                        const CollisionRequest &request, int threads) const
 {
     const std::size_t dof = model_->robot->numCoordinates();
-    const int workers = threads > 0 ? threads : omp_get_max_threads();
+    const int workers = batchWorkers(n, threads);
     if (workers == 1 || n < 2)
     {
-        std::unique_ptr<CpuWorkspace> ws = acquire();
+        std::unique_ptr<CpuWorkspace> ws = borrow();
         for (std::size_t i = 0; i < n; ++i)
             valid[i] = isValid(q + i * dof, request, *ws, contacts ? contacts + i : nullptr) ? 1 : 0;
-        release(std::move(ws));
+        giveBack(std::move(ws));
         return;
     }
 #pragma omp parallel num_threads(workers)
     {
-        std::unique_ptr<CpuWorkspace> ws = acquire();
+        std::unique_ptr<CpuWorkspace> ws = borrow();
 #pragma omp for schedule(dynamic, 16)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
             valid[i] = isValid(q + static_cast<std::size_t>(i) * dof, request, *ws, contacts ? contacts + i : nullptr)
                            ? 1
                            : 0;
-        release(std::move(ws));
+        giveBack(std::move(ws));
     }
 }
 }  // namespace rastercheck

@@ -4,12 +4,54 @@
 #include <mutex>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "rastercheck/collision/Backend.h"
+#include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/Pose.h"
 #include "rastercheck/device/Raster.h"
 
 namespace rastercheck
 {
-struct CpuWorkspace;
+/** \brief Scratch of one thread: every buffer the stages write, sized on first use and reused. */
+struct CpuWorkspace
+{
+    explicit CpuWorkspace(const CollisionModel &model)
+      : jointValues(model.robot->joints.size())
+      , linkPoses(model.robot->links.size())
+      , componentPose(model.numComponents())
+      , componentExactPose(model.numComponents())
+      , componentBox(model.numComponents())
+      , componentBounds(model.numComponents())
+      , layerBounds(model.numComponents())
+      , componentWorld(model.numComponents())
+      , componentWorldState(model.numComponents(), 0)
+    {
+    }
+
+    std::vector<double> jointValues;                       // n_joints
+    std::vector<device::Pose<double>> linkPoses;           // n_links
+    std::vector<device::Pose<float>> componentPose;        // n_components
+    std::vector<Eigen::Isometry3d> componentExactPose;     // n_components
+    std::vector<device::OrientedBox> componentBox;         // n_components, world
+    std::vector<device::Box> componentBounds;              // n_components, world
+    std::vector<device::Box> layerBounds;                  // n_components: bounds of layer k's subtree
+
+    // World vertices of each component, transformed once per state on first use (a component
+    // meets several objects); componentWorldState says for which state they are current.
+    std::vector<std::vector<device::Vec3<float>>> componentWorld;  // n_components x n_vertices
+    std::vector<std::uint64_t> componentWorldState;                // n_components
+    std::uint64_t state = 0;
+    std::vector<std::uint32_t> candidatesA, candidatesB;
+    std::vector<int> pixelCount;                       // n_pixels
+    std::vector<int> pixelStart;                       // n_pixels + 1
+    std::vector<device::Fragment> fragments;           // total fragments
+};
+
+/** \brief Worker threads for a batch of \a n states: \a requested (0 = all cores), but at least
+    16 states each. Forking a team for a handful of states (the motion validator's first rakes)
+    costs more than it saves, and far more when the cores are busy (threads spin at the join). */
+int batchWorkers(std::size_t n, int requested);
 
 /** \brief One pair's image plane: coverage per pixel (bit 0: the component, bit 1: the other solid)
     and the pixels whose rays find the solids overlapping. Row-major, grid.width x grid.height. */
@@ -37,6 +79,16 @@ public:
     bool isValid(const double *q, const CollisionRequest &request, CpuWorkspace &workspace, Contact *contact) const;
 
     std::unique_ptr<CpuWorkspace> makeWorkspace() const;
+    /** \brief A pooled workspace (made when the pool is empty); give it back with giveBack(). */
+    std::unique_ptr<CpuWorkspace> borrow() const;
+    void giveBack(std::unique_ptr<CpuWorkspace> workspace) const;
+
+    /** \brief Forward kinematics and box refit of state \a q into \a workspace: what exactPair needs. */
+    void refitState(const double *q, CpuWorkspace &workspace) const;
+    /** \brief The exact narrow phase of one pair (CollisionModel's numbering) at the state last
+        refitted into \a workspace, with \a padding. On collision fills \a contact completely. The
+        GPU backend finishes the pairs its stages could not settle with this. */
+    bool exactPair(std::uint32_t pair, double padding, CpuWorkspace &workspace, Contact &contact) const;
 
     /** \brief The raster image of the pair named by \a contact at state \a q (the paper's Fig. 6):
         which pixels each solid covers and where Sort_Search_Pair finds the overlap. For pictures and
@@ -44,9 +96,6 @@ public:
     bool rasterImage(const double *q, const Contact &contact, const CollisionRequest &request, RasterImage &image) const;
 
 private:
-    std::unique_ptr<CpuWorkspace> acquire() const;
-    void release(std::unique_ptr<CpuWorkspace> workspace) const;
-
     CollisionModelConstPtr model_;
     mutable std::mutex poolMutex_;
     mutable std::vector<std::unique_ptr<CpuWorkspace>> pool_;

@@ -68,7 +68,9 @@ RC_HD bool isEmpty(const Box &box)
     return box.min[0] > box.max[0] || box.min[1] > box.max[1] || box.min[2] > box.max[2];
 }
 
-/** \brief pose * box (box given in the link frame). */
+/** \brief pose * box (box given in the link frame), grown by 1e-6 of the translation's size: the
+    float pose rounded it to about 6e-8 of that, and a cull must not cut off geometry however far
+    from the origin the component is. */
 RC_HD OrientedBox transformBox(const Pose<float> &pose, const OrientedBox &local)
 {
     OrientedBox world;
@@ -80,8 +82,9 @@ RC_HD OrientedBox transformBox(const Pose<float> &pose, const OrientedBox &local
         for (int col = 0; col < 3; ++col)
             world.axes[3 * r + col] = pose.m[4 * r] * local.axes[col] + pose.m[4 * r + 1] * local.axes[3 + col] +
                                       pose.m[4 * r + 2] * local.axes[6 + col];
+    const float rounding = 1e-6f * (fabsf(pose.m[3]) + fabsf(pose.m[7]) + fabsf(pose.m[11]));
     for (int k = 0; k < 3; ++k)
-        world.half[k] = local.half[k];
+        world.half[k] = local.half[k] + rounding;
     return world;
 }
 

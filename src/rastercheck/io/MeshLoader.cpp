@@ -23,13 +23,14 @@ namespace rastercheck
 {
 namespace
 {
-// Files are read with validation only, checked, then post-processed as OMPL.app does. Validation:
-// assimp's importers can return face indices past the vertices on malformed input (a PLY, found by
-// fuzz_mesh), which crashed the later steps and would be copied into our meshes. The check between:
-// checkAndPostProcess.
-constexpr unsigned int kReadFlags = aiProcess_ValidateDataStructure;
-constexpr unsigned int kPostProcessFlags =
-    aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+// Files are read without post-processing, checked (checkAndPostProcess), then post-processed as
+// OMPL.app does. assimp's importers can return face indices past the vertices or faces without
+// vertices on malformed input (a PLY, found by fuzz_mesh), which crashed the later steps and would be
+// copied into our meshes. assimp's own ValidateDataStructure would catch them too, but it also
+// rejects what the post-processing repairs (a truncated OBJ's last face read as a line, a file of
+// points only) with messages that do not say what is wrong for us.
+constexpr unsigned int kReadFlags = 0;
+constexpr unsigned int kPostProcessFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
 
 void configure(Assimp::Importer &importer, ColladaUpAxis upAxis)
 {
@@ -158,9 +159,17 @@ const aiScene *checkAndPostProcess(Assimp::Importer &importer, const aiScene *sc
     {
         const aiMesh *mesh = scene->mMeshes[m];
         for (unsigned int f = 0; f < mesh->mNumFaces; ++f)
-            if (mesh->mFaces[f].mNumIndices == 0)
+        {
+            const aiFace &face = mesh->mFaces[f];
+            if (face.mNumIndices == 0 || !face.mIndices)
                 throw InputError(name, "mesh '" + std::string(mesh->mName.C_Str()) + "'",
                                  "face " + std::to_string(f) + " has no vertices");
+            for (unsigned int k = 0; k < face.mNumIndices; ++k)
+                if (face.mIndices[k] >= mesh->mNumVertices)
+                    throw InputError(name, "mesh '" + std::string(mesh->mName.C_Str()) + "'",
+                                     "face " + std::to_string(f) + " names vertex " + std::to_string(face.mIndices[k]) +
+                                         " of " + std::to_string(mesh->mNumVertices));
+        }
     }
     return importer.ApplyPostProcessing(kPostProcessFlags);
 }

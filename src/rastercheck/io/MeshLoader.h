@@ -34,9 +34,9 @@ enum class ColladaUpAxis
 
 /** \brief Reads a mesh file (STL, OBJ, DAE, anything assimp reads) as one node per assimp node
     that owns meshes (assimp flags Triangulate | JoinIdenticalVertices | SortByPType, as OMPL.app,
-    applied after the file passed assimp's ValidateDataStructure and has no face without vertices).
+    applied after a check that every face has vertices and names only vertices the mesh has).
     Units are those of the file (COLLADA <unit> is applied by assimp).
-    Throws InputError naming the file when it is missing, unreadable (assimp's validation included),
+    Throws InputError naming the file when it is missing, unreadable (a face naming no vertex or a missing one included),
     or has no triangles, when a vertex coordinate is not finite, or when a PLY file is not in the
     form detail::checkPly (io/PlyCheck.h) accepts (assimp would hang or allocate what a malformed one
     declares: checked before assimp reads it). OBJ material libraries

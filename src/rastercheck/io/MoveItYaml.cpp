@@ -2,11 +2,13 @@
 
 #include <cmath>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/core/Log.h"
 
 namespace rastercheck
 {
@@ -271,6 +273,7 @@ ScenePtr readScene(const std::string &yaml, const std::string &sourceName, doubl
     if (!world.IsMap())
         throw InputError(sourceName, "world", "expected a map");
     const YAML::Node objects = reader.sequence(world["collision_objects"], "world.collision_objects");
+    std::set<std::string> ids;
     for (std::size_t k = 0; objects && k < objects.size(); ++k)
     {
         const YAML::Node object = objects[k];
@@ -278,6 +281,9 @@ ScenePtr readScene(const std::string &yaml, const std::string &sourceName, doubl
             throw InputError(sourceName, "collision object #" + std::to_string(k), "expected a map");
         const std::string id = reader.text(object["id"], "collision object #" + std::to_string(k) + " id");
         const std::string where = "collision object '" + id + "'";
+        // MoveIt would let the second ADD replace the first: an obstacle of the file silently gone.
+        if (!ids.insert(id).second)
+            throw InputError(sourceName, where + " (#" + std::to_string(k) + ")", "id defined twice");
         // Only additions describe geometry; MotionBenchMaker scenes carry no operation field.
         if (object["operation"] && object["operation"].IsScalar())
         {
@@ -301,7 +307,14 @@ ScenePtr readScene(const std::string &yaml, const std::string &sourceName, doubl
         {
             Mesh worldMesh;
             worldMesh.append(shapes[i].mesh, objectPose * shapes[i].pose);
-            scene->addObject(shapes.size() == 1 ? id : id + "/" + std::to_string(i), std::move(worldMesh));
+            try
+            {
+                scene->addObject(shapes.size() == 1 ? id : id + "/" + std::to_string(i), std::move(worldMesh));
+            }
+            catch (const ConfigurationError &e)  // "a/0" from object a's shapes met an object called "a/0"
+            {
+                throw InputError(sourceName, where, e.what());
+            }
         }
     }
     return scene;
@@ -315,7 +328,10 @@ ScenePtr loadMoveItSceneString(const std::string &yaml, const std::string &sourc
 {
     try
     {
-        return readScene(yaml, sourceName, primitiveError);
+        ScenePtr scene = readScene(yaml, sourceName, primitiveError);
+        if (scene->objects.empty())
+            logWarning(sourceName + ": the scene has no collision objects: only self-collision is checked");
+        return scene;
     }
     catch (const YAML::Exception &e)
     {
@@ -354,7 +370,9 @@ MotionPlanRequest readRequest(const std::string &yaml, const std::string &source
                 sourceName, "start_state.joint_state",
                 std::to_string(names.size()) + " names but " + std::to_string(positions.size()) + " positions");
         for (std::size_t i = 0; i < names.size(); ++i)
-            request.startJoints[names[i]] = positions[i];
+            if (!request.startJoints.emplace(names[i], positions[i]).second)
+                throw InputError(sourceName, "start_state.joint_state.name[" + std::to_string(i) + "]",
+                                 "joint '" + names[i] + "' appears twice");
     }
 
     const YAML::Node goals = reader.sequence(root["goal_constraints"], "goal_constraints");
@@ -369,6 +387,8 @@ MotionPlanRequest readRequest(const std::string &yaml, const std::string &source
             if (!c.IsMap())
                 throw InputError(sourceName, where, "expected a map");
             const std::string name = reader.text(c["joint_name"], where + ".joint_name");
+            if (request.goalJoints.count(name))
+                throw InputError(sourceName, where + ".joint_name", "joint '" + name + "' is constrained twice");
             request.goalJoints[name] = reader.number(c["position"], where + ".position");
             if (c["tolerance_above"])
                 request.goalToleranceAbove[name] = reader.number(c["tolerance_above"], where + ".tolerance_above");

@@ -19,7 +19,9 @@ namespace rastercheck
     [height radius]; the type may be a name or the message constant (1 box .. 4 cone).
     `header.frame_id` is not interpreted: poses are taken as given in the planning frame (the robot's
     root, as in MotionBenchMaker). The scene's allowed-collision matrix and robot state are not read.
-    An object whose `operation` is REMOVE or MOVE is an InputError (it describes no geometry).
+    An object whose `operation` is REMOVE or MOVE is an InputError (it describes no geometry), and
+    so is an id used twice (MoveIt would replace the first object: an obstacle silently lost).
+    A scene without collision objects loads with a warning (only self-collision is checked).
     Throws InputError naming the file and the object on malformed input. */
 ScenePtr loadMoveItScene(const std::string &path, double primitiveError = kDefaultPrimitiveError);
 ScenePtr loadMoveItSceneString(const std::string &yaml, const std::string &sourceName = "<scene>",
@@ -39,8 +41,8 @@ struct MotionPlanRequest
 };
 
 /** \brief Reads a MotionPlanRequest YAML; missing sections leave their fields empty. Throws
-    InputError naming the file and element on malformed YAML, a non-number position, or name and
-    position lists of different lengths. */
+    InputError naming the file and element on malformed YAML, a non-number position, name and
+    position lists of different lengths, or a joint named twice (start) or constrained twice (goal). */
 MotionPlanRequest loadMoveItRequest(const std::string &path);
 MotionPlanRequest loadMoveItRequestString(const std::string &yaml, const std::string &sourceName = "<request>");
 }  // namespace rastercheck

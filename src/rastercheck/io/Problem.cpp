@@ -19,9 +19,16 @@ ScenePtr loadSceneFile(const std::string &path)
 {
     if (endsWith(path, ".yaml") || endsWith(path, ".yml"))
         return loadMoveItScene(path);
+    // Node names are labels, not ids: exporters repeat them or leave them empty. Make them unique.
     auto scene = std::make_shared<Scene>();
-    for (MeshNode &node : loadMeshNodes(path))
-        scene->addObject(node.name, std::move(node.mesh));
+    std::vector<MeshNode> nodes = loadMeshNodes(path);
+    for (std::size_t k = 0; k < nodes.size(); ++k)
+    {
+        std::string name = nodes[k].name.empty() ? "object" : nodes[k].name;
+        while (scene->objectIndex(name) >= 0)
+            name += "/" + std::to_string(k);
+        scene->addObject(name, std::move(nodes[k].mesh));
+    }
     return scene;
 }
 

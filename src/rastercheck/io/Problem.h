@@ -35,6 +35,7 @@ struct Problem
 Problem loadProblem(const ProblemSource &source);
 
 /** \brief A scene from a MoveIt scene YAML (by extension .yaml / .yml) or any mesh file assimp reads
-    (one object per node). */
+    (one object per node, named after it; a repeated or empty node name gets a "/k" suffix or the
+    name "object"). */
 ScenePtr loadSceneFile(const std::string &path);
 }  // namespace rastercheck

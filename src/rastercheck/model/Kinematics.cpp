@@ -3,7 +3,9 @@
 namespace rastercheck
 {
 RobotData::RobotData(const RobotModel &model)
-  : oMl(model.links.size(), Eigen::Isometry3d::Identity()), jointValues(model.joints.size(), 0.0)
+  : oMl(model.links.size(), Eigen::Isometry3d::Identity())
+  , jointValues(model.joints.size(), 0.0)
+  , linkPoses(model.links.size(), device::Pose<double>::identity())
 {
 }
 
@@ -33,28 +35,9 @@ Eigen::Isometry3d fromDevicePose(const device::Pose<double> &p)
 
 void forwardKinematics(const RobotModel &model, RobotData &data, const double *q)
 {
-    // Joint values first: a mimic joint may come before its source in the depth-first order
-    // (the Panda's second finger mimics the first, in a sibling branch).
-    for (std::size_t j = 0; j < model.joints.size(); ++j)
-        if (model.joints[j].firstCoordinate >= 0)
-            data.jointValues[j] = q[model.joints[j].firstCoordinate];
-    for (std::size_t j = 0; j < model.joints.size(); ++j)
-    {
-        const Joint &joint = model.joints[j];
-        if (joint.mimicOf >= 0)
-            data.jointValues[j] = joint.mimicMultiplier * data.jointValues[joint.mimicOf] + joint.mimicOffset;
-    }
-
-    data.oMl[0] = Eigen::Isometry3d::Identity();
-    for (std::size_t j = 0; j < model.joints.size(); ++j)
-    {
-        const Joint &joint = model.joints[j];
-        const double *values = joint.mimicOf >= 0 || device::coordinateCount(joint.kind) == 1
-                                   ? &data.jointValues[j]
-                                   : (joint.firstCoordinate >= 0 ? q + joint.firstCoordinate : nullptr);
-        const device::Vec3<double> axis{joint.axis.x(), joint.axis.y(), joint.axis.z()};
-        const device::Pose<double> local = device::jointPose(joint.kind, toDevicePose(joint.origin), axis, values);
-        data.oMl[joint.childLink] = data.oMl[joint.parentLink] * fromDevicePose(local);
-    }
+    device::linkPoses(model.kinematicJoints.data(), static_cast<int>(model.kinematicJoints.size()), q,
+                      data.jointValues.data(), data.linkPoses.data());
+    for (std::size_t l = 0; l < model.links.size(); ++l)
+        data.oMl[l] = fromDevicePose(data.linkPoses[l]);
 }
 }  // namespace rastercheck

@@ -17,11 +17,13 @@ struct RobotData
     std::vector<Eigen::Isometry3d> oMl;
     /** \brief Value of each one-coordinate joint (mimic resolved); unused for other kinds. */
     std::vector<double> jointValues;
+    /** \brief The same poses as oMl in device layout, as the shared chain computes them. */
+    std::vector<device::Pose<double>> linkPoses;
 };
 
 /** \brief Computes data.oMl from configuration \a q (model.numCoordinates() values, active-joint
-    order). The root link sits at the world origin. Uses the same per-joint function
-    (device::jointPose) as the GPU backend. */
+    order). The root link sits at the world origin. Runs the chain the GPU backend runs
+    (device::linkPoses), so both backends place links identically. */
 void forwardKinematics(const RobotModel &model, RobotData &data, const double *q);
 inline void forwardKinematics(const RobotModel &model, RobotData &data, const std::vector<double> &q)
 {

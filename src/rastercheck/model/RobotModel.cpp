@@ -1,4 +1,5 @@
 #include "rastercheck/model/RobotModel.h"
+#include "rastercheck/model/Kinematics.h"
 
 #include <algorithm>
 #include <cmath>
@@ -222,6 +223,12 @@ void RobotModel::finalize()
         if (a >= 0 && b >= 0)
             setCollisionAllowed(a, b, true);
     }
+
+    kinematicJoints.clear();
+    for (const Joint &joint : joints)
+        kinematicJoints.push_back(device::KinematicJoint{
+            joint.kind, joint.parentLink, joint.childLink, joint.firstCoordinate, joint.mimicOf, joint.mimicMultiplier,
+            joint.mimicOffset, toDevicePose(joint.origin), device::Vec3<double>{joint.axis.x(), joint.axis.y(), joint.axis.z()}});
 }
 
 std::vector<double> RobotModel::neutralConfiguration() const

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "rastercheck/device/Kinematics.h"
 #include "rastercheck/device/Pose.h"
 #include "rastercheck/geometry/Aabb.h"
 #include "rastercheck/geometry/Mesh.h"
@@ -103,6 +104,10 @@ public:
     /** \brief Allowed-collision matrix over components (symmetric, row-major, size n x n):
         true = pair exempt from self-collision checks. */
     std::vector<bool> allowedCollisions;
+
+    /** \brief The joints in device layout, same order (derived by finalize()): what forward
+        kinematics runs on, on the CPU and on the GPU. */
+    std::vector<device::KinematicJoint> kinematicJoints;
 
     std::size_t numCoordinates() const { return coordinateNames.size(); }
     std::size_t numComponents() const { return components.size(); }

@@ -1,11 +1,14 @@
 #include "rastercheck/model/Scene.h"
 
+#include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
 
 namespace rastercheck
 {
 void Scene::addObject(std::string name, Mesh worldMesh)
 {
+    if (objectIndex(name) >= 0)
+        throw ConfigurationError("scene object '" + name + "' is defined twice");
     SceneObject object;
     object.name = std::move(name);
     object.mesh = std::move(worldMesh);
@@ -15,6 +18,9 @@ void Scene::addObject(std::string name, Mesh worldMesh)
         logWarning("scene object '" + object.name + "' has no triangles; ignored");
         return;
     }
+    if (!object.topology.closed)
+        logWarning("scene object '" + object.name + "' is " + object.topology.summary() +
+                   ": its surface is checked exactly, but a component entirely inside it is not a collision");
     object.bounds = object.mesh.bounds();
     objects.push_back(std::move(object));
 }

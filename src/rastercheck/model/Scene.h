@@ -26,7 +26,10 @@ public:
     std::vector<SceneObject> objects;
 
     /** \brief Adds an object: cleans its mesh (cleanMesh), computes bounds. Empty meshes are skipped
-        with a warning naming \a name (an empty object can never collide). */
+        with a warning naming \a name (an empty object can never collide). An open mesh (holes after
+        cleaning) is kept with a warning: it is a surface without an inside, so a component entirely
+        inside it is not a collision. Throws ConfigurationError when an object named \a name exists
+        (contacts name objects; two of one name would make a contact ambiguous). */
     void addObject(std::string name, Mesh worldMesh);
 
     std::size_t numObjects() const { return objects.size(); }

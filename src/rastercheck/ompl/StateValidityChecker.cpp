@@ -22,6 +22,7 @@ StateValidityChecker::StateValidityChecker(const ::ompl::base::SpaceInformationP
     if (checker_->dof() != mapping_->numCoordinates())
         throw ConfigurationError("StateValidityChecker: the checker's robot has " + std::to_string(checker_->dof()) +
                                  " coordinates, the mapping's " + std::to_string(mapping_->numCoordinates()));
+    validate(request_);  // here, not first inside a planner's isValid()
 }
 
 bool StateValidityChecker::decide(const ::ompl::base::State *state, Contact *contact) const

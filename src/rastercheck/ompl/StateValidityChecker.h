@@ -25,7 +25,7 @@ class StateValidityChecker : public ::ompl::base::StateValidityChecker
 {
 public:
     /** \brief \a mapping must describe the state space of \a si; \a checker must check the mapping's
-        robot. Throws ConfigurationError otherwise. */
+        robot. Throws ConfigurationError otherwise, or when \a request is malformed (validate()). */
     StateValidityChecker(const ::ompl::base::SpaceInformationPtr &si, StateMappingConstPtr mapping,
                          CheckerConstPtr checker, const CollisionRequest &request = {});
 

@@ -1,0 +1,168 @@
+// Backends side by side: states/s against batch size and scene size for FCL (one core), the CPU
+// backend (all cores) and the CUDA backend (when a device is usable), and the motion validator's
+// per-edge latency, all in one run on the same states. Prints Markdown tables (docs/benchmarks.md).
+//
+// usage: rastercheck_bench_backends [max_batch=1000000] [mode=safe]
+//   CPU and FCL are timed on batches up to 10^4 states (their rate no longer depends on the batch
+//   size there); the GPU on every batch size up to max_batch.
+#include <cstdio>
+#include <cstdlib>
+#include <thread>
+
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+
+#include "BenchSupport.h"
+#include "Reference.h"
+#include "TestSupport.h"
+#include "rastercheck/collision/Checker.h"
+#include "rastercheck/ompl/Setup.h"
+
+using namespace rastercheck;
+
+namespace
+{
+struct SceneCase
+{
+    std::string name;
+    RobotModelConstPtr robot;
+    SceneConstPtr scene;
+};
+
+/** \brief Best of \a repeats timings of deciding \a n states, in states per second. */
+double statesPerSecond(const Backend &backend, const std::vector<double> &q, std::size_t n,
+                       const CollisionRequest &request, int repeats)
+{
+    std::vector<std::uint8_t> valid(n);
+    double best = 1e30;
+    for (int r = 0; r < repeats; ++r)
+        best = std::min(best, bench::seconds([&] { backend.check(q.data(), n, valid.data(), nullptr, request, 0); }));
+    return static_cast<double>(n) / best;
+}
+
+std::string rate(double statesPerSecond)
+{
+    char text[32];
+    if (statesPerSecond >= 1e6)
+        std::snprintf(text, sizeof text, "%.2fM", statesPerSecond / 1e6);
+    else
+        std::snprintf(text, sizeof text, "%.1fk", statesPerSecond / 1e3);
+    return text;
+}
+}  // namespace
+
+int main(int argc, char **argv)
+{
+    const std::size_t maxBatch = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 1000000;
+    const CollisionMode mode = argc > 2 ? parseCollisionMode(argv[2]) : CollisionMode::Safe;
+    const std::string root = bench::sharedDataOrExit();
+    const RobotModelConstPtr panda = bench::loadMbmRobot(root, "panda");
+    std::vector<SceneCase> cases;
+    for (const char *scenario : {"table_pick", "bookshelf_tall", "cage"})
+        cases.push_back({std::string("panda ") + scenario, panda,
+                         loadMoveItScene(bench::mbmProblemPath(root, "panda", scenario, 1, "scene"))});
+    const Problem &crane = test::plant();
+    cases.push_back({"crane in the plant", crane.robot, crane.scene});
+
+    CollisionRequest request;
+    request.mode = mode;
+    std::printf("mode %s, %u CPU threads\n\n", toString(mode).c_str(), std::thread::hardware_concurrency());
+
+    // States/s against batch size and scene size.
+    std::printf("| scene | triangles (robot / scene) | batch | FCL 1 core | CPU backend | GPU backend | GPU / FCL |\n");
+    std::printf("|---|---|---|---|---|---|---|\n");
+    for (const SceneCase &c : cases)
+    {
+        CheckerOptions gpuOptions;
+        gpuOptions.backend = BackendChoice::Cuda;
+        gpuOptions.minDeviceBatch = 1;
+        const Checker gpu(c.robot, c.scene, gpuOptions);
+        const bool haveGpu = gpu.backendName() != "cpu";
+        const CollisionModelConstPtr model(std::shared_ptr<void>(), &gpu.collisionModel());
+        const CpuBackend cpu(model);
+        test::FclReference fcl(*model);
+        const std::size_t dof = c.robot->numCoordinates();
+        const std::vector<double> q = bench::uniformStates(*c.robot, std::max<std::size_t>(maxBatch, 10000), 42);
+        std::size_t sceneTriangles = 0;
+        for (const SceneObject &object : c.scene->objects)
+            sceneTriangles += object.mesh.numTriangles();
+
+        const std::size_t fclStates = 10000;
+        const double fclRate = fclStates / bench::seconds([&] {
+            for (std::size_t i = 0; i < fclStates; ++i)
+                fcl.collides(q.data() + i * dof);
+        });
+        for (std::size_t batch = 1; batch <= maxBatch; batch *= 10)
+        {
+            const int repeats = batch <= 1000 ? 5 : 2;
+            const double cpuRate = batch <= 10000 ? statesPerSecond(cpu, q, batch, request, repeats) : 0;
+            const double gpuRate = haveGpu ? statesPerSecond(gpu.backend(), q, batch, request, repeats) : 0;
+            std::printf("| %s | %zu / %zu | %zu | %s | %s | %s | %s |\n", c.name.c_str(), c.robot->numTriangles(),
+                        sceneTriangles, batch, rate(fclRate).c_str(), cpuRate > 0 ? rate(cpuRate).c_str() : "-",
+                        haveGpu ? rate(gpuRate).c_str() : "no device",
+                        haveGpu ? (std::to_string(gpuRate / fclRate).substr(0, 6) + "x").c_str() : "-");
+        }
+    }
+
+    // Motion validator: per-edge latency on random edges (OMPL's default resolution, 1 %). FCL
+    // checks the same interpolated states one by one from the start, as DiscreteMotionValidator.
+    std::printf("\n| scene | checker | edges | mean latency per edge | states per edge |\n|---|---|---|---|---|\n");
+    for (const SceneCase &c : cases)
+        for (int choice = 0; choice < 3; ++choice)
+        {
+            rastercheck::ompl::SetupOptions options;
+            options.checker.backend = choice == 2 ? BackendChoice::Cuda : BackendChoice::Cpu;
+            options.request = request;
+            const Problem problem{c.robot, c.scene, nullptr};
+            ::ompl::geometric::SimpleSetupPtr setup = rastercheck::ompl::makeSimpleSetup(problem, options);
+            const rastercheck::ompl::StateValidityCheckerPtr checker = rastercheck::ompl::getStateValidityChecker(*setup);
+            if (choice == 2 && checker->getChecker().backendName() == "cpu")
+                continue;
+            const ::ompl::base::SpaceInformationPtr &si = setup->getSpaceInformation();
+            si->setup();
+            auto sampler = si->allocStateSampler();
+            const int edges = 2000;
+            std::vector<::ompl::base::State *> from(edges), to(edges);
+            for (int e = 0; e < edges; ++e)
+            {
+                from[e] = si->allocState();
+                to[e] = si->allocState();
+                sampler->sampleUniform(from[e]);
+                sampler->sampleUniform(to[e]);
+            }
+            const auto validator = si->getMotionValidator();
+            test::FclReference fcl(checker->getChecker().collisionModel());
+            std::vector<double> q(c.robot->numCoordinates());
+            ::ompl::base::State *between = si->allocState();
+            const double elapsed = bench::seconds([&] {
+                for (int e = 0; e < edges; ++e)
+                {
+                    if (choice != 0)
+                    {
+                        validator->checkMotion(from[e], to[e]);
+                        continue;
+                    }
+                    const unsigned steps = si->getStateSpace()->validSegmentCount(from[e], to[e]);
+                    for (unsigned k = 1; k <= steps; ++k)
+                    {
+                        si->getStateSpace()->interpolate(from[e], to[e], static_cast<double>(k) / steps, between);
+                        checker->getStateMapping().toConfiguration(between, q.data());
+                        if (fcl.collides(q.data()))
+                            break;
+                    }
+                }
+            });
+            si->freeState(between);
+            std::uint64_t states = 0;
+            for (int e = 0; e < edges; ++e)
+                states += si->getStateSpace()->validSegmentCount(from[e], to[e]);
+            const std::string name = choice == 0 ? "FCL, 1 core" : checker->getChecker().backendName() + " backend";
+            std::printf("| %s | %s | %d | %.1f us | %.1f |\n", c.name.c_str(), name.c_str(),
+                        edges, 1e6 * elapsed / edges, static_cast<double>(states) / edges);
+            for (int e = 0; e < edges; ++e)
+            {
+                si->freeState(from[e]);
+                si->freeState(to[e]);
+            }
+        }
+    return 0;
+}

@@ -1,0 +1,304 @@
+// The CUDA executor of the batched pipeline: each stage of device/BatchPipeline.h runs as one
+// kernel (forEachKernel instantiated with that stage's per-element function), compaction, scans
+// and the segmented sort are CUB calls. Buffers live for the runner's lifetime and only grow, so a
+// steady stream of batches does not allocate; the model is uploaded once.
+
+#include "CudaStageRunner.h"
+
+#include <algorithm>
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <cub/device/device_scan.cuh>
+#include <cub/device/device_segmented_sort.cuh>
+#include <cub/device/device_select.cuh>
+#include <cuda_runtime.h>
+#include <thrust/iterator/counting_iterator.h>
+
+#include "rastercheck/collision/StageChunks.h"
+
+namespace rastercheck::cuda
+{
+namespace
+{
+void check(cudaError_t status, const char *what)
+{
+    if (status != cudaSuccess)
+        throw std::runtime_error(std::string("CUDA: ") + what + " failed: " + cudaGetErrorName(status) + " (" +
+                                 cudaGetErrorString(status) + ")");
+}
+
+template <class F>
+__global__ void forEachKernel(std::size_t n, F f)
+{
+    const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < n)
+        f(i);
+}
+
+__global__ void probeKernel(int *out) { *out = 42; }
+
+/** \brief One device allocation that only grows. */
+struct DeviceAllocation
+{
+    void *pointer = nullptr;
+    std::size_t bytes = 0;
+
+    void *reserve(std::size_t need, const char *what)
+    {
+        if (need <= bytes)
+            return pointer;
+        release();
+        const std::size_t grown = need + need / 4;  // headroom: fewer regrowths as batches vary
+        check(cudaMalloc(&pointer, grown), what);
+        bytes = grown;
+        return pointer;
+    }
+    void release()
+    {
+        if (pointer)
+            cudaFree(pointer);
+        pointer = nullptr;
+        bytes = 0;
+    }
+};
+
+class CudaExecutor
+{
+public:
+    CudaExecutor() { check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate"); }
+    ~CudaExecutor()
+    {
+        for (DeviceAllocation &a : buffers_)
+            a.release();
+        temp_.release();
+        keysAlt_.release();
+        valuesAlt_.release();
+        count_.release();
+        cudaStreamDestroy(stream_);
+    }
+    CudaExecutor(const CudaExecutor &) = delete;
+    CudaExecutor &operator=(const CudaExecutor &) = delete;
+
+    template <class T>
+    T *buffer(int slot, std::size_t count)
+    {
+        return static_cast<T *>(buffers_[static_cast<std::size_t>(slot)].reserve(std::max<std::size_t>(1, count) * sizeof(T),
+                                                                                 "cudaMalloc (stage buffer)"));
+    }
+
+    template <class T>
+    void upload(T *destination, const T *source, std::size_t count)
+    {
+        if (count > 0)
+            check(cudaMemcpyAsync(destination, source, count * sizeof(T), cudaMemcpyHostToDevice, stream_),
+                  "cudaMemcpyAsync (upload)");
+    }
+
+    template <class T>
+    void download(T *destination, const T *source, std::size_t count)
+    {
+        if (count > 0)
+            check(cudaMemcpyAsync(destination, source, count * sizeof(T), cudaMemcpyDeviceToHost, stream_),
+                  "cudaMemcpyAsync (download)");
+        check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize (download)");
+    }
+
+    template <class F>
+    void forEach(std::size_t n, F f)
+    {
+        if (n == 0)
+            return;
+        constexpr unsigned threads = 256;
+        const std::size_t blocks = (n + threads - 1) / threads;
+        forEachKernel<<<static_cast<unsigned>(blocks), threads, 0, stream_>>>(n, f);
+        check(cudaGetLastError(), "kernel launch");
+    }
+
+    std::uint32_t selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected)
+    {
+        std::uint32_t *count = static_cast<std::uint32_t *>(count_.reserve(sizeof(std::uint32_t), "cudaMalloc (count)"));
+        const thrust::counting_iterator<std::uint32_t> indices(0);
+        std::size_t bytes = 0;
+        check(cub::DeviceSelect::Flagged(nullptr, bytes, indices, flags, selected, count, static_cast<std::int64_t>(n), stream_),
+              "cub::DeviceSelect::Flagged (size)");
+        check(cub::DeviceSelect::Flagged(temp_.reserve(bytes, "cudaMalloc (CUB scratch)"), bytes, indices, flags, selected,
+                                         count, static_cast<std::int64_t>(n), stream_),
+              "cub::DeviceSelect::Flagged");
+        std::uint32_t result = 0;
+        download(&result, count, 1);
+        return result;
+    }
+
+    /** \brief out[i] = sum of in[0..i); the inputs end with a zero, so the last output is the total. */
+    std::size_t exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n)
+    {
+        if (n == 0)
+            return 0;
+        std::size_t bytes = 0;
+        check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, n, stream_), "cub::DeviceScan::ExclusiveSum (size)");
+        check(cub::DeviceScan::ExclusiveSum(temp_.reserve(bytes, "cudaMalloc (CUB scratch)"), bytes, in, out, n, stream_),
+              "cub::DeviceScan::ExclusiveSum");
+        unsigned long long total = 0;
+        download(&total, out + (n - 1), 1);
+        return static_cast<std::size_t>(total);
+    }
+
+    void sortSegments(unsigned long long *keys, std::uint32_t *values, std::size_t n, const std::uint32_t *starts,
+                      std::uint32_t numSegments)
+    {
+        if (n == 0 || numSegments == 0)
+            return;
+        unsigned long long *keysOut =
+            static_cast<unsigned long long *>(keysAlt_.reserve(n * sizeof(unsigned long long), "cudaMalloc (sort keys)"));
+        std::uint32_t *valuesOut =
+            static_cast<std::uint32_t *>(valuesAlt_.reserve(n * sizeof(std::uint32_t), "cudaMalloc (sort values)"));
+        std::size_t bytes = 0;
+        check(cub::DeviceSegmentedSort::StableSortPairs(nullptr, bytes, keys, keysOut, values, valuesOut,
+                                                        static_cast<std::int64_t>(n), numSegments, starts, starts + 1,
+                                                        stream_),
+              "cub::DeviceSegmentedSort::StableSortPairs (size)");
+        check(cub::DeviceSegmentedSort::StableSortPairs(temp_.reserve(bytes, "cudaMalloc (CUB scratch)"), bytes, keys,
+                                                        keysOut, values, valuesOut, static_cast<std::int64_t>(n),
+                                                        numSegments, starts, starts + 1, stream_),
+              "cub::DeviceSegmentedSort::StableSortPairs");
+        check(cudaMemcpyAsync(keys, keysOut, n * sizeof(unsigned long long), cudaMemcpyDeviceToDevice, stream_),
+              "cudaMemcpyAsync (sorted keys)");
+        check(cudaMemcpyAsync(values, valuesOut, n * sizeof(std::uint32_t), cudaMemcpyDeviceToDevice, stream_),
+              "cudaMemcpyAsync (sorted values)");
+    }
+
+private:
+    cudaStream_t stream_ = nullptr;
+    std::array<DeviceAllocation, device::kNumStageBuffers> buffers_;
+    DeviceAllocation temp_, keysAlt_, valuesAlt_, count_;
+};
+
+/** \brief A host array copied to the device once. */
+template <class T>
+const T *uploadOnce(std::vector<DeviceAllocation> &keep, const T *source, std::size_t count)
+{
+    keep.emplace_back();
+    void *p = keep.back().reserve(std::max<std::size_t>(1, count) * sizeof(T), "cudaMalloc (model)");
+    if (count > 0)
+        check(cudaMemcpy(p, source, count * sizeof(T), cudaMemcpyHostToDevice), "cudaMemcpy (model)");
+    return static_cast<const T *>(p);
+}
+
+class CudaStageRunner : public StageRunner
+{
+public:
+    CudaStageRunner(const device::ModelArrays &host, std::string deviceName)
+      : deviceName_(std::move(deviceName))
+    {
+        const std::size_t m = static_cast<std::size_t>(host.numComponents);
+        const std::size_t o = static_cast<std::size_t>(host.numObjects);
+        model_ = host;
+        model_.joints = uploadOnce(model_memory_, host.joints, static_cast<std::size_t>(host.numJoints));
+        model_.componentVertices = uploadOnce(model_memory_, host.componentVertices, host.numComponentVertexFloats);
+        model_.componentTriangles = uploadOnce(model_memory_, host.componentTriangles, host.numComponentTriangleIndices);
+        model_.components = uploadOnce(model_memory_, host.components, m);
+        model_.componentLocalBoxes = uploadOnce(model_memory_, host.componentLocalBoxes, m);
+        model_.componentLink = uploadOnce(model_memory_, host.componentLink, m);
+        model_.componentSubtreeEnd = uploadOnce(model_memory_, host.componentSubtreeEnd, m);
+        model_.objectVertices = uploadOnce(model_memory_, host.objectVertices, host.numObjectVertexFloats);
+        model_.objectTriangles = uploadOnce(model_memory_, host.objectTriangles, host.numObjectTriangleIndices);
+        model_.objects = uploadOnce(model_memory_, host.objects, o);
+        model_.objectBoxes = uploadOnce(model_memory_, host.objectBoxes, o);
+        model_.selfPairs = uploadOnce(model_memory_, host.selfPairs, 2 * static_cast<std::size_t>(host.numSelfPairs));
+
+        // Budgets from the free memory, leaving half of it to others: bytes per element of each
+        // stage's buffers (fragments: key, value, their sorted copies and the walk's fragment).
+        std::size_t freeBytes = 0, totalBytes = 0;
+        check(cudaMemGetInfo(&freeBytes, &totalBytes), "cudaMemGetInfo");
+        const std::size_t usable = freeBytes / 2;
+        const std::size_t perState = 8 * static_cast<std::size_t>(host.numCoordinates + host.numJoints) +
+                                     96 * static_cast<std::size_t>(host.numLinks) + 160 * m + 32;
+        budget_.maxFragments = std::max<std::size_t>(1 << 20, usable * 4 / 10 / 32);
+        budget_.maxItems = std::max<std::size_t>(1 << 20, usable * 2 / 10 / 16);
+        budget_.maxPairElements = std::max<std::size_t>(host.numPairs(), usable * 2 / 10 / 8);
+        budget_.maxStates = std::max<std::size_t>(1, usable / 10 / perState);
+        // 32-bit indices inside a chunk.
+        budget_.maxFragments = std::min<std::size_t>(budget_.maxFragments, 1u << 31);
+        budget_.maxItems = std::min<std::size_t>(budget_.maxItems, 1u << 31);
+        budget_.maxPairElements = std::min<std::size_t>(budget_.maxPairElements, 1u << 31);
+    }
+
+    ~CudaStageRunner() override
+    {
+        for (DeviceAllocation &a : model_memory_)
+            a.release();
+    }
+
+    std::string name() const override { return "cuda (" + deviceName_ + ")"; }
+
+    void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
+             std::vector<device::PairOutcome> &outcomes) override
+    {
+        runStagesInChunks(executor_, model_, settings, budget_, q, admissible, n, outcomes);
+    }
+
+private:
+    std::string deviceName_;
+    std::vector<DeviceAllocation> model_memory_;
+    device::ModelArrays model_{};
+    device::StageBudget budget_;
+    CudaExecutor executor_;
+};
+}  // namespace
+
+bool deviceUsable(std::string &description)
+{
+    int count = 0;
+    cudaError_t status = cudaGetDeviceCount(&count);
+    if (status != cudaSuccess)
+    {
+        description = std::string("no CUDA device: ") + cudaGetErrorString(status);
+        cudaGetLastError();  // clear the sticky error state
+        return false;
+    }
+    if (count == 0)
+    {
+        description = "no CUDA device";
+        return false;
+    }
+    cudaDeviceProp properties{};
+    if ((status = cudaGetDeviceProperties(&properties, 0)) != cudaSuccess)
+    {
+        description = std::string("CUDA device 0 unreadable: ") + cudaGetErrorString(status);
+        return false;
+    }
+    // A device this build has no kernels for (or a broken driver) shows on the first launch.
+    int *probe = nullptr;
+    int answer = 0;
+    status = cudaMalloc(&probe, sizeof(int));
+    if (status == cudaSuccess)
+    {
+        probeKernel<<<1, 1>>>(probe);
+        status = cudaGetLastError();
+        if (status == cudaSuccess)
+            status = cudaMemcpy(&answer, probe, sizeof(int), cudaMemcpyDeviceToHost);
+        cudaFree(probe);
+    }
+    if (status != cudaSuccess || answer != 42)
+    {
+        description = std::string(properties.name) + " cannot run this build's kernels: " + cudaGetErrorString(status);
+        cudaGetLastError();
+        return false;
+    }
+    std::size_t freeBytes = 0, totalBytes = 0;
+    cudaMemGetInfo(&freeBytes, &totalBytes);
+    description = std::string(properties.name) + ", compute " + std::to_string(properties.major) + "." +
+                  std::to_string(properties.minor) + ", " + std::to_string(freeBytes >> 30) + " GiB free";
+    return true;
+}
+
+std::unique_ptr<StageRunner> makeStageRunner(const device::ModelArrays &model)
+{
+    cudaDeviceProp properties{};
+    check(cudaGetDeviceProperties(&properties, 0), "cudaGetDeviceProperties");
+    return std::make_unique<CudaStageRunner>(model, properties.name);
+}
+}  // namespace rastercheck::cuda

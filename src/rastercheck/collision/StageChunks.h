@@ -1,0 +1,57 @@
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "rastercheck/device/BatchPipeline.h"
+
+namespace rastercheck
+{
+/** \brief Runs the stages over \a n states in chunks that fit \a budget: a chunk that overflows is
+    halved and run again, so a batch of any size gets the verdicts it would get in one pass. A
+    single state that still overflows is run without rasterizing: its pairs go to the exact phase,
+    slower and never wrong (in raster mode that state gets the exact answer, which may find
+    collisions the raster would miss). Shared by the host and CUDA runners. */
+template <class Exec>
+void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device::StageSettings &settings,
+                       const device::StageBudget &budget, const double *q, const std::uint8_t *admissible,
+                       std::size_t n, std::vector<device::PairOutcome> &outcomes)
+{
+    const std::size_t dof = static_cast<std::size_t>(model.numCoordinates);
+    const std::size_t pairs = std::max<std::size_t>(1, model.numPairs());
+    if (pairs > budget.maxPairElements)
+        throw std::length_error("the model has more pairs than one pass can hold");
+    std::size_t chunk = std::min({n, budget.maxStates, budget.maxPairElements / pairs});
+    std::vector<device::PairOutcome> part;
+    std::size_t start = 0;
+    while (start < n)
+    {
+        const std::size_t count = std::min(chunk, n - start);
+        const device::PairOutcome *chunkOutcomes = nullptr;
+        std::uint32_t numOutcomes = 0;
+        if (!device::runStageChunk(ex, model, settings, budget, q + start * dof, admissible + start,
+                                   static_cast<std::uint32_t>(count), chunkOutcomes, numOutcomes))
+        {
+            if (count > 1)
+            {
+                chunk = count / 2;
+                continue;
+            }
+            device::StageSettings unrasterized = settings;
+            unrasterized.rasterize = false;
+            if (!device::runStageChunk(ex, model, unrasterized, budget, q + start * dof, admissible + start, 1,
+                                       chunkOutcomes, numOutcomes))
+                throw std::length_error("one state's pairs exceed the stage budget");
+        }
+        part.resize(numOutcomes);
+        ex.download(part.data(), chunkOutcomes, numOutcomes);
+        for (device::PairOutcome &o : part)
+            o.state += static_cast<std::uint32_t>(start);
+        outcomes.insert(outcomes.end(), part.begin(), part.end());
+        start += count;
+    }
+}
+}  // namespace rastercheck

@@ -1,0 +1,244 @@
+#include "rastercheck/collision/StagedBackend.h"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <numeric>
+
+
+#include "rastercheck/collision/StageChunks.h"
+
+namespace rastercheck
+{
+device::ModelArrays hostModelArrays(const CollisionModel &model)
+{
+    static_assert(sizeof(std::pair<int, int>) == 2 * sizeof(int), "self pairs are read as int[2]");
+    const RobotModel &robot = *model.robot;
+    return device::ModelArrays{robot.kinematicJoints.data(),
+                               static_cast<int>(robot.kinematicJoints.size()),
+                               static_cast<int>(robot.links.size()),
+                               static_cast<int>(robot.numCoordinates()),
+                               model.componentVertices.data(),
+                               model.componentVertices.size(),
+                               model.componentTriangles.data(),
+                               model.componentTriangles.size(),
+                               model.components.data(),
+                               model.componentLocalBoxes.data(),
+                               model.componentLink.data(),
+                               model.componentSubtreeEnd.data(),
+                               static_cast<int>(model.numComponents()),
+                               model.objectVertices.data(),
+                               model.objectVertices.size(),
+                               model.objectTriangles.data(),
+                               model.objectTriangles.size(),
+                               model.objects.data(),
+                               model.objectBoxes.data(),
+                               static_cast<int>(model.numObjects()),
+                               reinterpret_cast<const int *>(model.selfPairs.data()),
+                               static_cast<int>(model.selfPairs.size()),
+                               {model.origin.x(), model.origin.y(), model.origin.z()}};
+}
+
+namespace
+{
+/** \brief The stages' primitives as host loops (OpenMP), for running the GPU's driver on the CPU. */
+class HostExecutor
+{
+public:
+    template <class T>
+    T *buffer(int slot, std::size_t count)
+    {
+        std::vector<unsigned char> &storage = buffers_[static_cast<std::size_t>(slot)];
+        if (storage.size() < count * sizeof(T))
+            storage.resize(count * sizeof(T));
+        return reinterpret_cast<T *>(storage.data());
+    }
+
+    template <class T>
+    void upload(T *destination, const T *source, std::size_t count)
+    {
+        if (count > 0)
+            std::memcpy(destination, source, count * sizeof(T));
+    }
+
+    template <class T>
+    void download(T *destination, const T *source, std::size_t count)
+    {
+        upload(destination, source, count);
+    }
+
+    template <class F>
+    void forEach(std::size_t n, F f)
+    {
+#pragma omp parallel for schedule(static)
+        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
+            f(static_cast<std::size_t>(i));
+    }
+
+    std::uint32_t selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected)
+    {
+        std::uint32_t count = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            if (flags[i])
+                selected[count++] = static_cast<std::uint32_t>(i);
+        return count;
+    }
+
+    std::size_t exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n)
+    {
+        unsigned long long total = 0;
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            const unsigned long long value = in[i];  // in and out may alias
+            out[i] = total;
+            total += value;
+        }
+        return n > 0 ? static_cast<std::size_t>(out[n - 1] + in[n - 1]) : 0;
+    }
+
+    /** \brief Stable sort of each segment [starts[s], starts[s + 1]) by key. */
+    void sortSegments(unsigned long long *keys, std::uint32_t *values, std::size_t n, const std::uint32_t *starts,
+                      std::uint32_t numSegments)
+    {
+        (void)n;
+#pragma omp parallel
+        {
+            std::vector<std::pair<unsigned long long, std::uint32_t>> scratch;
+#pragma omp for schedule(dynamic, 64)
+            for (std::ptrdiff_t s = 0; s < static_cast<std::ptrdiff_t>(numSegments); ++s)
+            {
+                const std::uint32_t begin = starts[s], end = starts[s + 1];
+                scratch.clear();
+                for (std::uint32_t i = begin; i < end; ++i)
+                    scratch.emplace_back(keys[i], values[i]);
+                std::stable_sort(scratch.begin(), scratch.end(),
+                                 [](const auto &a, const auto &b) { return a.first < b.first; });
+                for (std::uint32_t i = begin; i < end; ++i)
+                {
+                    keys[i] = scratch[i - begin].first;
+                    values[i] = scratch[i - begin].second;
+                }
+            }
+        }
+    }
+
+private:
+    std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
+};
+
+class HostStageRunner : public StageRunner
+{
+public:
+    HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget)
+      : model_(std::move(model)), arrays_(hostModelArrays(*model_)), budget_(budget)
+    {
+    }
+
+    std::string name() const override { return "cpu-staged"; }
+
+    void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
+             std::vector<device::PairOutcome> &outcomes) override
+    {
+        runStagesInChunks(executor_, arrays_, settings, budget_, q, admissible, n, outcomes);
+    }
+
+private:
+    CollisionModelConstPtr model_;
+    device::ModelArrays arrays_;
+    device::StageBudget budget_;
+    HostExecutor executor_;
+};
+}  // namespace
+
+std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget)
+{
+    return std::make_unique<HostStageRunner>(std::move(model), budget);
+}
+
+StagedBackend::StagedBackend(CollisionModelConstPtr model, std::unique_ptr<StageRunner> runner)
+  : model_(std::move(model)), exact_(model_), runner_(std::move(runner))
+{
+}
+
+StagedBackend::~StagedBackend() = default;
+
+void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
+                          const CollisionRequest &request, int threads) const
+{
+    const CollisionModel &model = *model_;
+    const std::size_t dof = model.robot->numCoordinates();
+    const int workers = batchWorkers(n, threads);
+
+    std::vector<std::uint8_t> admissible(n);
+#pragma omp parallel for num_threads(workers) schedule(static)
+    for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
+        admissible[i] = model.configurationAdmissible(q + static_cast<std::size_t>(i) * dof) ? 1 : 0;
+
+    device::StageSettings settings{};
+    settings.padding = device::floatPadding(request.padding);
+    settings.pixel = static_cast<float>(request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize);
+    settings.maxImageSide = request.maxImageSide;
+    settings.checkEnvironment = request.checkEnvironment;
+    settings.checkSelfCollision = request.checkSelfCollision;
+    // Safe mode reports the CPU's first contact when asked for contacts, which takes the exact
+    // phase on every pair; without contacts a raster hit is proof enough.
+    settings.rasterize = request.mode == CollisionMode::Raster || (request.mode == CollisionMode::Safe && !contacts);
+    settings.confirmMisses = request.mode == CollisionMode::Safe;
+
+    std::vector<device::PairOutcome> outcomes;
+    {
+        std::lock_guard<std::mutex> lock(runnerMutex_);
+        runner_->run(q, admissible.data(), n, settings, outcomes);
+    }
+    std::vector<std::size_t> firstOutcome(n + 1, outcomes.size());
+    for (std::size_t k = outcomes.size(); k-- > 0;)
+        firstOutcome[outcomes[k].state] = k;
+    for (std::size_t i = n; i-- > 0;)
+        firstOutcome[i] = std::min(firstOutcome[i], firstOutcome[i + 1]);
+
+    // Per-state reduction: the first pair (in the CPU's order) that collides.
+#pragma omp parallel num_threads(workers)
+    {
+        std::unique_ptr<CpuWorkspace> ws = exact_.borrow();
+#pragma omp for schedule(dynamic, 16)
+        for (std::ptrdiff_t si = 0; si < static_cast<std::ptrdiff_t>(n); ++si)
+        {
+            const std::size_t i = static_cast<std::size_t>(si);
+            Contact contact;
+            bool collides = false;
+            if (!admissible[i])
+            {
+                contact.kind = Contact::Kind::OutOfBounds;
+                collides = true;
+            }
+            const device::PairOutcome *begin = outcomes.data() + firstOutcome[i];
+            const device::PairOutcome *end = outcomes.data() + firstOutcome[i + 1];
+            if (!collides && !contacts)
+                collides = std::any_of(begin, end, [](const device::PairOutcome &o) { return o.status == device::PairOverlaps; });
+            bool refitted = false;
+            for (const device::PairOutcome *o = begin; !collides && o != end; ++o)
+            {
+                if (o->status == device::PairOverlaps)
+                {
+                    model.nameParties(o->pair, contact);
+                    contact.triangle = o->triangle;
+                    // The raster works relative to CollisionModel::origin.
+                    contact.position = Eigen::Vector3d(o->position[0], o->position[1], o->position[2]) + model.origin;
+                    collides = true;
+                }
+                else if (o->status == device::PairOpen)
+                {
+                    if (!refitted)
+                        exact_.refitState(q + i * dof, *ws);
+                    refitted = true;
+                    collides = exact_.exactPair(o->pair, request.padding, *ws, contact);
+                }
+            }
+            valid[i] = collides ? 0 : 1;
+            if (contacts)
+                contacts[i] = collides ? contact : Contact{};
+        }
+        exact_.giveBack(std::move(ws));
+    }
+}
+}  // namespace rastercheck

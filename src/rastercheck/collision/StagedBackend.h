@@ -1,0 +1,44 @@
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "rastercheck/collision/Backend.h"
+#include "rastercheck/collision/CpuBackend.h"
+#include "rastercheck/collision/StageRunner.h"
+
+namespace rastercheck
+{
+/** \brief The model's flat arrays in host memory, as the stages read them. */
+device::ModelArrays hostModelArrays(const CollisionModel &model);
+
+/** \brief The stages on the host, through the same driver as the GPU (plain loops for kernels). */
+std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget = {});
+
+/** \brief A batch backend: the stages decide every pair they can for the whole batch in one pass,
+    then the host reduces per state to the first colliding pair, deciding exactly (the CPU
+    backend's narrow phase) the pairs the stages leave open. Verdicts and first contacts are the
+    CPU backend's: in exact mode by construction; in raster mode through the shared per-element
+    code; in safe mode a raster hit settles a pair as colliding when no contacts are asked (the
+    fast path), and when contacts are asked every pair is decided exactly, as on the CPU. */
+class StagedBackend : public Backend
+{
+public:
+    StagedBackend(CollisionModelConstPtr model, std::unique_ptr<StageRunner> runner);
+    ~StagedBackend() override;
+
+    std::string name() const override { return runner_->name(); }
+    void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
+               const CollisionRequest &request, int threads) const override;
+
+private:
+    CollisionModelConstPtr model_;
+    CpuBackend exact_;
+    std::unique_ptr<StageRunner> runner_;
+    mutable std::mutex runnerMutex_;  // one pass at a time on the runner's buffers
+};
+}  // namespace rastercheck

@@ -1,0 +1,417 @@
+#pragma once
+
+// The batched pipeline: many states decided in one pass, stage by stage, each stage one data-
+// parallel loop over its elements (a kernel on the GPU). The driver is a template over an
+// executor that provides the loops, scans, compaction and segmented sort: the CUDA executor runs
+// them as kernels and CUB calls (cuda/), the host executor as plain loops (collision/
+// HostStageRunner), so the CPU test suite runs exactly the code the GPU runs, apart from those
+// primitives.
+//
+// Stages per chunk of states:
+//   1. forward kinematics (one element per state), component poses, OBBs and AABBs (per state x
+//      component), layer boxes and the robot's bounding sphere (per state);
+//   2. culls per (state, pair): distance filter, layer AABBs, OBB tests; compaction of survivors;
+//   3. per surviving pair: image window and grid; per (pair, triangle): the per-triangle cull and
+//      the pre-rasterization fragment count; scan;
+//   4. rasterization into the counted slots; segmented sort by (pixel, depth) per pair;
+//   5. Sort_Search_Pair per pixel run; per pair the first hit pixel (atomic minimum); outcomes.
+// The per-state reduction (the first colliding pair in pair order) runs on the host, which also
+// decides exactly the pairs the raster leaves open (StagedBackend).
+
+#include <cstddef>
+#include <cstdint>
+
+#include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/HostDevice.h"
+#include "rastercheck/device/Kinematics.h"
+#include "rastercheck/device/Raster.h"
+#include "rastercheck/device/Stages.h"
+
+#if defined(__CUDACC__)
+#define RC_LAMBDA __host__ __device__
+#else
+#define RC_LAMBDA
+#endif
+
+namespace rastercheck::device
+{
+/** \brief The model's flat arrays (host or device memory, per executor), with their sizes. */
+struct ModelArrays
+{
+    const KinematicJoint *joints;
+    int numJoints;
+    int numLinks;
+    int numCoordinates;
+    const float *componentVertices;
+    std::size_t numComponentVertexFloats;
+    const std::uint32_t *componentTriangles;
+    std::size_t numComponentTriangleIndices;
+    const MeshSlice *components;
+    const OrientedBox *componentLocalBoxes;
+    const int *componentLink;
+    const int *componentSubtreeEnd;
+    int numComponents;
+    const float *objectVertices;
+    std::size_t numObjectVertexFloats;
+    const std::uint32_t *objectTriangles;
+    std::size_t numObjectTriangleIndices;
+    const MeshSlice *objects;
+    const Box *objectBoxes;
+    int numObjects;
+    const int *selfPairs;  // numSelfPairs x 2
+    int numSelfPairs;
+    double origin[3];  // CollisionModel::origin: world-frame floats are relative to it
+
+    RC_HD std::uint32_t numPairs() const
+    {
+        return static_cast<std::uint32_t>(numObjects) * static_cast<std::uint32_t>(numComponents) +
+               static_cast<std::uint32_t>(numSelfPairs);
+    }
+};
+
+/** \brief How the stages treat a batch (from the CollisionRequest). */
+struct StageSettings
+{
+    float padding;
+    float pixel;
+    int maxImageSide;
+    bool checkEnvironment;
+    bool checkSelfCollision;
+    /** \brief Rasterize surviving pairs (raster mode, and safe mode when no contacts are asked). */
+    bool rasterize;
+    /** \brief A pair the raster does not hit stays open for the exact phase (safe mode); otherwise
+        it is settled as apart unless padding asks for distances. */
+    bool confirmMisses;
+};
+
+/** \brief Where a pair stands after the stages. */
+enum PairStatus : std::int32_t
+{
+    PairApart = 0,     ///< settled: does not collide
+    PairOpen = 1,      ///< left to the exact narrow phase
+    PairOverlaps = 2   ///< a ray found the solids overlapping (triangle and position set)
+};
+
+/** \brief One pair that survived the culls. Outcomes come sorted by (state, pair). */
+struct PairOutcome
+{
+    std::uint32_t state;  // within the chunk
+    std::uint32_t pair;
+    std::int32_t status;
+    std::int32_t triangle;
+    float position[3];
+};
+
+/** \brief Limits of one pass; a chunk that would exceed them is split (verdicts do not change). */
+struct StageBudget
+{
+    std::size_t maxStates = 1 << 16;
+    std::size_t maxPairElements = std::size_t(1) << 30;  // states x pairs in a chunk
+    std::size_t maxItems = std::size_t(1) << 27;         // (pair, triangle) elements in a chunk
+    std::size_t maxFragments = std::size_t(1) << 27;
+};
+
+/** \brief The executor's scratch buffers, one per stage output; sized per chunk, reused. */
+enum StageBuffer : int
+{
+    BufferStates,
+    BufferAdmissible,
+    BufferJointValues,
+    BufferLinks,
+    BufferComponentPose,
+    BufferComponentBox,
+    BufferComponentBounds,
+    BufferLayers,
+    BufferRobotSphere,
+    BufferPairFlags,
+    BufferCandidates,
+    BufferCandidateCount,
+    BufferGrids,
+    BufferMargins,
+    BufferStatus,
+    BufferTriangleCount,
+    BufferItemStart,
+    BufferFragmentCount,
+    BufferFragmentStart,
+    BufferKeys,
+    BufferValues,
+    BufferFragments,
+    BufferSegmentStart,
+    BufferHit,
+    BufferOutcomes,
+    kNumStageBuffers
+};
+
+/** \brief One solid of a pair as the per-triangle stages see it. */
+struct StageSolid
+{
+    MeshSlice slice;
+    const float *vertices;           // slice's vertices, local frame
+    const std::uint32_t *triangles;  // slice's triangles
+    const Pose<float> *pose;         // null for objects (world frame already)
+    Box bounds;
+};
+
+RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<float> *poses, const Box *bounds,
+                      StageSolid &a, StageSolid &b)
+{
+    const std::uint32_t environmentPairs =
+        static_cast<std::uint32_t>(model.numObjects) * static_cast<std::uint32_t>(model.numComponents);
+    auto component = [&](int c) {
+        const MeshSlice &slice = model.components[c];
+        return StageSolid{slice, model.componentVertices + 3 * slice.firstVertex,
+                          model.componentTriangles + 3 * slice.firstTriangle, poses + c, bounds[c]};
+    };
+    if (pair < environmentPairs)
+    {
+        a = component(static_cast<int>(pair % model.numComponents));
+        const int o = static_cast<int>(pair / model.numComponents);
+        const MeshSlice &slice = model.objects[o];
+        b = StageSolid{slice, model.objectVertices + 3 * slice.firstVertex,
+                       model.objectTriangles + 3 * slice.firstTriangle, nullptr, model.objectBoxes[o]};
+        return;
+    }
+    const int *self = model.selfPairs + 2 * (pair - environmentPairs);
+    a = component(self[0]);
+    b = component(self[1]);
+}
+
+RC_HD Vec3<float> stageVertex(const StageSolid &solid, std::uint32_t index)
+{
+    const Vec3<float> local{solid.vertices[3 * index], solid.vertices[3 * index + 1], solid.vertices[3 * index + 2]};
+    return solid.pose ? transformPoint(*solid.pose, local) : local;
+}
+
+/** \brief Rasterizes triangle t of the pair (A's triangles first, then B's, as on the CPU). */
+template <class Emit>
+RC_HD int rasterizePairTriangle(const StageSolid &a, const StageSolid &b, std::uint32_t t, const RasterGrid &grid,
+                                float margin, Emit &&emit)
+{
+    const bool partyB = t >= a.slice.numTriangles;
+    const StageSolid &solid = partyB ? b : a;
+    const std::uint32_t local = partyB ? t - a.slice.numTriangles : t;
+    const std::uint32_t *tri = solid.triangles + 3 * local;
+    const Vec3<float> p0 = stageVertex(solid, tri[0]), p1 = stageVertex(solid, tri[1]), p2 = stageVertex(solid, tri[2]);
+    if (!triangleMeetsImage(p0, p1, p2, grid, margin))
+        return 0;
+    const std::uint32_t code = partyB ? (local | kPartyB) : local;
+    return rasterizeTriangle(grid, p0, p1, p2,
+                             [&](int pixel, float depth, bool entering) { emit(pixel, depth, entering ? code | kEntering : code); });
+}
+
+/** \brief Runs the stages for \a numStates states (host arrays: \a hostStates row-major,
+    \a hostAdmissible 1 per state that passed the bounds check). On return \a outcomes points at
+    the surviving pairs' outcomes in the executor's memory (\a numOutcomes of them, in (state,
+    pair) order). Returns false, having decided nothing, when the chunk exceeds \a budget (the
+    caller splits it). */
+template <class Exec>
+bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &settings, const StageBudget &budget,
+                   const double *hostStates, const std::uint8_t *hostAdmissible, std::uint32_t numStates,
+                   const PairOutcome *&outcomes, std::uint32_t &numOutcomes)
+{
+    const int dof = model.numCoordinates, m = model.numComponents, numLinks = model.numLinks;
+    const std::uint32_t pairs = model.numPairs();
+    const std::uint32_t environmentPairs =
+        static_cast<std::uint32_t>(model.numObjects) * static_cast<std::uint32_t>(m);
+    if (static_cast<std::size_t>(numStates) * pairs > budget.maxPairElements)
+        return false;
+
+    double *states = ex.template buffer<double>(BufferStates, static_cast<std::size_t>(numStates) * dof);
+    std::uint8_t *admissible = ex.template buffer<std::uint8_t>(BufferAdmissible, numStates);
+    ex.upload(states, hostStates, static_cast<std::size_t>(numStates) * dof);
+    ex.upload(admissible, hostAdmissible, numStates);
+
+    // 1. Forward kinematics and the hybrid hierarchy's boxes.
+    double *jointValues = ex.template buffer<double>(BufferJointValues, static_cast<std::size_t>(numStates) * model.numJoints + 1);
+    Pose<double> *links = ex.template buffer<Pose<double>>(BufferLinks, static_cast<std::size_t>(numStates) * numLinks);
+    const std::size_t componentElements = static_cast<std::size_t>(numStates) * m;
+    Pose<float> *poses = ex.template buffer<Pose<float>>(BufferComponentPose, componentElements + 1);
+    OrientedBox *boxes = ex.template buffer<OrientedBox>(BufferComponentBox, componentElements + 1);
+    Box *bounds = ex.template buffer<Box>(BufferComponentBounds, componentElements + 1);
+    Box *layers = ex.template buffer<Box>(BufferLayers, componentElements + 1);
+    Sphere *robotSphere = ex.template buffer<Sphere>(BufferRobotSphere, numStates);
+    const ModelArrays md = model;
+    ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) {
+        if (admissible[s])
+            linkPoses(md.joints, md.numJoints, states + s * dof, jointValues + s * md.numJoints, links + s * numLinks);
+    });
+    ex.forEach(componentElements, [=] RC_LAMBDA(std::size_t i) {
+        const std::size_t s = i / m;
+        const int c = static_cast<int>(i % m);
+        if (!admissible[s])
+            return;
+        poses[i] = toFloatPose(links[s * numLinks + md.componentLink[c]], md.origin);
+        boxes[i] = transformBox(poses[i], md.componentLocalBoxes[c]);
+        bounds[i] = boundsOf(boxes[i]);
+    });
+    ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) {
+        if (!admissible[s] || m == 0)
+            return;
+        computeLayerBounds(bounds + s * m, md.componentSubtreeEnd, m, layers + s * m);
+        Box all = emptyBox();
+        for (int c = 0; c < m; ++c)
+            extend(all, bounds[s * m + c]);
+        robotSphere[s] = boundingSphere(all);
+    });
+
+    // 2. Culls per (state, pair), then compaction: the survivors in (state, pair) order.
+    const std::size_t pairElements = static_cast<std::size_t>(numStates) * pairs;
+    std::uint8_t *flags = ex.template buffer<std::uint8_t>(BufferPairFlags, pairElements + 1);
+    const StageSettings st = settings;
+    ex.forEach(pairElements, [=] RC_LAMBDA(std::size_t i) {
+        const std::size_t s = i / pairs;
+        const std::uint32_t pair = static_cast<std::uint32_t>(i % pairs);
+        bool survives = false;
+        if (admissible[s])
+        {
+            if (pair < environmentPairs)
+            {
+                const int o = static_cast<int>(pair / m), k = static_cast<int>(pair % m);
+                const Box &objectBox = md.objectBoxes[o];
+                survives = st.checkEnvironment && objectWithinReach(robotSphere[s], objectBox, st.padding) &&
+                           layersReach(layers + s * m, md.componentSubtreeEnd, k, objectBox, st.padding) &&
+                           orientedBoxOverlapsBox(boxes[s * m + k], objectBox, st.padding);
+            }
+            else
+            {
+                const int *self = md.selfPairs + 2 * (pair - environmentPairs);
+                survives = st.checkSelfCollision &&
+                           orientedBoxesOverlap(boxes[s * m + self[0]], boxes[s * m + self[1]], st.padding);
+            }
+        }
+        flags[i] = survives ? 1 : 0;
+    });
+    std::uint32_t *candidates = ex.template buffer<std::uint32_t>(BufferCandidates, pairElements + 1);
+    const std::uint32_t numCandidates = ex.selectFlagged(flags, pairElements, candidates);
+
+    // 3. Per surviving pair: the image window, the grid, and how many triangles to rasterize.
+    RasterGrid *grids = ex.template buffer<RasterGrid>(BufferGrids, numCandidates + 1);
+    float *margins = ex.template buffer<float>(BufferMargins, numCandidates + 1);
+    std::int32_t *status = ex.template buffer<std::int32_t>(BufferStatus, numCandidates + 1);
+    unsigned long long *triangleCount = ex.template buffer<unsigned long long>(BufferTriangleCount, numCandidates + 1);
+    ex.forEach(numCandidates + 1, [=] RC_LAMBDA(std::size_t c) {
+        triangleCount[c] = 0;
+        if (c == numCandidates)
+            return;  // the scan's trailing zero: its output is the total
+        const std::size_t s = candidates[c] / pairs;
+        const std::uint32_t pair = candidates[c] % pairs;
+        StageSolid a, b;
+        pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
+        const Box window = pairWindow(a.bounds, b.bounds, st.padding);
+        if (isEmpty(window))
+        {
+            status[c] = PairApart;
+            return;
+        }
+        status[c] = PairOpen;
+        if (!st.rasterize || !rasterUsable(a.slice.closed, b.slice.closed, window, st.pixel))
+            return;  // the exact phase decides
+        grids[c] = makeGrid(window, st.pixel, st.maxImageSide);
+        margins[c] = pairMargin(window, grids[c], st.padding);
+        triangleCount[c] = a.slice.numTriangles + b.slice.numTriangles;
+    });
+    unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, numCandidates + 1);
+    const std::size_t numItems = ex.exclusiveSum(triangleCount, itemStart, numCandidates + 1);
+    if (numItems > budget.maxItems)
+        return false;
+
+    // Pre-rasterization count per (pair, triangle): the per-triangle cull, then the pixels covered.
+    unsigned long long *fragmentCount = ex.template buffer<unsigned long long>(BufferFragmentCount, numItems + 1);
+    ex.forEach(numItems + 1, [=] RC_LAMBDA(std::size_t i) {
+        if (i == numItems)
+        {
+            fragmentCount[i] = 0;
+            return;
+        }
+        const std::uint32_t c = findSegment(itemStart, numCandidates, static_cast<unsigned long long>(i));
+        const std::size_t s = candidates[c] / pairs;
+        StageSolid a, b;
+        pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
+        fragmentCount[i] = static_cast<unsigned long long>(rasterizePairTriangle(
+            a, b, static_cast<std::uint32_t>(i - itemStart[c]), grids[c], margins[c], [](int, float, std::uint32_t) {}));
+    });
+    unsigned long long *fragmentStart = ex.template buffer<unsigned long long>(BufferFragmentStart, numItems + 1);
+    const std::size_t numFragments = ex.exclusiveSum(fragmentCount, fragmentStart, numItems + 1);
+    if (numFragments > budget.maxFragments)
+        return false;
+
+    // 4. Rasterization into the counted slots, keyed by (pixel, depth); sort within each pair.
+    unsigned long long *keys = ex.template buffer<unsigned long long>(BufferKeys, numFragments + 1);
+    std::uint32_t *values = ex.template buffer<std::uint32_t>(BufferValues, numFragments + 1);
+    ex.forEach(numItems, [=] RC_LAMBDA(std::size_t i) {
+        const std::uint32_t c = findSegment(itemStart, numCandidates, static_cast<unsigned long long>(i));
+        const std::size_t s = candidates[c] / pairs;
+        StageSolid a, b;
+        pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
+        std::size_t slot = fragmentStart[i];
+        rasterizePairTriangle(a, b, static_cast<std::uint32_t>(i - itemStart[c]), grids[c], margins[c],
+                              [&](int pixel, float depth, std::uint32_t code) {
+                                  keys[slot] = (static_cast<unsigned long long>(pixel) << 32) | depthKey(depth);
+                                  values[slot] = code;
+                                  ++slot;
+                              });
+    });
+    std::uint32_t *segmentStart = ex.template buffer<std::uint32_t>(BufferSegmentStart, numCandidates + 1);
+    ex.forEach(numCandidates + 1, [=] RC_LAMBDA(std::size_t c) {
+        segmentStart[c] = static_cast<std::uint32_t>(fragmentStart[itemStart[c]]);
+    });
+    ex.sortSegments(keys, values, numFragments, segmentStart, numCandidates);
+
+    // 5. Sort_Search_Pair on each pixel's run; the first hit pixel of each pair.
+    Fragment *fragments = ex.template buffer<Fragment>(BufferFragments, numFragments + 1);
+    unsigned long long *hit = ex.template buffer<unsigned long long>(BufferHit, numCandidates + 1);
+    ex.forEach(numFragments, [=] RC_LAMBDA(std::size_t f) {
+        fragments[f] = Fragment{depthFromKey(static_cast<std::uint32_t>(keys[f])), values[f]};
+    });
+    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) { hit[c] = ~0ull; });
+    ex.forEach(numFragments, [=] RC_LAMBDA(std::size_t f) {
+        const std::uint32_t c = findSegment(segmentStart, numCandidates, static_cast<std::uint32_t>(f));
+        const unsigned long long pixel = keys[f] >> 32;
+        if (f > segmentStart[c] && (keys[f - 1] >> 32) == pixel)
+            return;  // not the first fragment of its pixel's run
+        std::uint32_t end = static_cast<std::uint32_t>(f) + 1;
+        while (end < segmentStart[c + 1] && (keys[end] >> 32) == pixel)
+            ++end;
+        const int count = static_cast<int>(end - f);
+        if (count < 2)
+            return;
+        // The radix sort ordered by depth; ties take the CPU's order (by code) here.
+        sortFragments(fragments + f, count);
+        const std::size_t s = candidates[c] / pairs;
+        StageSolid a, b;
+        pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
+        if (sortSearchPair(fragments + f, count, a.slice.closed, b.slice.closed) >= 0)
+            atomicMinimum(&hit[c], (pixel << 32) | static_cast<unsigned long long>(f));
+    });
+
+    // Outcomes, in (state, pair) order.
+    PairOutcome *decided = ex.template buffer<PairOutcome>(BufferOutcomes, numCandidates + 1);
+    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
+        PairOutcome out{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs, status[c], -1,
+                        {0.0f, 0.0f, 0.0f}};
+        if (out.status == PairOpen && triangleCount[c] > 0)
+        {
+            if (hit[c] != ~0ull)
+            {
+                const int pixel = static_cast<int>(hit[c] >> 32);
+                const std::uint32_t run = static_cast<std::uint32_t>(hit[c] & 0xffffffffull);
+                std::uint32_t end = run + 1;
+                while (end < segmentStart[c + 1] && (keys[end] >> 32) == (hit[c] >> 32))
+                    ++end;
+                const std::size_t s = out.state;
+                StageSolid a, b;
+                pairSolids(md, out.pair, poses + s * m, bounds + s * m, a, b);
+                const int at = sortSearchPair(fragments + run, static_cast<int>(end - run), a.slice.closed, b.slice.closed);
+                hitContact(fragments + run, at, grids[c], pixel, out.triangle, out.position);
+                out.status = PairOverlaps;
+            }
+            else if (!st.confirmMisses && !(st.padding > 0))
+                out.status = PairApart;
+        }
+        decided[c] = out;
+    });
+    outcomes = decided;
+    numOutcomes = numCandidates;
+    return true;
+}
+}  // namespace rastercheck::device

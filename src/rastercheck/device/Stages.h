@@ -1,0 +1,214 @@
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+
+#include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/HostDevice.h"
+#include "rastercheck/device/Pose.h"
+#include "rastercheck/device/Raster.h"
+
+namespace rastercheck::device
+{
+/** \brief A mesh's slice of the flat vertex and triangle buffers. */
+struct MeshSlice
+{
+    std::uint32_t firstVertex;
+    std::uint32_t numVertices;
+    std::uint32_t firstTriangle;
+    std::uint32_t numTriangles;
+    bool closed;
+};
+
+/** \brief Bounding sphere of a box: its centre and half diagonal. */
+struct Sphere
+{
+    float center[3];
+    float radius;
+};
+
+RC_HD Sphere boundingSphere(const Box &box)
+{
+    Sphere s;
+    float radius2 = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+        s.center[k] = 0.5f * (box.min[k] + box.max[k]);
+        const float half = 0.5f * (box.max[k] - box.min[k]);
+        radius2 += half * half;
+    }
+    s.radius = sqrtf(radius2);
+    return s;
+}
+
+/** \brief The distance filter over obstacles: false when the object's bounding sphere lies farther
+    from the robot's than their radii plus the padding. */
+RC_HD bool objectWithinReach(const Sphere &robot, const Box &objectBox, float padding)
+{
+    const Sphere object = boundingSphere(objectBox);
+    float distance2 = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+        const float d = object.center[k] - robot.center[k];
+        distance2 += d * d;
+    }
+    return !(sqrtf(distance2) > robot.radius + object.radius + padding);
+}
+
+/** \brief Layer boxes of the hybrid hierarchy: layer k bounds components [k, subtreeEnd[k]), the
+    component's link and everything the chain carries beyond it. */
+RC_HD void computeLayerBounds(const Box *componentBounds, const int *subtreeEnd, int numComponents, Box *layers)
+{
+    for (int k = numComponents - 1; k >= 0; --k)
+    {
+        layers[k] = componentBounds[k];
+        for (int j = k + 1; j < subtreeEnd[k]; ++j)
+            extend(layers[k], componentBounds[j]);
+    }
+}
+
+/** \brief Whether the descent through the layers reaches component k for an object: every layer
+    that contains k (its own and its ancestors') meets the object's box. The CPU backend walks the
+    layers and skips whole subtrees; a GPU thread decides one (component, object) element, with the
+    same outcome. */
+RC_HD bool layersReach(const Box *layers, const int *subtreeEnd, int k, const Box &objectBox, float padding)
+{
+    for (int j = 0; j <= k; ++j)
+        if (subtreeEnd[j] > k && !boxesOverlap(layers[j], objectBox, padding))
+            return false;
+    return true;
+}
+
+/** \brief Where a pair can meet: A's bounds grown by the padding, cut by B's (may be empty). */
+RC_HD Box pairWindow(const Box &a, const Box &b, float padding)
+{
+    Box grownA = a;
+    for (int k = 0; k < 3; ++k)
+    {
+        grownA.min[k] -= padding;
+        grownA.max[k] += padding;
+    }
+    return intersection(grownA, b);
+}
+
+/** \brief The padding for the float culls: a double beyond float's range (a padding of 1e300 m is
+    allowed: everything collides) saturates instead of overflowing the conversion. */
+RC_HD float floatPadding(double padding)
+{
+    const double largest = 3.4028234663852886e38;  // FLT_MAX
+    return static_cast<float>(padding < largest ? padding : largest);
+}
+
+/** \brief Largest coordinate magnitude of a box: float rounding there is about 6e-8 of it. */
+RC_HD float magnitudeOf(const Box &box)
+{
+    float magnitude = 0;
+    for (int k = 0; k < 3; ++k)
+        magnitude = maxOf(magnitude, maxOf(fabsf(box.min[k]), fabsf(box.max[k])));
+    return magnitude;
+}
+
+/** \brief Whether the raster can decide a pair: parity needs a closed solid, and fragments placed
+    well within a pixel. Far from CollisionModel::origin (a robot 1e6 m from its scene's centre)
+    float rounding is not, and the raster would see overlaps that are not there: such pairs, like
+    pairs of two open meshes, are decided exactly. */
+RC_HD bool rasterUsable(bool closedA, bool closedB, const Box &window, float pixel)
+{
+    return (closedA || closedB) && 1e-6f * magnitudeOf(window) < 0.1f * pixel;
+}
+
+/** \brief How far outside the image a triangle may lie and still be kept: the padding plus the
+    float pipeline's rounding allowance (a few ulps of the largest coordinate in play). */
+RC_HD float pairMargin(const Box &window, const RasterGrid &grid, float padding)
+{
+    return padding + 1e-6f * magnitudeOf(window) + 1e-6f * grid.pixel;
+}
+
+/** \brief Per-triangle cull: whether the triangle's projection meets the image rectangle grown by
+    \a margin. Every triangle a ray of the image can cross is kept, so the parity stays exact. */
+RC_HD bool triangleMeetsImage(const Vec3<float> &a, const Vec3<float> &b, const Vec3<float> &c,
+                              const RasterGrid &grid, float margin)
+{
+    const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
+    const float uLo = grid.origin[0] - margin, uHi = grid.origin[0] + grid.width * grid.pixel + margin;
+    const float vLo = grid.origin[1] - margin, vHi = grid.origin[1] + grid.height * grid.pixel + margin;
+    const float au = coordinate(a, u), bu = coordinate(b, u), cu = coordinate(c, u);
+    const float av = coordinate(a, v), bv = coordinate(b, v), cv = coordinate(c, v);
+    return !(maxOf(au, maxOf(bu, cu)) < uLo || minOf(au, minOf(bu, cu)) > uHi || maxOf(av, maxOf(bv, cv)) < vLo ||
+             minOf(av, minOf(bv, cv)) > vHi);
+}
+
+/** \brief The contact a raster hit reports: the triangle of the pair's second solid met last at or
+    before the hit fragment on the ray, and the hit's position (pixel centre at the hit's depth).
+    \a run: the pixel's depth-sorted fragments; \a hit: index returned by sortSearchPair. */
+RC_HD void hitContact(const Fragment *run, int hit, const RasterGrid &grid, int pixel, int &triangle, float position[3])
+{
+    int objectFragment = hit;
+    while (objectFragment > 0 && !isPartyB(run[objectFragment]))
+        --objectFragment;
+    triangle = static_cast<int>(triangleOf(run[objectFragment]));
+    const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
+    position[grid.axis] = run[hit].depth;
+    position[u] = grid.origin[0] + (static_cast<float>(pixel % grid.width) + 0.5f) * grid.pixel;
+    position[v] = grid.origin[1] + (static_cast<float>(pixel / grid.width) + 0.5f) * grid.pixel;
+}
+
+/** \brief Pair numbering shared by the backends, in the order the CPU visits pairs (so "first
+    contact" means the same pair everywhere): environment pairs object-major, (o, k) -> o * m + k,
+    then the self pairs in CollisionModel::selfPairs order. */
+RC_HD std::uint32_t environmentPair(int object, int component, int numComponents)
+{
+    return static_cast<std::uint32_t>(object) * static_cast<std::uint32_t>(numComponents) +
+           static_cast<std::uint32_t>(component);
+}
+
+/** \brief Largest c in [0, n) with starts[c] <= i; starts ascending, starts[0] <= i. Maps an item of
+    a flattened list back to its segment (the last of several empty segments that start there is
+    the one holding the item). */
+template <class Offset>
+RC_HD std::uint32_t findSegment(const Offset *starts, std::uint32_t n, Offset i)
+{
+    std::uint32_t lo = 0, hi = n;  // answer in [lo, hi)
+    while (hi - lo > 1)
+    {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        if (starts[mid] <= i)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/** \brief Depth as an unsigned key whose order is the float order (-0 and +0 map together, as the
+    CPU's comparisons treat them), for radix sorting fragments. */
+RC_HD std::uint32_t depthKey(float depth)
+{
+    const float normalized = depth + 0.0f;  // -0 -> +0
+    std::uint32_t bits;
+    memcpy(&bits, &normalized, sizeof bits);
+    return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+}
+
+RC_HD float depthFromKey(std::uint32_t key)
+{
+    const std::uint32_t bits = (key & 0x80000000u) ? (key & 0x7fffffffu) : ~key;
+    float depth;
+    memcpy(&depth, &bits, sizeof depth);
+    return depth;
+}
+
+/** \brief Lowers *address to value atomically (the per-pair "first hit pixel" reduction). */
+RC_HD void atomicMinimum(unsigned long long *address, unsigned long long value)
+{
+#if defined(__CUDA_ARCH__)
+    atomicMin(address, value);
+#else
+    unsigned long long current = __atomic_load_n(address, __ATOMIC_RELAXED);
+    while (value < current &&
+           !__atomic_compare_exchange_n(address, &current, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED))
+    {
+    }
+#endif
+}
+}  // namespace rastercheck::device

@@ -1,0 +1,110 @@
+// The CUDA backend against the CPU backend, state for state, on a real GPU. Every test skips when
+// this build has no CUDA backend or no usable device (ctest label "gpu"); the same driver and
+// per-element code are checked on every machine through the host executor (test_staged_pipeline).
+#include <gtest/gtest.h>
+
+#include "BackendSuites.h"
+#include "rastercheck/collision/Checker.h"
+
+namespace rc = rastercheck;
+
+namespace
+{
+/** \brief A checker on the CUDA backend for every batch size, or null (the test then skips). */
+std::unique_ptr<rc::Checker> gpuChecker(const rc::test::StateSuite &suite)
+{
+    rc::CheckerOptions options;
+    options.backend = rc::BackendChoice::Cuda;
+    options.minDeviceBatch = 1;
+    auto checker = std::make_unique<rc::Checker>(suite.robot, suite.scene, options);
+    if (checker->backendName().rfind("cuda", 0) != 0)
+        return nullptr;
+    return checker;
+}
+
+#define REQUIRE_GPU(checker)                                                                                         \
+    if (!(checker))                                                                                                  \
+    GTEST_SKIP() << "no CUDA backend in this build or no usable CUDA device (the staged pipeline is tested on the " \
+                    "CPU by test_staged_pipeline)"
+
+/** \brief The checker's model for a CPU backend beside it (the checker outlives the backend). */
+rc::CollisionModelConstPtr sameModel(const rc::Checker &checker)
+{
+    return rc::CollisionModelConstPtr(std::shared_ptr<void>(), &checker.collisionModel());
+}
+
+const rc::CollisionMode kModes[] = {rc::CollisionMode::Safe, rc::CollisionMode::Raster, rc::CollisionMode::Exact};
+}  // namespace
+
+TEST(GpuBackend, SameVerdictsAndFirstContactsAsTheCpuOnTheAccuracySuites)
+{
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(1000))
+    {
+        const std::unique_ptr<rc::Checker> gpu = gpuChecker(suite);
+        REQUIRE_GPU(gpu);
+        const rc::CpuBackend cpu(sameModel(*gpu));
+        for (rc::CollisionMode mode : kModes)
+            for (double padding : {0.0, 0.01})
+            {
+                rc::CollisionRequest request;
+                request.mode = mode;
+                request.padding = padding;
+                rc::test::expectSameDecisions(gpu->backend(), cpu, gpu->collisionModel(), suite.states, request,
+                                              suite.name + " (" + rc::toString(mode) + ", padding " +
+                                                  std::to_string(padding) + ")");
+            }
+    }
+}
+
+TEST(GpuBackend, RandomBatchesOf1To1e6StatesMatchTheCpu)
+{
+    const std::vector<rc::test::StateSuite> suites = rc::test::accuracySuites(1);
+    const rc::test::StateSuite *panda = nullptr;
+    for (const rc::test::StateSuite &suite : suites)
+        if (suite.name == "panda table_pick")
+            panda = &suite;
+    if (!panda)
+        GTEST_SKIP() << "shared data not found: set RASTERCHECK_DATA";
+    const std::unique_ptr<rc::Checker> gpu = gpuChecker(*panda);
+    REQUIRE_GPU(gpu);
+    const rc::CpuBackend cpu(sameModel(*gpu));
+    for (std::size_t n : {1u, 7u, 1000u})
+        for (rc::CollisionMode mode : kModes)
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            rc::test::expectSameDecisions(gpu->backend(), cpu, gpu->collisionModel(), rc::test::randomStates(*panda->robot, n, 5),
+                                          request, "batch of " + std::to_string(n) + " (" + rc::toString(mode) + ")");
+        }
+    // A million states: verdicts only (the contacts path runs the exact phase on every pair).
+    const std::size_t n = 1000000;
+    const std::vector<double> states = rc::test::randomStates(*panda->robot, n, 6);
+    for (rc::CollisionMode mode : {rc::CollisionMode::Safe, rc::CollisionMode::Raster})
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        std::vector<std::uint8_t> fromGpu(n), fromCpu(n);
+        gpu->backend().check(states.data(), n, fromGpu.data(), nullptr, request, 0);
+        cpu.check(states.data(), n, fromCpu.data(), nullptr, request, 0);
+        std::size_t differ = 0, invalid = 0;
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            differ += fromGpu[i] != fromCpu[i];
+            invalid += fromCpu[i] == 0;
+        }
+        EXPECT_EQ(differ, 0u) << rc::toString(mode);
+        EXPECT_GT(invalid, 0u);
+        EXPECT_LT(invalid, n);
+    }
+}
+
+TEST(GpuBackend, TheCheckerSaysWhichDeviceItUses)
+{
+    const rc::test::StateSuite suite = rc::test::accuracySuites(1)[0];
+    const std::unique_ptr<rc::Checker> gpu = gpuChecker(suite);
+    REQUIRE_GPU(gpu);
+    EXPECT_NE(gpu->backendName().find("cuda ("), std::string::npos) << gpu->backendName();
+    rc::CheckerOptions automatic;
+    const rc::Checker chosen(suite.robot, suite.scene, automatic);
+    EXPECT_EQ(chosen.backendName(), gpu->backendName());  // auto picks the device
+}

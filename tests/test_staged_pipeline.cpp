@@ -1,0 +1,148 @@
+// The GPU backend's code path on the CPU: the batched stages (device/BatchPipeline.h) through the
+// host executor, with the host's per-state reduction (StagedBackend), must decide every state and
+// report every first contact exactly as the CPU backend does. The CUDA backend runs the same driver
+// and per-element functions; only the loops, scans, compaction and sort differ.
+#include <gtest/gtest.h>
+
+#include "BackendSuites.h"
+#include "BlindSpots.h"
+#include "rastercheck/collision/StagedBackend.h"
+
+namespace rc = rastercheck;
+
+namespace
+{
+const rc::CollisionMode kModes[] = {rc::CollisionMode::Safe, rc::CollisionMode::Raster, rc::CollisionMode::Exact};
+
+std::string label(const std::string &suite, rc::CollisionMode mode) { return suite + " (" + rc::toString(mode) + ")"; }
+}  // namespace
+
+TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySuites)
+{
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(200))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::CpuBackend cpu(model);
+        const rc::StagedBackend staged(model, rc::makeHostStageRunner(model));
+        for (rc::CollisionMode mode : kModes)
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            const rc::test::Agreement counts =
+                rc::test::expectSameDecisions(staged, cpu, *model, suite.states, request, label(suite.name, mode));
+            if (mode == rc::CollisionMode::Exact && suite.name.rfind("panda", 0) == 0)
+            {
+                EXPECT_GT(counts.valid, 0u) << suite.name;  // the comparison covers both answers
+                EXPECT_GT(counts.invalid, 0u) << suite.name;
+            }
+        }
+    }
+}
+
+TEST(StagedPipeline, PaddingAndSwitchedOffChecksMatchTheCpuBackend)
+{
+    const std::vector<rc::test::StateSuite> suites = rc::test::accuracySuites(80);
+    for (const rc::test::StateSuite &suite : suites)
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::CpuBackend cpu(model);
+        const rc::StagedBackend staged(model, rc::makeHostStageRunner(model));
+        for (rc::CollisionMode mode : kModes)
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            request.padding = 0.01;
+            rc::test::expectSameDecisions(staged, cpu, *model, suite.states, request, label(suite.name, mode) + " padded");
+            request.padding = 0;
+            request.checkSelfCollision = false;
+            rc::test::expectSameDecisions(staged, cpu, *model, suite.states, request, label(suite.name, mode) + " no self");
+            request.checkSelfCollision = true;
+            request.checkEnvironment = false;
+            rc::test::expectSameDecisions(staged, cpu, *model, suite.states, request, label(suite.name, mode) + " self only");
+        }
+    }
+}
+
+TEST(StagedPipeline, BatchesOfEverySizeGiveTheSameVerdicts)
+{
+    const rc::test::StateSuite suite = rc::test::accuracySuites(1)[0];  // the thin plate
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    const rc::CpuBackend cpu(model);
+    const rc::StagedBackend staged(model, rc::makeHostStageRunner(model));
+    const std::vector<rc::test::BlindSpotSuite> blind = rc::test::blindSpotSuites(1000, 7);
+    for (std::size_t n : {1u, 7u, 1000u})
+    {
+        const std::vector<double> states(blind[0].states.begin(), blind[0].states.begin() + 7 * n);
+        for (rc::CollisionMode mode : kModes)
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            rc::test::expectSameDecisions(staged, cpu, *model, states, request,
+                                          label("batch of " + std::to_string(n), mode));
+        }
+    }
+}
+
+TEST(StagedPipeline, ChunksTooSmallForTheBatchGiveIdenticalVerdicts)
+{
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(60))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::CpuBackend cpu(model);
+        rc::device::StageBudget fewStates;
+        fewStates.maxStates = 5;
+        const rc::StagedBackend chunked(model, rc::makeHostStageRunner(model, fewStates));
+        // So small that chunks halve down to single states and some single states overflow: their
+        // pairs go to the exact phase, which in safe and exact mode is what the CPU does anyway.
+        rc::device::StageBudget tiny = fewStates;
+        tiny.maxItems = 4000;
+        tiny.maxFragments = 2000;
+        const rc::StagedBackend overflowing(model, rc::makeHostStageRunner(model, tiny));
+        for (rc::CollisionMode mode : kModes)
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            rc::test::expectSameDecisions(chunked, cpu, *model, suite.states, request, label(suite.name, mode) + " chunked");
+            if (mode != rc::CollisionMode::Raster)
+                rc::test::expectSameDecisions(overflowing, cpu, *model, suite.states, request,
+                                              label(suite.name, mode) + " overflowing");
+        }
+    }
+}
+
+TEST(StagedPipeline, AStateTooLargeForOnePassInRasterModeGetsTheExactAnswer)
+{
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(60))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::CpuBackend cpu(model);
+        rc::device::StageBudget none;
+        none.maxItems = 0;  // no state fits: every one is decided exactly
+        const rc::StagedBackend overflowing(model, rc::makeHostStageRunner(model, none));
+        rc::CollisionRequest raster, exact;
+        raster.mode = rc::CollisionMode::Raster;
+        exact.mode = rc::CollisionMode::Exact;
+        const std::size_t n = suite.numStates();
+        std::vector<std::uint8_t> fromOverflow(n), fromExact(n);
+        overflowing.check(suite.states.data(), n, fromOverflow.data(), nullptr, raster, 0);
+        cpu.check(suite.states.data(), n, fromExact.data(), nullptr, exact, 0);
+        EXPECT_EQ(fromOverflow, fromExact) << suite.name;
+    }
+}
+
+TEST(StagedPipeline, BadStatesAreInvalidNotErrors)
+{
+    const rc::test::StateSuite suite = rc::test::accuracySuites(3)[0];
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    const rc::StagedBackend staged(model, rc::makeHostStageRunner(model));
+    std::vector<double> states = suite.states;
+    states[0] = std::numeric_limits<double>::quiet_NaN();
+    states[7 + 1] = 1e9;  // beyond the bounds
+    std::vector<std::uint8_t> valid(3, 1);
+    std::vector<rc::Contact> contacts(3);
+    staged.check(states.data(), 3, valid.data(), contacts.data(), {}, 1);
+    EXPECT_EQ(valid[0], 0);
+    EXPECT_EQ(valid[1], 0);
+    EXPECT_EQ(contacts[0].kind, rc::Contact::Kind::OutOfBounds);
+    EXPECT_EQ(contacts[1].kind, rc::Contact::Kind::OutOfBounds);
+}
