@@ -25,7 +25,7 @@ command -v clang++ >/dev/null || { echo "fuzz.sh: clang++ not found (libFuzzer n
 
 # -O1 -g without NDEBUG: assertions (Eigen's index checks included) stay on and stacks are readable.
 CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DRASTERCHECK_BUILD_FUZZERS=ON \
-    -DRASTERCHECK_BUILD_TESTS=OFF -DRASTERCHECK_BUILD_BENCH=OFF -DRASTERCHECK_BUILD_EXAMPLES=OFF \
+    -DRASTERCHECK_BUILD_TESTS=OFF -DRASTERCHECK_BUILD_BENCH=OFF -DRASTERCHECK_BUILD_EXAMPLES=OFF -DRASTERCHECK_WITH_CUDA=OFF \
     -DBUILD_SHARED_LIBS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" >/dev/null
 # shellcheck disable=SC2046
 cmake --build "$build" -j "${FUZZ_JOBS:-2}" --target $(printf 'fuzz_%s ' $targets)
