@@ -98,7 +98,7 @@ for t in $targets; do
     echo "fuzz.sh: $t: $runs executions (log $log)"
     start=$(date +%s%N)
     status=0
-    # TMPDIR: a harness that crashes leaves its scratch folder (fuzz/FuzzTargets.cpp) in the build tree.
+    # TMPDIR: the harnesses' scratch folder (fuzz/FuzzTargets.cpp) in the build tree.
     TMPDIR=$(cd "$build/fuzz-tmp" && pwd) ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
         "$build/fuzz/fuzz_$t" -runs="$runs" -seed="$seed" -max_len="${max_len[$t]}" -timeout=10 \
         -rss_limit_mb=2048 -detect_leaks=1 -print_final_stats=1 "${dict[@]}" \

@@ -1,10 +1,13 @@
 #include "FuzzTargets.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "rastercheck/core/Error.h"
@@ -90,46 +93,42 @@ std::string text(const std::uint8_t *data, std::size_t size)
     return std::string(reinterpret_cast<const char *>(data), size);
 }
 
-// A per-process folder with the mesh files the URDF and .cfg inputs may name; removed at exit.
-class Scratch
+// The folder with the mesh files the URDF and .cfg inputs may name. Its name follows from the user
+// and the files' contents, and it is never removed: a per-process folder removed at exit was left
+// behind by every process that ended without running destructors (a crash, a fuzzer's child), by
+// the hundred. Files are written under a temporary name and renamed, so processes that start
+// together see whole files.
+const std::string &scratchFolder()
 {
-public:
-    Scratch()
+    static const std::string folder = []
     {
-        const char *tmp = std::getenv("TMPDIR");
-        std::string pattern = std::string(tmp && *tmp ? tmp : "/tmp") + "/rastercheck-fuzz-XXXXXX";
-        if (!mkdtemp(pattern.data()))
-            throw std::runtime_error("cannot create a scratch folder from " + pattern);
-        folder_ = pattern;
         const std::pair<const char *, std::string> files[] = {
             {"mesh.stl", asciiStl({{"box", boxAt({0, 0, 0}, {1, 1, 1})}})},
             {"robot.stl", asciiStl({{"tetrahedron", tetrahedron()}})},
             {"world.stl",
              asciiStl({{"wallA", boxAt({0, 0, 0}, {1, 1, 1})}, {"wallB", boxAt({10, 0, 0}, {11, 1, 2})}})}};
+        std::string all;
+        for (const auto &[name, contents] : files)
+            all += std::string(name) + '\0' + contents + '\0';
+        std::ostringstream path;
+        const char *tmp = std::getenv("TMPDIR");
+        path << (tmp && *tmp ? tmp : "/tmp") << "/rastercheck-fuzz-" << getuid() << "-" << std::hex
+             << std::hash<std::string>{}(all);
+        const std::string folder = path.str();
+        struct stat info;
+        if (mkdir(folder.c_str(), 0700) != 0 &&
+            (lstat(folder.c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || info.st_uid != getuid()))
+            throw std::runtime_error("cannot use " + folder + " as the fuzz harnesses' scratch folder");
         for (const auto &[name, contents] : files)
         {
-            std::ofstream out(folder_ + "/" + name, std::ios::binary);
-            out << contents;
-            files_.push_back(folder_ + "/" + name);
+            const std::string file = folder + "/" + name, part = file + "." + std::to_string(getpid());
+            std::ofstream(part, std::ios::binary) << contents;
+            if (std::rename(part.c_str(), file.c_str()) != 0)
+                throw std::runtime_error("cannot write " + file);
         }
-    }
-    ~Scratch()
-    {
-        for (const std::string &file : files_)
-            unlink(file.c_str());
-        rmdir(folder_.c_str());
-    }
-    const std::string &folder() const { return folder_; }
-
-private:
-    std::string folder_;
-    std::vector<std::string> files_;
-};
-
-const std::string &scratchFolder()
-{
-    static const Scratch scratch;
-    return scratch.folder();
+        return folder;
+    }();
+    return folder;
 }
 
 void violated(const std::string &source, const std::string &what)
