@@ -208,6 +208,9 @@ public:
         model_.objects = uploadOnce(model_memory_, host.objects, o);
         model_.objectBoxes = uploadOnce(model_memory_, host.objectBoxes, o);
         model_.selfPairs = uploadOnce(model_memory_, host.selfPairs, 2 * static_cast<std::size_t>(host.numSelfPairs));
+        model_.convexVertices = uploadOnce(model_memory_, host.convexVertices, host.numConvexVertexDoubles);
+        model_.convexHullPoints = uploadOnce(model_memory_, host.convexHullPoints, host.numConvexHullDoubles);
+        model_.convexSolids = uploadOnce(model_memory_, host.convexSolids, m + o);
 
         // Budgets from the free memory, leaving half of it to others: bytes per element of each
         // stage's buffers (fragments: key, value, their sorted copies and the walk's fragment).

@@ -40,6 +40,23 @@ device::OrientedBox toDeviceBox(const Obb &box)
 }
 }  // namespace
 
+device::ConvexSolid appendConvexSolid(const Mesh &mesh, std::vector<double> &vertices, std::vector<double> &hullPoints)
+{
+    device::ConvexSolid solid{static_cast<std::uint32_t>(vertices.size() / 3),
+                              static_cast<std::uint32_t>(mesh.numVertices()),
+                              static_cast<std::uint32_t>(hullPoints.size() / 3), 0, 0.0};
+    for (const Eigen::Vector3d &v : mesh.vertices)
+    {
+        vertices.insert(vertices.end(), v.data(), v.data() + 3);
+        solid.radius = std::max(solid.radius, v.norm());
+    }
+    const std::vector<std::uint32_t> extreme = mesh.extremeVertices(kConvexHullDirections);
+    solid.numHullPoints = static_cast<std::uint32_t>(extreme.size());
+    for (std::uint32_t i : extreme)
+        hullPoints.insert(hullPoints.end(), mesh.vertices[i].data(), mesh.vertices[i].data() + 3);
+    return solid;
+}
+
 CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr sceneModel)
   : robot(std::move(robotModel)), scene(std::move(sceneModel))
 {
@@ -69,6 +86,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         componentLocalBoxes.push_back(toDeviceBox(box));
         componentLink.push_back(component.link);
         componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh));
+        convexSolids.push_back(appendConvexSolid(component.mesh, convexVertices, convexHullPoints));
         diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
     }
     componentSubtreeEnd = robot->componentSubtreeEnd;
@@ -91,6 +109,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         }
         objectBoxes.push_back(box);
         objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh));
+        convexSolids.push_back(appendConvexSolid(object.mesh, convexVertices, convexHullPoints));
     }
 
     for (std::size_t a = 0; a < components.size(); ++a)

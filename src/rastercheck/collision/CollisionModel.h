@@ -7,6 +7,7 @@
 
 #include "rastercheck/collision/CollisionRequest.h"
 #include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/Separation.h"
 #include "rastercheck/device/Stages.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/model/RobotModel.h"
@@ -58,6 +59,19 @@ public:
     std::vector<std::unique_ptr<MeshBvh>> componentBvhs;  // n_components, link frame
     std::vector<std::unique_ptr<MeshBvh>> objectBvhs;     // n_objects, world frame
 
+    /** \brief The convex separation cull's view of each solid (device::provablySeparated), in
+        double in its own frame (components: link frame; objects: world frame, not re-centred):
+        every vertex of its mesh, and its extreme vertices along 128 directions (the hull points
+        GJK searches). convexSolids holds the components first, then the objects. */
+    std::vector<double> convexVertices;                 // n_convex_vertices x 3
+    std::vector<double> convexHullPoints;               // n_hull_points x 3
+    std::vector<device::ConvexSolid> convexSolids;      // n_components + n_objects
+    /** \brief Solid \a index of convexSolids as the separation test reads it. */
+    device::ConvexProxy convexProxy(std::size_t index) const
+    {
+        return device::convexProxy(convexVertices.data(), convexHullPoints.data(), convexSolids[index]);
+    }
+
     /** \brief Raster pixel side used when a request gives none: 1/128 of the median diagonal of the
         components' boxes (a few millimetres for an arm), so a typical link spans about a hundred
         pixels. */
@@ -81,4 +95,13 @@ public:
 };
 
 using CollisionModelConstPtr = std::shared_ptr<const CollisionModel>;
+
+/** \brief Directions the hull points of a solid are extreme along: enough that the hull they span
+    comes within a few percent of the mesh's size (so GJK's direction is good), few enough that
+    its support searches stay short. The proof itself always reads every vertex. */
+constexpr std::size_t kConvexHullDirections = 128;
+
+/** \brief Appends \a mesh's vertices and hull points (its own frame, double) to the separation
+    cull's arrays and returns where they went (CollisionModel::convexSolids). */
+device::ConvexSolid appendConvexSolid(const Mesh &mesh, std::vector<double> &vertices, std::vector<double> &hullPoints);
 }  // namespace rastercheck

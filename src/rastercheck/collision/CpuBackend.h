@@ -87,7 +87,8 @@ public:
     void refitState(const double *q, CpuWorkspace &workspace) const;
     /** \brief The exact narrow phase of one pair (CollisionModel's numbering) at the state last
         refitted into \a workspace, with \a padding. On collision fills \a contact completely. The
-        GPU backend finishes the pairs its stages could not settle with this. */
+        staged backends finish the pairs their stages could not settle with this; the stages have
+        already tried the hull proof on those pairs, so it is not repeated here. */
     bool exactPair(std::uint32_t pair, double padding, CpuWorkspace &workspace, Contact &contact) const;
 
     /** \brief The raster image of the pair named by \a contact at state \a q (the paper's Fig. 6):

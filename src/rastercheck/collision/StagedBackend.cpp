@@ -36,7 +36,28 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                static_cast<int>(model.numObjects()),
                                reinterpret_cast<const int *>(model.selfPairs.data()),
                                static_cast<int>(model.selfPairs.size()),
-                               {model.origin.x(), model.origin.y(), model.origin.z()}};
+                               {model.origin.x(), model.origin.y(), model.origin.z()},
+                               model.convexVertices.data(),
+                               model.convexVertices.size(),
+                               model.convexHullPoints.data(),
+                               model.convexHullPoints.size(),
+                               model.convexSolids.data()};
+}
+
+device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)
+{
+    device::StageSettings settings{};
+    settings.padding = device::floatPadding(request.padding);
+    settings.separationPadding = std::max(0.0, request.padding);
+    settings.pixel = static_cast<float>(request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize);
+    settings.maxImageSide = request.maxImageSide;
+    settings.checkEnvironment = request.checkEnvironment;
+    settings.checkSelfCollision = request.checkSelfCollision;
+    // Safe mode reports the CPU's first contact when asked for contacts, which takes the exact
+    // phase on every pair; without contacts a raster hit is proof enough.
+    settings.rasterize = request.mode == CollisionMode::Raster || (request.mode == CollisionMode::Safe && !contactsAsked);
+    settings.confirmMisses = request.mode == CollisionMode::Safe;
+    return settings;
 }
 
 namespace
@@ -174,16 +195,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
         admissible[i] = model.configurationAdmissible(q + static_cast<std::size_t>(i) * dof) ? 1 : 0;
 
-    device::StageSettings settings{};
-    settings.padding = device::floatPadding(request.padding);
-    settings.pixel = static_cast<float>(request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize);
-    settings.maxImageSide = request.maxImageSide;
-    settings.checkEnvironment = request.checkEnvironment;
-    settings.checkSelfCollision = request.checkSelfCollision;
-    // Safe mode reports the CPU's first contact when asked for contacts, which takes the exact
-    // phase on every pair; without contacts a raster hit is proof enough.
-    settings.rasterize = request.mode == CollisionMode::Raster || (request.mode == CollisionMode::Safe && !contacts);
-    settings.confirmMisses = request.mode == CollisionMode::Safe;
+    const device::StageSettings settings = stageSettings(model, request, contacts != nullptr);
 
     std::vector<device::PairOutcome> outcomes;
     {

@@ -16,6 +16,9 @@ namespace rastercheck
 /** \brief The model's flat arrays in host memory, as the stages read them. */
 device::ModelArrays hostModelArrays(const CollisionModel &model);
 
+/** \brief How the stages treat a batch decided under \a request (contacts asked or not). */
+device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked);
+
 /** \brief The stages on the host, through the same driver as the GPU (plain loops for kernels). */
 std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget = {});
 

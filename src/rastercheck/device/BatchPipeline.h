@@ -11,7 +11,7 @@
 //   1. forward kinematics (one element per state), component poses, OBBs and AABBs (per state x
 //      component), layer boxes and the robot's bounding sphere (per state);
 //   2. culls per (state, pair): distance filter, layer AABBs, OBB tests; compaction of survivors;
-//   3. per surviving pair: image window and grid; per (pair, triangle): the per-triangle cull and
+//   3. per surviving pair: image window, the convex separation proof, and the grid; per (pair, triangle): the per-triangle cull and
 //      the pre-rasterization fragment count; scan;
 //   4. rasterization into the counted slots; segmented sort by (pixel, depth) per pair;
 //   5. Sort_Search_Pair per pixel run; per pair the first hit pixel (atomic minimum); outcomes.
@@ -25,6 +25,7 @@
 #include "rastercheck/device/HostDevice.h"
 #include "rastercheck/device/Kinematics.h"
 #include "rastercheck/device/Raster.h"
+#include "rastercheck/device/Separation.h"
 #include "rastercheck/device/Stages.h"
 
 #if defined(__CUDACC__)
@@ -61,6 +62,12 @@ struct ModelArrays
     const int *selfPairs;  // numSelfPairs x 2
     int numSelfPairs;
     double origin[3];  // CollisionModel::origin: world-frame floats are relative to it
+    // The separation cull's arrays (CollisionModel::convexVertices and so on), double, own frames.
+    const double *convexVertices;
+    std::size_t numConvexVertexDoubles;
+    const double *convexHullPoints;
+    std::size_t numConvexHullDoubles;
+    const ConvexSolid *convexSolids;  // numComponents + numObjects
 
     RC_HD std::uint32_t numPairs() const
     {
@@ -73,6 +80,7 @@ struct ModelArrays
 struct StageSettings
 {
     float padding;
+    double separationPadding;  ///< the request's padding (>= 0) for the hull proof, as on the CPU
     float pixel;
     int maxImageSide;
     bool checkEnvironment;
@@ -174,6 +182,27 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
     const int *self = model.selfPairs + 2 * (pair - environmentPairs);
     a = component(self[0]);
     b = component(self[1]);
+}
+
+/** \brief The convex separation cull of a pair (CpuBackend's hullsApart): true when a plane
+    between the solids' hulls proves them more than \a padding apart. \a links are the state's
+    link poses (double, world frame), as the CPU backend's. */
+RC_HD bool pairHullsApart(const ModelArrays &model, std::uint32_t pair, const Pose<double> *links, double padding)
+{
+    const std::uint32_t environmentPairs =
+        static_cast<std::uint32_t>(model.numObjects) * static_cast<std::uint32_t>(model.numComponents);
+    auto proxy = [&](std::uint32_t solid) {
+        return convexProxy(model.convexVertices, model.convexHullPoints, model.convexSolids[solid]);
+    };
+    if (pair < environmentPairs)
+    {
+        const std::uint32_t c = pair % model.numComponents, o = pair / model.numComponents;
+        return provablySeparated(proxy(c), links[model.componentLink[c]], proxy(model.numComponents + o),
+                                 Pose<double>::identity(), padding);
+    }
+    const int *self = model.selfPairs + 2 * (pair - environmentPairs);
+    return provablySeparated(proxy(self[0]), links[model.componentLink[self[0]]], proxy(self[1]),
+                             links[model.componentLink[self[1]]], padding);
 }
 
 RC_HD Vec3<float> stageVertex(const StageSolid &solid, std::uint32_t index)
@@ -298,7 +327,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         StageSolid a, b;
         pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
         const Box window = pairWindow(a.bounds, b.bounds, st.padding);
-        if (isEmpty(window))
+        if (isEmpty(window) || pairHullsApart(md, pair, links + s * numLinks, st.separationPadding))
         {
             status[c] = PairApart;
             return;

@@ -1,5 +1,8 @@
 #include "rastercheck/geometry/Mesh.h"
 
+#include <algorithm>
+#include <cmath>
+#include <numeric>
 #include <utility>
 
 namespace rastercheck
@@ -11,6 +14,32 @@ Aabb Mesh::bounds() const
         for (std::uint32_t i : t)
             box.extend(vertices[i]);
     return box;
+}
+
+std::vector<std::uint32_t> Mesh::extremeVertices(std::size_t directions) const
+{
+    std::vector<std::uint32_t> chosen;
+    if (vertices.size() <= directions)
+    {
+        chosen.resize(vertices.size());
+        std::iota(chosen.begin(), chosen.end(), 0u);
+        return chosen;
+    }
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));  // the golden angle
+    for (std::size_t k = 0; k < directions; ++k)
+    {
+        const double z = 1.0 - (2.0 * static_cast<double>(k) + 1.0) / static_cast<double>(directions);
+        const double r = std::sqrt(1.0 - z * z), phi = golden * static_cast<double>(k);
+        const Eigen::Vector3d d(r * std::cos(phi), r * std::sin(phi), z);
+        std::uint32_t best = 0;
+        for (std::uint32_t i = 1; i < vertices.size(); ++i)
+            if (d.dot(vertices[i]) > d.dot(vertices[best]))
+                best = i;
+        chosen.push_back(best);
+    }
+    std::sort(chosen.begin(), chosen.end());
+    chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+    return chosen;
 }
 
 void Mesh::transform(const Eigen::Isometry3d &transform)
