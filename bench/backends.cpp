@@ -15,6 +15,7 @@
 #include "Reference.h"
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/ompl/Setup.h"
 
 using namespace rastercheck;
@@ -37,6 +38,45 @@ double statesPerSecond(const Backend &backend, const std::vector<double> &q, std
     for (int r = 0; r < repeats; ++r)
         best = std::min(best, bench::seconds([&] { backend.check(q.data(), n, valid.data(), nullptr, request, 0); }));
     return static_cast<double>(n) / best;
+}
+
+/** \brief What the stages leave to the host: the pairs of \a n states that survive the box culls,
+    how the stages settle them (the host executor's outcomes, which the GPU's equal), and the time
+    one core takes to decide the open ones exactly. That time bounds the GPU backend's rate in safe
+    mode from above, whatever the device: states/s <= host cores x the per-core rate printed. */
+void printHostShare(const std::string &name, const CollisionModelConstPtr &model, const std::vector<double> &q,
+                    std::size_t n, const CollisionRequest &request)
+{
+    const std::size_t dof = model->robot->numCoordinates();
+    std::vector<std::uint8_t> admissible(n);
+    for (std::size_t i = 0; i < n; ++i)
+        admissible[i] = model->configurationAdmissible(q.data() + i * dof) ? 1 : 0;
+    std::vector<device::PairOutcome> outcomes;
+    makeHostStageRunner(model)->run(q.data(), admissible.data(), n, stageSettings(*model, request, false), outcomes);
+    std::size_t apart = 0, hits = 0, open = 0;
+    for (const device::PairOutcome &o : outcomes)
+        (o.status == device::PairApart ? apart : o.status == device::PairOverlaps ? hits : open) += 1;
+    const CpuBackend exact(model);
+    std::unique_ptr<CpuWorkspace> ws = exact.makeWorkspace();
+    const double seconds = bench::seconds(
+        [&]
+        {
+            std::uint32_t refitted = ~0u;
+            for (const device::PairOutcome &o : outcomes)
+            {
+                if (o.status != device::PairOpen)
+                    continue;
+                if (o.state != refitted)
+                    exact.refitState(q.data() + o.state * dof, *ws);
+                refitted = o.state;
+                Contact contact;
+                exact.exactPair(o.pair, request.padding, *ws, contact);
+            }
+        });
+    const double perState = 1.0 / static_cast<double>(n);
+    std::printf("| %s | %zu | %.2f | %.2f | %.3f | %.3f | %s |\n", name.c_str(), n, outcomes.size() * perState,
+                apart * perState, hits * perState, open * perState,
+                open > 0 ? (std::to_string(static_cast<long>(n / seconds / 1e3)) + "k").c_str() : "unbounded");
 }
 
 std::string rate(double statesPerSecond)
@@ -87,10 +127,12 @@ int main(int argc, char **argv)
             sceneTriangles += object.mesh.numTriangles();
 
         const std::size_t fclStates = 10000;
-        const double fclRate = fclStates / bench::seconds([&] {
-            for (std::size_t i = 0; i < fclStates; ++i)
-                fcl.collides(q.data() + i * dof);
-        });
+        const double fclRate = fclStates / bench::seconds(
+                                               [&]
+                                               {
+                                                   for (std::size_t i = 0; i < fclStates; ++i)
+                                                       fcl.collides(q.data() + i * dof);
+                                               });
         for (std::size_t batch = 1; batch <= maxBatch; batch *= 10)
         {
             const int repeats = batch <= 1000 ? 5 : 2;
@@ -101,6 +143,16 @@ int main(int argc, char **argv)
                         haveGpu ? rate(gpuRate).c_str() : "no device",
                         haveGpu ? (std::to_string(gpuRate / fclRate).substr(0, 6) + "x").c_str() : "-");
         }
+    }
+
+    // What the stages leave to the host in this mode.
+    std::printf(
+        "\n| scene | states | pairs past the box culls / state | settled apart by the stages | raster hits | "
+        "left to the host | host ceiling, states/s per core |\n|---|---|---|---|---|---|---|\n");
+    for (const SceneCase &c : cases)
+    {
+        const auto model = std::make_shared<const CollisionModel>(c.robot, c.scene);
+        printHostShare(c.name, model, bench::uniformStates(*c.robot, 10000, 42), 10000, request);
     }
 
     // Motion validator: per-edge latency on random edges (OMPL's default resolution, 1 %). FCL
@@ -114,7 +166,8 @@ int main(int argc, char **argv)
             options.request = request;
             const Problem problem{c.robot, c.scene, nullptr};
             ::ompl::geometric::SimpleSetupPtr setup = rastercheck::ompl::makeSimpleSetup(problem, options);
-            const rastercheck::ompl::StateValidityCheckerPtr checker = rastercheck::ompl::getStateValidityChecker(*setup);
+            const rastercheck::ompl::StateValidityCheckerPtr checker =
+                rastercheck::ompl::getStateValidityChecker(*setup);
             if (choice == 2 && checker->getChecker().backendName() == "cpu")
                 continue;
             const ::ompl::base::SpaceInformationPtr &si = setup->getSpaceInformation();
@@ -133,31 +186,33 @@ int main(int argc, char **argv)
             test::FclReference fcl(checker->getChecker().collisionModel());
             std::vector<double> q(c.robot->numCoordinates());
             ::ompl::base::State *between = si->allocState();
-            const double elapsed = bench::seconds([&] {
-                for (int e = 0; e < edges; ++e)
+            const double elapsed = bench::seconds(
+                [&]
                 {
-                    if (choice != 0)
+                    for (int e = 0; e < edges; ++e)
                     {
-                        validator->checkMotion(from[e], to[e]);
-                        continue;
+                        if (choice != 0)
+                        {
+                            validator->checkMotion(from[e], to[e]);
+                            continue;
+                        }
+                        const unsigned steps = si->getStateSpace()->validSegmentCount(from[e], to[e]);
+                        for (unsigned k = 1; k <= steps; ++k)
+                        {
+                            si->getStateSpace()->interpolate(from[e], to[e], static_cast<double>(k) / steps, between);
+                            checker->getStateMapping().toConfiguration(between, q.data());
+                            if (fcl.collides(q.data()))
+                                break;
+                        }
                     }
-                    const unsigned steps = si->getStateSpace()->validSegmentCount(from[e], to[e]);
-                    for (unsigned k = 1; k <= steps; ++k)
-                    {
-                        si->getStateSpace()->interpolate(from[e], to[e], static_cast<double>(k) / steps, between);
-                        checker->getStateMapping().toConfiguration(between, q.data());
-                        if (fcl.collides(q.data()))
-                            break;
-                    }
-                }
-            });
+                });
             si->freeState(between);
             std::uint64_t states = 0;
             for (int e = 0; e < edges; ++e)
                 states += si->getStateSpace()->validSegmentCount(from[e], to[e]);
             const std::string name = choice == 0 ? "FCL, 1 core" : checker->getChecker().backendName() + " backend";
-            std::printf("| %s | %s | %d | %.1f us | %.1f |\n", c.name.c_str(), name.c_str(),
-                        edges, 1e6 * elapsed / edges, static_cast<double>(states) / edges);
+            std::printf("| %s | %s | %d | %.1f us | %.1f |\n", c.name.c_str(), name.c_str(), edges,
+                        1e6 * elapsed / edges, static_cast<double>(states) / edges);
             for (int e = 0; e < edges; ++e)
             {
                 si->freeState(from[e]);

@@ -239,7 +239,7 @@ RC_HD bool provablySeparated(const ConvexProxy &a, const Pose<double> &poseA, co
         if (vv - vw <= 1e-10 * vv)
             break;  // converged: v is the hull points' nearest direction within rounding
         simplex[count++] = w;
-        Vec3<double> next;
+        Vec3<double> next = v;  // written by closestOnSimplex when it succeeds
         if (!detail::closestOnSimplex(simplex, count, next))
             return false;  // the origin is inside: the hull points' hulls meet
         if (!(dot(next, next) < vv))
