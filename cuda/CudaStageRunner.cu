@@ -208,9 +208,10 @@ public:
         model_.objects = uploadOnce(model_memory_, host.objects, o);
         model_.objectBoxes = uploadOnce(model_memory_, host.objectBoxes, o);
         model_.selfPairs = uploadOnce(model_memory_, host.selfPairs, 2 * static_cast<std::size_t>(host.numSelfPairs));
-        model_.convexVertices = uploadOnce(model_memory_, host.convexVertices, host.numConvexVertexDoubles);
-        model_.convexHullPoints = uploadOnce(model_memory_, host.convexHullPoints, host.numConvexHullDoubles);
-        model_.convexSolids = uploadOnce(model_memory_, host.convexSolids, m + o);
+        model_.convex.vertices = uploadOnce(model_memory_, host.convex.vertices, host.numConvexVertexDoubles);
+        model_.convex.hullPoints = uploadOnce(model_memory_, host.convex.hullPoints, host.numConvexHullDoubles);
+        model_.convex.pieces = uploadOnce(model_memory_, host.convex.pieces, host.numConvexPieces);
+        model_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
 
         // Budgets from the free memory, leaving half of it to others: bytes per element of each
         // stage's buffers (fragments: key, value, their sorted copies and the walk's fragment).

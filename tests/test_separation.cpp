@@ -25,17 +25,18 @@ public:
     std::size_t add(const rc::Mesh &mesh, bool closed = true)
     {
         meshes_.push_back(std::make_unique<rc::Mesh>(mesh));  // the BVH reads the mesh it was built on
-        solids_.push_back(rc::appendConvexSolid(mesh, vertices_, hullPoints_));
+        convex_.add(mesh);
         bvhs_.push_back(std::make_unique<rc::MeshBvh>(*meshes_.back()));
         closed_.push_back(closed);
-        return solids_.size() - 1;
+        return convex_.numSolids() - 1;
     }
 
     bool provenApart(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b, const Eigen::Isometry3d &poseB,
                      double padding) const
     {
-        return rc::device::provablySeparated(proxy(a), rc::toDevicePose(poseA), proxy(b), rc::toDevicePose(poseB),
-                                             padding);
+        return rc::device::solidsProvablySeparated(convex_.arrays(), static_cast<std::uint32_t>(a),
+                                                   rc::toDevicePose(poseA), static_cast<std::uint32_t>(b),
+                                                   rc::toDevicePose(poseB), padding);
     }
 
     bool oracleOverlaps(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b, const Eigen::Isometry3d &poseB,
@@ -44,22 +45,43 @@ public:
         return rc::solidsOverlap(*bvhs_[a], poseA, closed_[a], *bvhs_[b], poseB, closed_[b], padding);
     }
 
-    double radius(std::size_t solid) const { return solids_[solid].radius; }
-    std::uint32_t numHullPoints(std::size_t solid) const { return solids_[solid].numHullPoints; }
-    std::uint32_t numVertices(std::size_t solid) const { return solids_[solid].numVertices; }
+    /** \brief The whole mesh's convex piece of solid \a s. */
+    const rc::device::ConvexPiece &whole(std::size_t s) const
+    {
+        return convex_.arrays().pieces[convex_.arrays().solidPieces[s]];
+    }
+    double radius(std::size_t s) const { return whole(s).radius; }
+    std::size_t numPieces(std::size_t s) const { return convex_.numPieces(s); }
 
 private:
-    rc::device::ConvexProxy proxy(std::size_t solid) const
-    {
-        return rc::device::convexProxy(vertices_.data(), hullPoints_.data(), solids_[solid]);
-    }
-
-    std::vector<double> vertices_, hullPoints_;
-    std::vector<rc::device::ConvexSolid> solids_;
+    rc::ConvexSolids convex_;
     std::vector<std::unique_ptr<rc::Mesh>> meshes_;
     std::vector<std::unique_ptr<rc::MeshBvh>> bvhs_;
     std::vector<bool> closed_;
 };
+
+/** \brief \a a and \a b as one mesh of two shells. */
+rc::Mesh joined(rc::Mesh a, const rc::Mesh &b)
+{
+    const std::uint32_t offset = static_cast<std::uint32_t>(a.vertices.size());
+    a.vertices.insert(a.vertices.end(), b.vertices.begin(), b.vertices.end());
+    for (rc::Mesh::Triangle t : b.triangles)
+    {
+        for (std::uint32_t &v : t)
+            v += offset;
+        a.triangles.push_back(t);
+    }
+    return a;
+}
+
+rc::Mesh movedBox(const Vec &size, const Vec &centre)
+{
+    rc::Mesh box = rc::makeBox(size);
+    Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
+    shift.translation() = centre;
+    box.transform(shift);
+    return box;
+}
 
 Eigen::Isometry3d at(double x, double y = 0, double z = 0)
 {
@@ -146,12 +168,33 @@ TEST(Separation, FineSpheresAreProvenApartAlongTheirCentreLineThroughTheirHullPo
 {
     Solids solids;
     const std::size_t sphere = solids.add(rc::makeSphere(1.0, 1e-4));
-    ASSERT_GT(solids.numVertices(sphere), 4 * rc::kConvexHullDirections);  // GJK sees a small subset
-    EXPECT_LE(solids.numHullPoints(sphere), rc::kConvexHullDirections);
+    ASSERT_GT(solids.whole(sphere).numVertices, 4 * rc::kConvexHullDirections);  // GJK sees a small subset
+    EXPECT_LE(solids.whole(sphere).numHullPoints, rc::kConvexHullDirections);
     // The mesh contains the unit sphere and lies within 1e-4 of it: the gap is between 0.0498 and 0.05.
     const Eigen::Isometry3d apart = at(1.2, 1.2, std::sqrt(2.05 * 2.05 - 2 * 1.2 * 1.2));
     EXPECT_TRUE(solids.provenApart(sphere, at(0), sphere, apart, 0.049));
     EXPECT_FALSE(solids.provenApart(sphere, at(0), sphere, apart, 0.0501));
+}
+
+TEST(Separation, SolidsOfSeveralShellsAreSeparatedShellByShellWhenTheirHullsInterlock)
+{
+    // Two L shapes of two boxes each (a link with two collision elements), hooked into each
+    // other: each one's hull holds part of the other, but every box is 0.1 from every other box.
+    Solids solids;
+    const std::size_t lower = solids.add(joined(movedBox(Vec(2, 0.2, 1), Vec(0, 0, 0)),        // x -1..1, z -0.5..0.5
+                                                movedBox(Vec(0.2, 0.2, 1), Vec(0.9, 0, 1))));  // x 0.8..1, z 0.5..1.5
+    const std::size_t upper = solids.add(joined(movedBox(Vec(1.5, 0.2, 0.2), Vec(-0.05, 0, 1.2)),    // x -0.8..0.7
+                                                movedBox(Vec(0.2, 0.2, 0.5), Vec(-0.7, 0, 0.85))));  // z 0.6..1.1
+    ASSERT_EQ(solids.numPieces(lower), 3u);  // the whole, then the two shells
+    ASSERT_EQ(solids.numPieces(upper), 3u);
+    const Eigen::Isometry3d here = at(0);
+    EXPECT_FALSE(solids.oracleOverlaps(lower, here, upper, here, 0.099));
+    EXPECT_TRUE(solids.oracleOverlaps(lower, here, upper, here, 0.101));
+    EXPECT_TRUE(solids.provenApart(lower, here, upper, here, 0.09));
+    EXPECT_FALSE(solids.provenApart(lower, here, upper, here, 0.101));
+    // Lowered by 0.15, the upper bar cuts into the lower box: never proven apart.
+    EXPECT_TRUE(solids.oracleOverlaps(lower, here, upper, at(0, 0, -0.15), 0.0));
+    EXPECT_FALSE(solids.provenApart(lower, here, upper, at(0, 0, -0.15), 0.0));
 }
 
 TEST(Separation, ProofsNeverContradictTheOracleAndSettleConvexPairsThatAreClearlyApart)

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
@@ -40,21 +41,45 @@ device::OrientedBox toDeviceBox(const Obb &box)
 }
 }  // namespace
 
-device::ConvexSolid appendConvexSolid(const Mesh &mesh, std::vector<double> &vertices, std::vector<double> &hullPoints)
+void ConvexSolids::addPiece(const Mesh &mesh)
 {
-    device::ConvexSolid solid{static_cast<std::uint32_t>(vertices.size() / 3),
+    device::ConvexPiece piece{static_cast<std::uint32_t>(vertices_.size() / 3),
                               static_cast<std::uint32_t>(mesh.numVertices()),
-                              static_cast<std::uint32_t>(hullPoints.size() / 3), 0, 0.0};
+                              static_cast<std::uint32_t>(hullPoints_.size() / 3), 0, 0.0};
     for (const Eigen::Vector3d &v : mesh.vertices)
     {
-        vertices.insert(vertices.end(), v.data(), v.data() + 3);
-        solid.radius = std::max(solid.radius, v.norm());
+        vertices_.insert(vertices_.end(), v.data(), v.data() + 3);
+        piece.radius = std::max(piece.radius, v.norm());
     }
     const std::vector<std::uint32_t> extreme = mesh.extremeVertices(kConvexHullDirections);
-    solid.numHullPoints = static_cast<std::uint32_t>(extreme.size());
+    piece.numHullPoints = static_cast<std::uint32_t>(extreme.size());
     for (std::uint32_t i : extreme)
-        hullPoints.insert(hullPoints.end(), mesh.vertices[i].data(), mesh.vertices[i].data() + 3);
-    return solid;
+        hullPoints_.insert(hullPoints_.end(), mesh.vertices[i].data(), mesh.vertices[i].data() + 3);
+    pieces_.push_back(piece);
+}
+
+void ConvexSolids::add(const Mesh &mesh)
+{
+    addPiece(mesh);
+    std::size_t shells = 0;
+    const std::vector<std::uint32_t> shellOf = triangleShells(mesh, shells);
+    if (shells >= 2 && shells <= kMaxConvexShells)
+    {
+        // Each shell's vertices as a mesh of its own (a piece needs no triangles). Shells are linked
+        // through shared vertices, so every vertex belongs to one shell.
+        std::vector<Mesh> parts(shells);
+        std::vector<std::uint8_t> taken(mesh.numVertices(), 0);
+        for (std::size_t t = 0; t < mesh.numTriangles(); ++t)
+            for (std::uint32_t v : mesh.triangles[t])
+                if (!taken[v])
+                {
+                    taken[v] = 1;
+                    parts[shellOf[t]].vertices.push_back(mesh.vertices[v]);
+                }
+        for (const Mesh &part : parts)
+            addPiece(part);
+    }
+    solidPieces_.push_back(static_cast<std::uint32_t>(pieces_.size()));
 }
 
 CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr sceneModel)
@@ -86,7 +111,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         componentLocalBoxes.push_back(toDeviceBox(box));
         componentLink.push_back(component.link);
         componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh));
-        convexSolids.push_back(appendConvexSolid(component.mesh, convexVertices, convexHullPoints));
+        convex.add(component.mesh);
         diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
     }
     componentSubtreeEnd = robot->componentSubtreeEnd;
@@ -109,7 +134,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         }
         objectBoxes.push_back(box);
         objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh));
-        convexSolids.push_back(appendConvexSolid(object.mesh, convexVertices, convexHullPoints));
+        convex.add(object.mesh);
     }
 
     for (std::size_t a = 0; a < components.size(); ++a)

@@ -15,6 +15,43 @@
 
 namespace rastercheck
 {
+/** \brief Directions the hull points of a convex piece are extreme along: enough that the hull
+    they span comes within a few percent of the piece's size (so GJK's direction is good), few
+    enough that its support searches stay short. The proof itself always reads every vertex. */
+constexpr std::size_t kConvexHullDirections = 128;
+
+/** \brief Most shells a solid is split into for the separation cull: shell pairs grow as the
+    product, and a solid of more shells (a scene mesh of loose parts) is tried whole only. */
+constexpr std::size_t kMaxConvexShells = 8;
+
+/** \brief The separation cull's arrays (device::ConvexArrays), in double, each solid in its own
+    frame: its whole mesh as one piece, then each of its closed shells when it has 2 to
+    kMaxConvexShells of them. */
+class ConvexSolids
+{
+public:
+    /** \brief Appends \a mesh as the next solid. */
+    void add(const Mesh &mesh);
+    std::size_t numSolids() const { return solidPieces_.size() - 1; }
+    /** \brief Pieces of solid \a s: its whole mesh, then its shells (none when it has one). */
+    std::size_t numPieces(std::size_t s) const { return solidPieces_[s + 1] - solidPieces_[s]; }
+    device::ConvexArrays arrays() const
+    {
+        return device::ConvexArrays{vertices_.data(), hullPoints_.data(), pieces_.data(), solidPieces_.data()};
+    }
+    std::size_t numVertexDoubles() const { return vertices_.size(); }
+    std::size_t numHullPointDoubles() const { return hullPoints_.size(); }
+    std::size_t numAllPieces() const { return pieces_.size(); }
+
+private:
+    void addPiece(const Mesh &mesh);
+
+    std::vector<double> vertices_;    // n_piece_vertices x 3
+    std::vector<double> hullPoints_;  // n_hull_points x 3
+    std::vector<device::ConvexPiece> pieces_;
+    std::vector<std::uint32_t> solidPieces_{0};  // n_solids + 1
+};
+
 /** \brief Flat, immutable arrays of one robot and one scene, laid out for the pipeline stages (and
     uploaded unchanged to a GPU), plus the oracle's BVHs. Built once per checker.
 
@@ -59,18 +96,8 @@ public:
     std::vector<std::unique_ptr<MeshBvh>> componentBvhs;  // n_components, link frame
     std::vector<std::unique_ptr<MeshBvh>> objectBvhs;     // n_objects, world frame
 
-    /** \brief The convex separation cull's view of each solid (device::provablySeparated), in
-        double in its own frame (components: link frame; objects: world frame, not re-centred):
-        every vertex of its mesh, and its extreme vertices along 128 directions (the hull points
-        GJK searches). convexSolids holds the components first, then the objects. */
-    std::vector<double> convexVertices;                 // n_convex_vertices x 3
-    std::vector<double> convexHullPoints;               // n_hull_points x 3
-    std::vector<device::ConvexSolid> convexSolids;      // n_components + n_objects
-    /** \brief Solid \a index of convexSolids as the separation test reads it. */
-    device::ConvexProxy convexProxy(std::size_t index) const
-    {
-        return device::convexProxy(convexVertices.data(), convexHullPoints.data(), convexSolids[index]);
-    }
+    /** \brief The convex separation cull's view of every solid: components first, then objects. */
+    ConvexSolids convex;
 
     /** \brief Raster pixel side used when a request gives none: 1/128 of the median diagonal of the
         components' boxes (a few millimetres for an arm), so a typical link spans about a hundred
@@ -96,12 +123,4 @@ public:
 
 using CollisionModelConstPtr = std::shared_ptr<const CollisionModel>;
 
-/** \brief Directions the hull points of a solid are extreme along: enough that the hull they span
-    comes within a few percent of the mesh's size (so GJK's direction is good), few enough that
-    its support searches stay short. The proof itself always reads every vertex. */
-constexpr std::size_t kConvexHullDirections = 128;
-
-/** \brief Appends \a mesh's vertices and hull points (its own frame, double) to the separation
-    cull's arrays and returns where they went (CollisionModel::convexSolids). */
-device::ConvexSolid appendConvexSolid(const Mesh &mesh, std::vector<double> &vertices, std::vector<double> &hullPoints);
 }  // namespace rastercheck

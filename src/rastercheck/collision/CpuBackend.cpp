@@ -28,7 +28,8 @@ struct Solid
     device::Box bounds;              // world
     const MeshBvh *bvh;
     const Eigen::Isometry3d *exactPose;
-    device::ConvexProxy hull;                // the separation cull's view, own frame
+    device::ConvexArrays convex;             // the separation cull's arrays
+    std::uint32_t convexSolid;               // this solid's number there
     const device::Pose<double> *hullPose;    // exactPose in device layout
 };
 
@@ -149,7 +150,8 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
     pairs per pair that turned out apart). */
 bool hullsApart(const Solid &a, const Solid &b, double padding)
 {
-    return device::provablySeparated(a.hull, *a.hullPose, b.hull, *b.hullPose, std::max(0.0, padding));
+    return device::solidsProvablySeparated(a.convex, a.convexSolid, *a.hullPose, b.convexSolid, *b.hullPose,
+                                           std::max(0.0, padding));
 }
 
 /** \brief The exact narrow phase (the oracle): triangle pairs and containment. */
@@ -246,7 +248,8 @@ Solid componentSolid(const CollisionModel &model, CpuWorkspace &ws, std::size_t 
                  ws.componentBounds[c],
                  model.componentBvhs[c].get(),
                  &ws.componentExactPose[c],
-                 model.convexProxy(c),
+                 model.convex.arrays(),
+                 static_cast<std::uint32_t>(c),
                  &ws.linkPoses[model.componentLink[c]]};
 }
 
@@ -260,7 +263,8 @@ Solid objectSolid(const CollisionModel &model, std::size_t o)
                  model.objectBoxes[o],
                  model.objectBvhs[o].get(),
                  &identityPose(),
-                 model.convexProxy(model.numComponents() + o),
+                 model.convex.arrays(),
+                 static_cast<std::uint32_t>(model.numComponents() + o),
                  &identityDevicePose()};
 }
 }  // namespace

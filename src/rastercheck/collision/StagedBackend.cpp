@@ -37,11 +37,10 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                reinterpret_cast<const int *>(model.selfPairs.data()),
                                static_cast<int>(model.selfPairs.size()),
                                {model.origin.x(), model.origin.y(), model.origin.z()},
-                               model.convexVertices.data(),
-                               model.convexVertices.size(),
-                               model.convexHullPoints.data(),
-                               model.convexHullPoints.size(),
-                               model.convexSolids.data()};
+                               model.convex.arrays(),
+                               model.convex.numVertexDoubles(),
+                               model.convex.numHullPointDoubles(),
+                               model.convex.numAllPieces()};
 }
 
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)

@@ -62,12 +62,11 @@ struct ModelArrays
     const int *selfPairs;  // numSelfPairs x 2
     int numSelfPairs;
     double origin[3];  // CollisionModel::origin: world-frame floats are relative to it
-    // The separation cull's arrays (CollisionModel::convexVertices and so on), double, own frames.
-    const double *convexVertices;
+    // The separation cull's arrays (CollisionModel::convex; solids: components, then objects).
+    ConvexArrays convex;
     std::size_t numConvexVertexDoubles;
-    const double *convexHullPoints;
     std::size_t numConvexHullDoubles;
-    const ConvexSolid *convexSolids;  // numComponents + numObjects
+    std::size_t numConvexPieces;
 
     RC_HD std::uint32_t numPairs() const
     {
@@ -189,20 +188,18 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
     link poses (double, world frame), as the CPU backend's. */
 RC_HD bool pairHullsApart(const ModelArrays &model, std::uint32_t pair, const Pose<double> *links, double padding)
 {
-    const std::uint32_t environmentPairs =
-        static_cast<std::uint32_t>(model.numObjects) * static_cast<std::uint32_t>(model.numComponents);
-    auto proxy = [&](std::uint32_t solid) {
-        return convexProxy(model.convexVertices, model.convexHullPoints, model.convexSolids[solid]);
-    };
+    const std::uint32_t m = static_cast<std::uint32_t>(model.numComponents);
+    const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
     if (pair < environmentPairs)
     {
-        const std::uint32_t c = pair % model.numComponents, o = pair / model.numComponents;
-        return provablySeparated(proxy(c), links[model.componentLink[c]], proxy(model.numComponents + o),
-                                 Pose<double>::identity(), padding);
+        const std::uint32_t c = pair % m, o = pair / m;
+        return solidsProvablySeparated(model.convex, c, links[model.componentLink[c]], m + o,
+                                       Pose<double>::identity(), padding);
     }
     const int *self = model.selfPairs + 2 * (pair - environmentPairs);
-    return provablySeparated(proxy(self[0]), links[model.componentLink[self[0]]], proxy(self[1]),
-                             links[model.componentLink[self[1]]], padding);
+    return solidsProvablySeparated(model.convex, static_cast<std::uint32_t>(self[0]),
+                                   links[model.componentLink[self[0]]], static_cast<std::uint32_t>(self[1]),
+                                   links[model.componentLink[self[1]]], padding);
 }
 
 RC_HD Vec3<float> stageVertex(const StageSolid &solid, std::uint32_t index)

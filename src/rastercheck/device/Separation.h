@@ -11,11 +11,11 @@
 
 namespace rastercheck::device
 {
-/** \brief Where one solid's points lie in the model's flat arrays (CollisionModel::convexSolids):
-    every vertex of its mesh (the proof needs them all: the solid lies in their convex hull) and a
-    few of them that span that hull closely (the hull points, what GJK searches). Offsets count
-    points (3 doubles each). Components are in their link frame, objects in the world frame. */
-struct ConvexSolid
+/** \brief Where one convex piece's points lie in the flat arrays (ConvexArrays): every vertex of the
+    piece (the proof needs them all: the piece lies in their convex hull) and a few of them that
+    span that hull closely (the hull points, what GJK searches). Offsets count points (3 doubles
+    each), in the solid's own frame (components: link frame; objects: world frame). */
+struct ConvexPiece
 {
     std::uint32_t firstVertex;
     std::uint32_t numVertices;
@@ -24,7 +24,18 @@ struct ConvexSolid
     double radius;  ///< largest distance of a vertex from the frame's origin
 };
 
-/** \brief One solid as the separation test reads it: pointers into the flat arrays. */
+/** \brief The separation cull's view of every solid (CollisionModel::convex): solid s owns pieces
+    [solidPieces[s], solidPieces[s + 1]): first its whole mesh, then, when the mesh is made of
+    several closed shells (a link with several collision elements), each shell on its own. */
+struct ConvexArrays
+{
+    const double *vertices;
+    const double *hullPoints;
+    const ConvexPiece *pieces;
+    const std::uint32_t *solidPieces;
+};
+
+/** \brief One piece as the separation test reads it: pointers into the flat arrays. */
 struct ConvexProxy
 {
     const double *vertices;
@@ -34,11 +45,11 @@ struct ConvexProxy
     double radius;
 };
 
-RC_HD ConvexProxy convexProxy(const double *vertices, const double *hullPoints, const ConvexSolid &solid)
+RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, std::uint32_t piece)
 {
-    return ConvexProxy{vertices + 3 * static_cast<std::size_t>(solid.firstVertex), solid.numVertices,
-                       hullPoints + 3 * static_cast<std::size_t>(solid.firstHullPoint), solid.numHullPoints,
-                       solid.radius};
+    const ConvexPiece &p = arrays.pieces[piece];
+    return ConvexProxy{arrays.vertices + 3 * static_cast<std::size_t>(p.firstVertex), p.numVertices,
+                       arrays.hullPoints + 3 * static_cast<std::size_t>(p.firstHullPoint), p.numHullPoints, p.radius};
 }
 
 /** \brief Relative rounding slack of the separation proof: a gap must exceed the padding by this
@@ -247,5 +258,30 @@ RC_HD bool provablySeparated(const ConvexProxy &a, const Pose<double> &poseA, co
         v = next;
     }
     return gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(dot(v, v));
+}
+
+/** \brief Are solids \a a and \a b (ConvexArrays numbering, placed by their poses) provably more
+    than \a padding apart? First their whole hulls; when those come too close and either solid is
+    made of several shells, every shell of one against every shell of the other (a solid with one
+    shell stands for itself): the solid is the union of its shells, each inside its own hull, so
+    all those pairs apart means the solids are. Nested parts of a crane (the boom foot between the
+    superstructure's plates) are settled so; a single non-convex shell is not. */
+RC_HD bool solidsProvablySeparated(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
+                                   std::uint32_t b, const Pose<double> &poseB, double padding)
+{
+    const std::uint32_t a0 = arrays.solidPieces[a], a1 = arrays.solidPieces[a + 1];
+    const std::uint32_t b0 = arrays.solidPieces[b], b1 = arrays.solidPieces[b + 1];
+    if (a0 == a1 || b0 == b1)
+        return false;
+    if (provablySeparated(convexProxy(arrays, a0), poseA, convexProxy(arrays, b0), poseB, padding))
+        return true;
+    if (a1 - a0 == 1 && b1 - b0 == 1)
+        return false;
+    const std::uint32_t aShells = a1 - a0 > 1 ? a0 + 1 : a0, bShells = b1 - b0 > 1 ? b0 + 1 : b0;
+    for (std::uint32_t i = aShells; i < a1; ++i)
+        for (std::uint32_t j = bShells; j < b1; ++j)
+            if (!provablySeparated(convexProxy(arrays, i), poseA, convexProxy(arrays, j), poseB, padding))
+                return false;
+    return true;
 }
 }  // namespace rastercheck::device
