@@ -8,22 +8,26 @@
 namespace rastercheck
 {
 /** \brief How a state is decided. Every mode checks bounds, the environment and (unless disabled)
-    self-collision with the allowed-collision matrix, and honours padding exactly. */
+    self-collision with the allowed-collision matrix, and honours padding exactly. In every mode a
+    pair that survives the paper's box culls first gets the convex separation proof
+    (device/Separation.h), which settles it as apart only when a plane provably keeps the solids
+    more than the padding apart; what the modes differ in is the pairs that proof leaves. */
 enum class CollisionMode
 {
-    /** \brief Default: never calls a colliding state valid. Every pair that survives the paper's
-        culls is decided exactly. The CPU backend decides such pairs with the exact narrow phase
-        directly, because on a CPU that is faster than rasterizing them (docs/benchmarks.md); a
-        GPU backend, which rasterizes a whole batch in one pass, may settle pairs by the raster
-        first (a parity hit is an overlap) and must confirm every other pair exactly. */
+    /** \brief Default: never calls a colliding state valid. Every pair the proof leaves is decided
+        exactly. The CPU backend decides such pairs with the exact narrow phase directly, because on
+        a CPU that is faster than rasterizing them (docs/benchmarks.md); a GPU backend, which
+        rasterizes a whole batch in one pass, may settle pairs by the raster first (a parity hit is
+        an overlap) and must confirm every other pair exactly. */
     Safe,
-    /** \brief The paper's method alone: rays through pixel centres only, so overlaps thinner than a
-        pixel or seen edge-on can be missed (measured in docs/accuracy.md). Pairs of two open meshes,
-        pairs so far from CollisionModel::origin that float rounding exceeds a tenth of a pixel, and
-        padding still go to the exact narrow phase. */
+    /** \brief The paper's method for the pairs the proof leaves: rays through pixel centres only,
+        so overlaps thinner than a pixel or seen edge-on can be missed (measured in
+        docs/accuracy.md). Pairs of two open meshes, pairs so far from CollisionModel::origin that
+        float rounding exceeds a tenth of a pixel, and padding still go to the exact narrow phase. */
     Raster,
-    /** \brief The exact narrow phase (triangle-triangle plus point-in-solid) on every pair that
-        survives the conservative box culls: the oracle. */
+    /** \brief The exact narrow phase (triangle-triangle plus point-in-solid) on every pair the
+        proof leaves: exact answers. The tests' oracle (bruteForceCollides) is that narrow phase
+        on every pair with no cull at all. */
     Exact
 };
 

@@ -5,6 +5,7 @@
 // (BatchPipeline), in double on both: most pairs the boxes pass are still apart, and the plane
 // settles them for a few thousand multiply-adds where the exact narrow phase walks two BVHs.
 
+#include <cstddef>
 #include <cstdint>
 
 #include "rastercheck/device/Pose.h"
