@@ -56,36 +56,55 @@ TEST(GpuBackend, SameVerdictsAndFirstContactsAsTheCpuOnTheAccuracySuites)
     }
 }
 
-TEST(GpuBackend, RandomBatchesOf1To1e6StatesMatchTheCpu)
+/** \brief The Panda on the table_pick scene with a GPU checker and a CPU backend on one model. */
+class PandaOnTheGpu : public ::testing::Test
 {
-    const std::vector<rc::test::StateSuite> suites = rc::test::accuracySuites(1);
-    const rc::test::StateSuite *panda = nullptr;
-    for (const rc::test::StateSuite &suite : suites)
-        if (suite.name == "panda table_pick")
-            panda = &suite;
-    if (!panda)
-        GTEST_SKIP() << "shared data not found: set RASTERCHECK_DATA";
-    const std::unique_ptr<rc::Checker> gpu = gpuChecker(*panda);
-    REQUIRE_GPU(gpu);
-    const rc::CpuBackend cpu(sameModel(*gpu));
+protected:
+    void SetUp() override
+    {
+        suites_ = rc::test::accuracySuites(1);
+        for (const rc::test::StateSuite &suite : suites_)
+            if (suite.name == "panda table_pick")
+                panda_ = &suite;
+        if (!panda_)
+            GTEST_SKIP() << "shared data not found: set RASTERCHECK_DATA";
+        gpu_ = gpuChecker(*panda_);
+        REQUIRE_GPU(gpu_);
+        cpu_ = std::make_unique<rc::CpuBackend>(sameModel(*gpu_));
+    }
+
+    std::vector<rc::test::StateSuite> suites_;
+    const rc::test::StateSuite *panda_ = nullptr;
+    std::unique_ptr<rc::Checker> gpu_;
+    std::unique_ptr<rc::CpuBackend> cpu_;
+};
+
+TEST_F(PandaOnTheGpu, RandomBatchesOf1To1000StatesMatchTheCpu)
+{
     for (std::size_t n : {1u, 7u, 1000u})
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
             request.mode = mode;
-            rc::test::expectSameDecisions(gpu->backend(), cpu, gpu->collisionModel(), rc::test::randomStates(*panda->robot, n, 5),
-                                          request, "batch of " + std::to_string(n) + " (" + rc::toString(mode) + ")");
+            rc::test::expectSameDecisions(gpu_->backend(), *cpu_, gpu_->collisionModel(),
+                                          rc::test::randomStates(*panda_->robot, n, 5), request,
+                                          "batch of " + std::to_string(n) + " (" + rc::toString(mode) + ")");
         }
-    // A million states: verdicts only (the contacts path runs the exact phase on every pair).
+}
+
+// Verdicts only (the contacts path runs the exact phase on every pair); a separate test so that
+// compute-sanitizer can run the others in minutes.
+TEST_F(PandaOnTheGpu, AMillionRandomStatesMatchTheCpu)
+{
     const std::size_t n = 1000000;
-    const std::vector<double> states = rc::test::randomStates(*panda->robot, n, 6);
+    const std::vector<double> states = rc::test::randomStates(*panda_->robot, n, 6);
     for (rc::CollisionMode mode : {rc::CollisionMode::Safe, rc::CollisionMode::Raster})
     {
         rc::CollisionRequest request;
         request.mode = mode;
         std::vector<std::uint8_t> fromGpu(n), fromCpu(n);
-        gpu->backend().check(states.data(), n, fromGpu.data(), nullptr, request, 0);
-        cpu.check(states.data(), n, fromCpu.data(), nullptr, request, 0);
+        gpu_->backend().check(states.data(), n, fromGpu.data(), nullptr, request, 0);
+        cpu_->check(states.data(), n, fromCpu.data(), nullptr, request, 0);
         std::size_t differ = 0, invalid = 0;
         for (std::size_t i = 0; i < n; ++i)
         {

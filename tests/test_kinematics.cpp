@@ -1,9 +1,14 @@
 // Forward kinematics against poses computed by hand, mimic joints, and the model's derived layout.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <random>
 
 #include <gtest/gtest.h>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/device/SinCos.h"
 #include "rastercheck/model/Kinematics.h"
 
 namespace rc = rastercheck;
@@ -46,7 +51,64 @@ rc::RobotModel planarArm()
     model.finalize();
     return model;
 }
+
+/** \brief Distance in units in the last place between two finite doubles. */
+std::int64_t ulpsApart(double a, double b)
+{
+    std::int64_t x = 0, y = 0;
+    std::memcpy(&x, &a, sizeof x);
+    std::memcpy(&y, &b, sizeof y);
+    // Map the sign-magnitude bit patterns onto a line where neighbouring doubles are 1 apart.
+    x = x < 0 ? INT64_MIN - x : x;
+    y = y < 0 ? INT64_MIN - y : y;
+    return x > y ? x - y : y - x;
+}
 }  // namespace
+
+// The kinematics' sine and cosine are our own (device/SinCos.h) so the CUDA kernels place links
+// to the same bits as the CPU; they must still be as good as the C library's.
+TEST(Kinematics, SinCosIsWithinOneUlpOfTheCLibrary)
+{
+    std::mt19937_64 random(3);
+    for (double range : {0.8, 7.0, 1000.0, rc::device::kSinCosExactRange})
+    {
+        std::uniform_real_distribution<double> angles(-range, range);
+        std::int64_t worstSine = 0, worstCosine = 0;
+        for (int i = 0; i < 200000; ++i)
+        {
+            const double angle = angles(random);
+            double sine = 0, cosine = 0;
+            rc::device::sinCos(angle, sine, cosine);
+            worstSine = std::max(worstSine, ulpsApart(sine, std::sin(angle)));
+            worstCosine = std::max(worstCosine, ulpsApart(cosine, std::cos(angle)));
+        }
+        EXPECT_LE(worstSine, 1) << "angles within +-" << range;
+        EXPECT_LE(worstCosine, 1) << "angles within +-" << range;
+    }
+    // Quadrant boundaries and odd symmetry, exactly.
+    const double quarter = std::acos(-1.0) / 2;
+    for (int k = -8; k <= 8; ++k)
+    {
+        double sine = 0, cosine = 0, sineOfOpposite = 0, cosineOfOpposite = 0;
+        rc::device::sinCos(k * quarter, sine, cosine);
+        EXPECT_LE(ulpsApart(sine, std::sin(k * quarter)), 1) << k;
+        EXPECT_LE(ulpsApart(cosine, std::cos(k * quarter)), 1) << k;
+        rc::device::sinCos(-k * quarter, sineOfOpposite, cosineOfOpposite);
+        EXPECT_EQ(sineOfOpposite, -sine) << k;
+        EXPECT_EQ(cosineOfOpposite, cosine) << k;
+    }
+    double sine = 0, cosine = 0;
+    rc::device::sinCos(0.0, sine, cosine);
+    EXPECT_EQ(sine, 0.0);
+    EXPECT_EQ(cosine, 1.0);
+    // Beyond the exact range: reduced modulo 2 pi first, still a point on the unit circle.
+    rc::device::sinCos(1e300, sine, cosine);
+    EXPECT_NEAR(sine * sine + cosine * cosine, 1.0, 1e-15);
+    rc::device::sinCos(std::nan(""), sine, cosine);
+    EXPECT_TRUE(std::isnan(sine) && std::isnan(cosine));
+    rc::device::sinCos(-INFINITY, sine, cosine);
+    EXPECT_TRUE(std::isnan(sine) && std::isnan(cosine));
+}
 
 TEST(Kinematics, RevoluteAndPrismaticMatchHandComputedPoses)
 {

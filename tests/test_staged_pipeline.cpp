@@ -1,7 +1,9 @@
 // The GPU backend's code path on the CPU: the batched stages (device/BatchPipeline.h) through the
 // host executor, with the host's per-state reduction (StagedBackend), must decide every state and
 // report every first contact exactly as the CPU backend does. The CUDA backend runs the same driver
-// and per-element functions; only the loops, scans, compaction and sort differ.
+// and per-element functions; only the loops, scans, compaction and sort differ. The host's scratch
+// buffers are poisoned (HostScratch::Poisoned) as uninitialised device memory may be, except in the
+// chunked run, which reuses what earlier chunks left as the CUDA runner does.
 #include <gtest/gtest.h>
 
 #include "BackendSuites.h"
@@ -26,7 +28,7 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
-        const rc::StagedBackend staged(model, rc::makeHostStageRunner(model));
+        const rc::StagedBackend staged(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned));
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
@@ -49,7 +51,7 @@ TEST(StagedPipeline, PaddingAndSwitchedOffChecksMatchTheCpuBackend)
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
-        const rc::StagedBackend staged(model, rc::makeHostStageRunner(model));
+        const rc::StagedBackend staged(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned));
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
@@ -74,7 +76,7 @@ TEST(StagedPipeline, BatchesOfEverySizeGiveTheSameVerdicts)
     const rc::test::StateSuite suite = rc::test::accuracySuites(1)[0];  // the thin plate
     const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
     const rc::CpuBackend cpu(model);
-    const rc::StagedBackend staged(model, rc::makeHostStageRunner(model));
+    const rc::StagedBackend staged(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned));
     const std::vector<rc::test::BlindSpotSuite> blind = rc::test::blindSpotSuites(1000, 7);
     for (std::size_t n : {1u, 7u, 1000u})
     {
@@ -103,7 +105,7 @@ TEST(StagedPipeline, ChunksTooSmallForTheBatchGiveIdenticalVerdicts)
         rc::device::StageBudget tiny = fewStates;
         tiny.maxItems = 4000;
         tiny.maxFragments = 2000;
-        const rc::StagedBackend overflowing(model, rc::makeHostStageRunner(model, tiny));
+        const rc::StagedBackend overflowing(model, rc::makeHostStageRunner(model, tiny, rc::HostScratch::Poisoned));
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
@@ -125,7 +127,7 @@ TEST(StagedPipeline, AStateTooLargeForOnePassInRasterModeGetsTheExactAnswer)
         const rc::CpuBackend cpu(model);
         rc::device::StageBudget none;
         none.maxItems = 0;  // no state fits: every one is decided exactly
-        const rc::StagedBackend overflowing(model, rc::makeHostStageRunner(model, none));
+        const rc::StagedBackend overflowing(model, rc::makeHostStageRunner(model, none, rc::HostScratch::Poisoned));
         rc::CollisionRequest raster, exact;
         raster.mode = rc::CollisionMode::Raster;
         exact.mode = rc::CollisionMode::Exact;
@@ -141,7 +143,7 @@ TEST(StagedPipeline, BadStatesAreInvalidNotErrors)
 {
     const rc::test::StateSuite suite = rc::test::accuracySuites(3)[0];
     const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
-    const rc::StagedBackend staged(model, rc::makeHostStageRunner(model));
+    const rc::StagedBackend staged(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned));
     std::vector<double> states = suite.states;
     states[0] = std::numeric_limits<double>::quiet_NaN();
     states[7 + 1] = 1e9;  // beyond the bounds
@@ -168,7 +170,7 @@ TEST(StagedPipeline, TheStagesSettleMostPairsThemselvesAndNeverContradictTheOrac
         ++checkedSuites;
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend oracle(model);
-        const std::unique_ptr<rc::StageRunner> runner = rc::makeHostStageRunner(model);
+        const std::unique_ptr<rc::StageRunner> runner = rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned);
         const rc::CollisionRequest request;  // safe mode, no padding
         const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
         std::vector<std::uint8_t> admissible(n);

@@ -65,12 +65,16 @@ namespace
 class HostExecutor
 {
 public:
+    explicit HostExecutor(HostScratch scratch) : scratch_(scratch) {}
+
     template <class T>
     T *buffer(int slot, std::size_t count)
     {
         std::vector<unsigned char> &storage = buffers_[static_cast<std::size_t>(slot)];
         if (storage.size() < count * sizeof(T))
             storage.resize(count * sizeof(T));
+        if (scratch_ == HostScratch::Poisoned)
+            std::memset(storage.data(), 0xFF, count * sizeof(T));
         return reinterpret_cast<T *>(storage.data());
     }
 
@@ -143,14 +147,15 @@ public:
     }
 
 private:
+    HostScratch scratch_;
     std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
 };
 
 class HostStageRunner : public StageRunner
 {
 public:
-    HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget)
-      : model_(std::move(model)), arrays_(hostModelArrays(*model_)), budget_(budget)
+    HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch)
+      : model_(std::move(model)), arrays_(hostModelArrays(*model_)), budget_(budget), executor_(scratch)
     {
     }
 
@@ -170,9 +175,10 @@ private:
 };
 }  // namespace
 
-std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget)
+std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget,
+                                                 HostScratch scratch)
 {
-    return std::make_unique<HostStageRunner>(std::move(model), budget);
+    return std::make_unique<HostStageRunner>(std::move(model), budget, scratch);
 }
 
 StagedBackend::StagedBackend(CollisionModelConstPtr model, std::unique_ptr<StageRunner> runner)

@@ -19,8 +19,17 @@ device::ModelArrays hostModelArrays(const CollisionModel &model);
 /** \brief How the stages treat a batch decided under \a request (contacts asked or not). */
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked);
 
+/** \brief What the host executor's scratch buffers hold when a stage gets them. */
+enum class HostScratch
+{
+    Reused,   ///< whatever the last chunk left (zeros when new), as in production
+    Poisoned  ///< all bytes 0xFF (NaN, -1, all flags set), as uninitialised device memory may be:
+              ///< a stage that reads a slot nobody wrote then shows up in the CPU tests
+};
+
 /** \brief The stages on the host, through the same driver as the GPU (plain loops for kernels). */
-std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget = {});
+std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget = {},
+                                                 HostScratch scratch = HostScratch::Reused);
 
 /** \brief A batch backend: the stages decide every pair they can for the whole batch in one pass,
     then the host reduces per state to the first colliding pair, deciding exactly (the CPU

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "rastercheck/device/HostDevice.h"
+#include "rastercheck/device/SinCos.h"
 
 namespace rastercheck::device
 {
@@ -94,7 +95,9 @@ RC_HD Pose<T> compose(const Pose<T> &a, const Pose<T> &b)
 template <class T>
 RC_HD Pose<T> axisAngle(const Vec3<T> &axis, T angle)
 {
-    const T c = std::cos(angle), s = std::sin(angle), t = T(1) - c;
+    double sine = 0, cosine = 0;
+    sinCos(static_cast<double>(angle), sine, cosine);
+    const T c = static_cast<T>(cosine), s = static_cast<T>(sine), t = T(1) - c;
     const T x = axis.x, y = axis.y, z = axis.z;
     return Pose<T>{{t * x * x + c, t * x * y - s * z, t * x * z + s * y, T(0), t * x * y + s * z, t * y * y + c,
                     t * y * z - s * x, T(0), t * x * z - s * y, t * y * z + s * x, t * z * z + c, T(0)}};
@@ -166,7 +169,9 @@ RC_HD Pose<T> jointPose(JointKind kind, const Pose<T> &origin, const Vec3<T> &ax
                                                   values[6]));
         case JointKind::Planar:
         {
-            const T c = std::cos(values[2]), s = std::sin(values[2]);
+            double sine = 0, cosine = 0;
+            sinCos(static_cast<double>(values[2]), sine, cosine);
+            const T c = static_cast<T>(cosine), s = static_cast<T>(sine);
             return compose(origin, Pose<T>{{c, -s, T(0), values[0], s, c, T(0), values[1], T(0), T(0), T(1), T(0)}});
         }
         default:

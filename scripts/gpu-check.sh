@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# The GPU verification of the CUDA backend (issue 5) in as few device calls as possible: the GPU
+# machine lacks our Debian libraries, so the programs are built here and carried there
+# (../shared/GPU.md), and device time counts from the machine's start, so each step is one call
+# that fits the device's 600 s per command (the limits below add up to less).
+#
+#   On the build machine:  scripts/gpu-check.sh bundle
+#       builds build-gpu for sm_90 (H100, H200) and packs .gpu/ (programs, libraries, Panda data).
+#   On the GPU machine, from the repository root:
+#       export LD_LIBRARY_PATH=$PWD/.gpu/lib RASTERCHECK_DATA=$PWD/.gpu/data RASTERCHECK_SOURCE=$PWD
+#       scripts/gpu-check.sh run tests; ... run sanitize; ... run bench   (no step: all three)
+#   Every step writes its log under $OUT (else ./gpu-results) and the run ends with one line per
+#   step and its exit status; a failing step does not stop the others.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+
+bundle() {
+    set -e
+    command -v cpio >/dev/null || { echo "gpu-check: gpu-bundle needs cpio (apt-get install cpio)" >&2; exit 1; }
+    cmake -S . -B build-gpu -G Ninja -DCMAKE_BUILD_TYPE=Release -DRASTERCHECK_WITH_CUDA=ON \
+        -DCMAKE_CUDA_ARCHITECTURES=90
+    cmake --build build-gpu --target test_gpu_backend test_staged_pipeline rastercheck_bench_backends
+    ../shared/tools/gpu-bundle build-gpu --bin test_gpu_backend --bin test_staged_pipeline \
+        --bin rastercheck_bench_backends --data mbm/panda
+}
+
+run() {
+    local out=${OUT:-$PWD/gpu-results}
+    mkdir -p "$out"
+    local steps=("$@")
+    ((${#steps[@]})) || steps=(tests sanitize bench)
+    local summary=()
+    step() {  # step NAME SECONDS COMMAND...: run with a time limit, log to $out/NAME.log
+        local name=$1 limit=$2
+        shift 2
+        local start=$SECONDS
+        timeout "$limit" "$@" >"$out/$name.log" 2>&1
+        local rc=$?
+        summary+=("$name: rc $rc, $((SECONDS - start)) s")
+        echo "gpu-check: $name: rc $rc, $((SECONDS - start)) s"
+    }
+    {
+        date -u +"%Y-%m-%d %H:%M UTC"
+        nvidia-smi -L
+        nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
+        nvcc --version | tail -2
+        nproc
+    } >"$out/machine.txt" 2>&1
+    cat "$out/machine.txt"
+    for s in "${steps[@]}"; do
+        case $s in
+            tests)
+                step gpu-tests 300 .gpu/bin/test_gpu_backend
+                step staged-pipeline 200 .gpu/bin/test_staged_pipeline ;;
+            sanitize)
+                # Every kernel on small batches (the million-state test would take too long).
+                step memcheck 240 compute-sanitizer --tool memcheck --error-exitcode 3 .gpu/bin/test_gpu_backend \
+                    --gtest_filter='*AccuracySuites*:*To1000States*'
+                step racecheck 240 compute-sanitizer --tool racecheck --error-exitcode 3 .gpu/bin/test_gpu_backend \
+                    --gtest_filter='*To1000States*' ;;
+            bench)
+                step bench-safe 280 .gpu/bin/rastercheck_bench_backends 1000000 safe
+                step bench-raster 200 .gpu/bin/rastercheck_bench_backends 100000 raster ;;
+            *) echo "gpu-check: unknown step $s (tests, sanitize, bench)" >&2; return 2 ;;
+        esac
+    done
+    printf '%s\n' "${summary[@]}" >"$out/summary.txt"
+}
+
+case ${1:-} in
+    bundle) bundle ;;
+    run) shift; run "$@" ;;
+    *) sed -n '2,13p' "$0"; exit 2 ;;
+esac
