@@ -20,6 +20,7 @@ bundle() {
     cmake -S . -B build-gpu -G Ninja -DCMAKE_BUILD_TYPE=Release -DRASTERCHECK_WITH_CUDA=ON \
         -DCMAKE_CUDA_ARCHITECTURES=90
     cmake --build build-gpu --target test_gpu_backend test_staged_pipeline rastercheck_bench_backends
+    mkdir -p "$(git rev-parse --git-dir)/info"  # gpu-bundle appends to info/exclude, absent in some checkouts
     ../shared/tools/gpu-bundle build-gpu --bin test_gpu_backend --bin test_staged_pipeline \
         --bin rastercheck_bench_backends --data mbm/panda
 }
