@@ -7,7 +7,7 @@
 // few ulps away from where the CPU backend places it, and a contact position, a pixel on a
 // triangle's edge or a separation proof at its slack could differ between the two backends. This
 // function uses only + - * / and rint, which IEEE 754 rounds the same everywhere (the CUDA build
-// passes --fmad=false so nvcc does not fuse them, and x86-64 g++ has no FMA without -mfma): both
+// passes --fmad=false so nvcc does not fuse them, and the host build passes -ffp-contract=off): both
 // backends get the same bits.
 //
 // The method is fdlibm's (Sun Microsystems, 1993; as in FreeBSD's msun and musl): a three-part
