@@ -20,6 +20,13 @@ std::string label(const std::string &suite, rc::CollisionMode mode)
 {
     return suite + " (" + rc::toString(mode) + ")";
 }
+
+/** \brief The stages on the host with poisoned scratch, as uninitialised device memory may be. */
+std::unique_ptr<rc::StageRunner> poisonedStages(const rc::CollisionModelConstPtr &model,
+                                                const rc::device::StageBudget &budget = {})
+{
+    return rc::makeHostStageRunner(model, budget, rc::HostScratch::Poisoned);
+}
 }  // namespace
 
 TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySuites)
@@ -28,7 +35,7 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
-        const rc::StagedBackend staged(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned));
+        const rc::StagedBackend staged(model, poisonedStages(model));
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
@@ -51,7 +58,7 @@ TEST(StagedPipeline, PaddingAndSwitchedOffChecksMatchTheCpuBackend)
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
-        const rc::StagedBackend staged(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned));
+        const rc::StagedBackend staged(model, poisonedStages(model));
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
@@ -76,7 +83,7 @@ TEST(StagedPipeline, BatchesOfEverySizeGiveTheSameVerdicts)
     const rc::test::StateSuite suite = rc::test::accuracySuites(1)[0];  // the thin plate
     const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
     const rc::CpuBackend cpu(model);
-    const rc::StagedBackend staged(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned));
+    const rc::StagedBackend staged(model, poisonedStages(model));
     const std::vector<rc::test::BlindSpotSuite> blind = rc::test::blindSpotSuites(1000, 7);
     for (std::size_t n : {1u, 7u, 1000u})
     {
@@ -105,7 +112,7 @@ TEST(StagedPipeline, ChunksTooSmallForTheBatchGiveIdenticalVerdicts)
         rc::device::StageBudget tiny = fewStates;
         tiny.maxItems = 4000;
         tiny.maxFragments = 2000;
-        const rc::StagedBackend overflowing(model, rc::makeHostStageRunner(model, tiny, rc::HostScratch::Poisoned));
+        const rc::StagedBackend overflowing(model, poisonedStages(model, tiny));
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
@@ -127,7 +134,7 @@ TEST(StagedPipeline, AStateTooLargeForOnePassInRasterModeGetsTheExactAnswer)
         const rc::CpuBackend cpu(model);
         rc::device::StageBudget none;
         none.maxItems = 0;  // no state fits: every one is decided exactly
-        const rc::StagedBackend overflowing(model, rc::makeHostStageRunner(model, none, rc::HostScratch::Poisoned));
+        const rc::StagedBackend overflowing(model, poisonedStages(model, none));
         rc::CollisionRequest raster, exact;
         raster.mode = rc::CollisionMode::Raster;
         exact.mode = rc::CollisionMode::Exact;
@@ -143,7 +150,7 @@ TEST(StagedPipeline, BadStatesAreInvalidNotErrors)
 {
     const rc::test::StateSuite suite = rc::test::accuracySuites(3)[0];
     const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
-    const rc::StagedBackend staged(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned));
+    const rc::StagedBackend staged(model, poisonedStages(model));
     std::vector<double> states = suite.states;
     states[0] = std::numeric_limits<double>::quiet_NaN();
     states[7 + 1] = 1e9;  // beyond the bounds
@@ -170,7 +177,7 @@ TEST(StagedPipeline, TheStagesSettleMostPairsThemselvesAndNeverContradictTheOrac
         ++checkedSuites;
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend oracle(model);
-        const std::unique_ptr<rc::StageRunner> runner = rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned);
+        const std::unique_ptr<rc::StageRunner> runner = poisonedStages(model);
         const rc::CollisionRequest request;  // safe mode, no padding
         const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
         std::vector<std::uint8_t> admissible(n);
