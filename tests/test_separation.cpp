@@ -250,3 +250,62 @@ TEST(Separation, ProofsNeverContradictTheOracleOnThePandasLinks)
     ASSERT_GT(apart, 1000);
     EXPECT_GT(proven, apart / 2) << proven << " of " << apart << " apart pairs proven";
 }
+
+namespace
+{
+/** \brief Largest amount by which a vertex of \a piece sticks out of its hull points' hull along any
+    of \a directions random directions: a lower bound on the largest vertex distance from that hull,
+    which the piece's hull slack must not undercut. */
+double largestOvershoot(const rc::device::ConvexArrays &arrays, const rc::device::ConvexPiece &piece, int directions,
+                        std::mt19937 &rng)
+{
+    std::normal_distribution<double> normal;
+    double largest = 0.0;
+    for (int k = 0; k < directions; ++k)
+    {
+        Vec u(normal(rng), normal(rng), normal(rng));
+        u.normalize();
+        const rc::device::Vec3<double> d{u.x(), u.y(), u.z()};
+        const double overVertices =
+            rc::device::supportValue(arrays.vertices + 3 * std::size_t{piece.firstVertex}, piece.numVertices, d);
+        const double overHull =
+            rc::device::supportValue(arrays.hullPoints + 3 * std::size_t{piece.firstHullPoint}, piece.numHullPoints, d);
+        largest = std::max(largest, overVertices - overHull);
+    }
+    return largest;
+}
+}  // namespace
+
+TEST(Separation, TheHullSlackBoundsHowFarVerticesStickOutOfTheHullPointsHull)
+{
+    rc::ConvexSolids convex;
+    convex.add(rc::makeBox(Vec(0.4, 0.1, 0.25)));  // 8 vertices: all hull points, no slack
+    convex.add(rc::makeSphere(1.0, 1e-4));         // 60 000 vertices on the unit sphere
+    std::vector<std::string> names = {"box", "sphere"};
+    const std::string root = rc::test::sharedData();
+    if (!root.empty())
+    {
+        const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
+        for (const rc::Component &component : problem.robot->components)
+        {
+            convex.add(component.mesh);
+            names.push_back(component.name);
+        }
+    }
+    const rc::device::ConvexArrays arrays = convex.arrays();
+    EXPECT_EQ(arrays.pieces[0].hullSlack, 0.0);
+    // Between 128 extreme points of the unit sphere a vertex stands out by a few percent at most.
+    EXPECT_GT(arrays.pieces[1].hullSlack, 1e-3);
+    EXPECT_LT(arrays.pieces[1].hullSlack, 0.05);
+    std::mt19937 rng(11);
+    for (std::size_t s = 0; s < convex.numSolids(); ++s)
+    {
+        const rc::device::ConvexPiece &piece = arrays.pieces[arrays.solidPieces[s]];
+        const double overshoot = largestOvershoot(arrays, piece, piece.numVertices > 1000 ? 2000 : 20000, rng);
+        EXPECT_GE(piece.hullSlack, overshoot) << names[s];
+        // Tight enough to pay: within a few times what random directions find.
+        EXPECT_LE(piece.hullSlack, 3.0 * overshoot + 1e-5 * piece.radius) << names[s];
+        std::printf("%-14s vertices %5u hull points %3u radius %.4f slack %.6f overshoot %.6f\n", names[s].c_str(),
+                    piece.numVertices, piece.numHullPoints, piece.radius, piece.hullSlack, overshoot);
+    }
+}

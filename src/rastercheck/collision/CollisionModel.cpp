@@ -45,7 +45,7 @@ void ConvexSolids::addPiece(const Mesh &mesh)
 {
     device::ConvexPiece piece{static_cast<std::uint32_t>(vertices_.size() / 3),
                               static_cast<std::uint32_t>(mesh.numVertices()),
-                              static_cast<std::uint32_t>(hullPoints_.size() / 3), 0, 0.0};
+                              static_cast<std::uint32_t>(hullPoints_.size() / 3), 0, 0.0, 0.0};
     for (const Eigen::Vector3d &v : mesh.vertices)
     {
         vertices_.insert(vertices_.end(), v.data(), v.data() + 3);
@@ -53,8 +53,28 @@ void ConvexSolids::addPiece(const Mesh &mesh)
     }
     const std::vector<std::uint32_t> extreme = mesh.extremeVertices(kConvexHullDirections);
     piece.numHullPoints = static_cast<std::uint32_t>(extreme.size());
+    const std::size_t firstHullDouble = hullPoints_.size();
     for (std::uint32_t i : extreme)
         hullPoints_.insert(hullPoints_.end(), mesh.vertices[i].data(), mesh.vertices[i].data() + 3);
+    if (extreme.size() < mesh.numVertices())
+    {
+        // How far the other vertices may stick out of the hull points' hull: with it, a gap
+        // between hull points alone can prove a pair apart (device::provablySeparated). The
+        // slack added covers the rounding of the bound's inside test.
+        std::vector<std::uint8_t> isHullPoint(mesh.numVertices(), 0);
+        for (std::uint32_t i : extreme)
+            isHullPoint[i] = 1;
+        const double *hull = hullPoints_.data() + firstHullDouble;
+        for (std::size_t i = 0; i < mesh.numVertices(); ++i)
+            if (!isHullPoint[i])
+            {
+                const Eigen::Vector3d &v = mesh.vertices[i];
+                piece.hullSlack = std::max(piece.hullSlack, device::hullDistanceBound({v.x(), v.y(), v.z()}, hull,
+                                                                                      piece.numHullPoints,
+                                                                                      piece.hullSlack));
+            }
+        piece.hullSlack += 1e-6 * piece.radius;
+    }
     pieces_.push_back(piece);
 }
 

@@ -17,7 +17,8 @@ namespace rastercheck
 {
 /** \brief Directions the hull points of a convex piece are extreme along: enough that the hull
     they span comes within a few percent of the piece's size (so GJK's direction is good), few
-    enough that its support searches stay short. The proof itself always reads every vertex. */
+    enough that its support searches stay short. Every vertex lies within the piece's hull slack
+    of that hull; the proof reads every vertex only when the hull points' gap does not clear it. */
 constexpr std::size_t kConvexHullDirections = 128;
 
 /** \brief Most shells a solid is split into for the separation cull: shell pairs grow as the

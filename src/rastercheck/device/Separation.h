@@ -13,16 +13,18 @@
 namespace rastercheck::device
 {
 /** \brief Where one convex piece's points lie in the flat arrays (ConvexArrays): every vertex of the
-    piece (the proof needs them all: the piece lies in their convex hull) and a few of them that
-    span that hull closely (the hull points, what GJK searches). Offsets count points (3 doubles
-    each), in the solid's own frame (components: link frame; objects: world frame). */
+    piece (the piece lies in their convex hull) and a few of them that span that hull closely (the
+    hull points, what GJK searches; no vertex lies farther than hullSlack from their hull). Offsets
+    count points (3 doubles each), in the solid's own frame (components: link frame; objects: world
+    frame). */
 struct ConvexPiece
 {
     std::uint32_t firstVertex;
     std::uint32_t numVertices;
     std::uint32_t firstHullPoint;
     std::uint32_t numHullPoints;
-    double radius;  ///< largest distance of a vertex from the frame's origin
+    double radius;     ///< largest distance of a vertex from the frame's origin
+    double hullSlack;  ///< no vertex lies farther than this from the hull points' convex hull
 };
 
 /** \brief The separation cull's view of every solid (CollisionModel::convex): solid s owns pieces
@@ -44,13 +46,15 @@ struct ConvexProxy
     const double *hullPoints;
     std::uint32_t numHullPoints;
     double radius;
+    double hullSlack;
 };
 
 RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, std::uint32_t piece)
 {
     const ConvexPiece &p = arrays.pieces[piece];
     return ConvexProxy{arrays.vertices + 3 * static_cast<std::size_t>(p.firstVertex), p.numVertices,
-                       arrays.hullPoints + 3 * static_cast<std::size_t>(p.firstHullPoint), p.numHullPoints, p.radius};
+                       arrays.hullPoints + 3 * static_cast<std::size_t>(p.firstHullPoint), p.numHullPoints, p.radius,
+                       p.hullSlack};
 }
 
 /** \brief Relative rounding slack of the separation proof: a gap must exceed the padding by this
@@ -111,10 +115,16 @@ namespace detail
 /** \brief Closest point to the origin of the convex hull of simplex[0..count) (count 1 to 4), and
     the smallest sub-simplex whose hull holds it, written back in place. Every face is tried (15 at
     most): the projection of the origin on a face's affine hull, when it falls inside the face, is
-    a point of the hull, and the nearest of those is the closest point. Returns false when the
-    origin lies inside a full tetrahedron (the hulls meet). Degenerate faces are skipped: their
-    sub-faces hold the answer. */
-RC_HD bool closestOnSimplex(Vec3<double> *simplex, int &count, Vec3<double> &closest)
+    a point of the hull, and the nearest of those is the closest point. Degenerate faces are
+    skipped: their sub-faces hold the answer. */
+enum class SimplexStep
+{
+    Closer,        ///< \a closest and the sub-simplex are written
+    OriginInside,  ///< the origin lies inside a full tetrahedron (the hulls meet)
+    Flat           ///< no face was usable (numerically flat): nothing written
+};
+
+RC_HD SimplexStep closestOnSimplex(Vec3<double> *simplex, int &count, Vec3<double> &closest)
 {
     double bestNorm = -1.0;
     int bestMask = 0;
@@ -173,7 +183,7 @@ RC_HD bool closestOnSimplex(Vec3<double> *simplex, int &count, Vec3<double> &clo
         for (int k = 0; k < n; ++k)
             p = p + lambda[k] * e[k];
         if (n == 3)
-            return false;  // the origin is inside the tetrahedron
+            return SimplexStep::OriginInside;
         const double norm = dot(p, p);
         if (bestNorm < 0.0 || norm < bestNorm)
         {
@@ -183,13 +193,13 @@ RC_HD bool closestOnSimplex(Vec3<double> *simplex, int &count, Vec3<double> &clo
         }
     }
     if (bestNorm < 0.0)
-        return false;  // nothing usable: numerically flat; report no separation
+        return SimplexStep::Flat;
     int kept = 0;
     for (int i = 0; i < count; ++i)
         if (bestMask & (1 << i))
             simplex[kept++] = simplex[i];
     count = kept;
-    return true;
+    return SimplexStep::Closer;
 }
 
 RC_HD Vec3<double> worldSupport(const ConvexProxy &solid, const Pose<double> &pose, const Vec3<double> &d)
@@ -201,10 +211,51 @@ RC_HD Vec3<double> worldSupport(const ConvexProxy &solid, const Pose<double> &po
 }
 }  // namespace detail
 
+/** \brief An upper bound on the distance from \a x to the convex hull of \a points (count >= 1):
+    GJK on the set x - hull, whose point nearest the origin is x less the hull's point nearest x.
+    Every v it visits lies in that set, so |v| bounds the distance however early it stops: at
+    convergence, at \a enough (the caller keeps a maximum over many points and needs no less), or
+    after 64 steps. 0 when the origin is found inside a tetrahedron of hull points: the barycentric
+    test rounds, so the caller adds a slack (ConvexSolids: 1e-6 of the piece's radius). For
+    ConvexSolids at load time, on the host. */
+RC_HD double hullDistanceBound(const Vec3<double> &x, const double *points, std::uint32_t count, double enough)
+{
+    const auto pointOfSet = [&](const Vec3<double> &d)  // the point of x - hull extreme along d
+    {
+        std::uint32_t index = 0;
+        supportValue(points, count, Vec3<double>{-d.x, -d.y, -d.z}, &index);
+        const double *p = points + 3 * index;
+        return x - Vec3<double>{p[0], p[1], p[2]};
+    };
+    Vec3<double> v = x - Vec3<double>{points[0], points[1], points[2]};
+    Vec3<double> simplex[4] = {v};
+    int size = 1;
+    for (int iteration = 0; iteration < 64; ++iteration)
+    {
+        const double vv = dot(v, v);
+        if (!(vv > enough * enough))
+            break;
+        const Vec3<double> w = pointOfSet(Vec3<double>{-v.x, -v.y, -v.z});
+        if (vv - dot(v, w) <= 1e-12 * vv)
+            break;  // converged
+        simplex[size++] = w;
+        Vec3<double> next = v;
+        const detail::SimplexStep step = detail::closestOnSimplex(simplex, size, next);
+        if (step == detail::SimplexStep::OriginInside)
+            return 0.0;
+        if (step == detail::SimplexStep::Flat || !(dot(next, next) < vv))
+            break;
+        v = next;
+    }
+    return std::sqrt(dot(v, v));
+}
+
 /** \brief Are solids A and B (placed by their poses, world frame) provably more than \a padding
     apart? GJK (van den Bergen's distance loop) over the hull points proposes the direction between
-    the solids' nearest points; gapAlong() proves it over every vertex, once along the first
-    direction that looks good enough (most pairs end there) and once along the converged one. True
+    the solids' nearest points. The hull points' gap along it proves the pair apart when it clears
+    the padding plus both pieces' hull slacks (most pairs end there, after a few hundred
+    multiply-adds); otherwise gapAlong() tries the proof over every vertex, once along the first
+    direction that looks good enough and once along the converged one. True
     only with a proof, so the answer is conservative whatever GJK does; a false sends the pair on to
     the exact narrow phase. For convex meshes of no more than rastercheck::kConvexHullDirections
     (128) vertices, every vertex is a hull point and the proof is found whenever the solids are
@@ -240,20 +291,25 @@ RC_HD bool provablySeparated(const ConvexProxy &a, const Pose<double> &poseA, co
         const Vec3<double> w =
             detail::worldSupport(a, poseA, Vec3<double>{-v.x, -v.y, -v.z}) - detail::worldSupport(b, poseB, v);
         const double vw = dot(v, w);
-        // v . w / |v| bounds the hull points' distance from below: once it clears the margin, the
-        // direction is worth the proof over every vertex.
-        if (!proofTried && vw > margin * std::sqrt(vv))
+        // v . w / |v| is the gap the plane normal to v leaves between the hull points' hulls (it
+        // bounds their distance from below). No vertex sticks out of its hull points' hull by more
+        // than the piece's hull slack, so a gap that clears the margin plus both slacks is a proof
+        // without reading every vertex; one that clears the margin alone is worth that reading.
+        const double length = std::sqrt(vv);
+        if (vw > (margin + a.hullSlack + b.hullSlack) * length)
+            return true;
+        if (!proofTried && vw > margin * length)
         {
             proofTried = true;
-            if (gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(vv))
+            if (gapAlong(v, a, poseA, b, poseB) > margin * length)
                 return true;
         }
         if (vv - vw <= 1e-10 * vv)
             break;  // converged: v is the hull points' nearest direction within rounding
         simplex[count++] = w;
-        Vec3<double> next = v;  // written by closestOnSimplex when it succeeds
-        if (!detail::closestOnSimplex(simplex, count, next))
-            return false;  // the origin is inside: the hull points' hulls meet
+        Vec3<double> next = v;  // written by closestOnSimplex when it gets closer
+        if (detail::closestOnSimplex(simplex, count, next) != detail::SimplexStep::Closer)
+            return false;  // the hull points' hulls meet, or GJK lost its footing: no proof
         if (!(dot(next, next) < vv))
             break;  // no progress left
         v = next;
