@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -26,8 +27,11 @@ namespace
 void check(cudaError_t status, const char *what)
 {
     if (status != cudaSuccess)
+    {
+        cudaGetLastError();  // a caught failure must not resurface at the next launch check
         throw std::runtime_error(std::string("CUDA: ") + what + " failed: " + cudaGetErrorName(status) + " (" +
                                  cudaGetErrorString(status) + ")");
+    }
 }
 
 template <class F>
@@ -40,29 +44,59 @@ __global__ void forEachKernel(std::size_t n, F f)
 
 __global__ void probeKernel(int *out) { *out = 42; }
 
-/** \brief One device allocation that only grows. */
-struct DeviceAllocation
+/** \brief One device allocation that only grows, freed with its owner. */
+class DeviceAllocation
 {
-    void *pointer = nullptr;
-    std::size_t bytes = 0;
-
-    void *reserve(std::size_t need, const char *what)
+public:
+    DeviceAllocation() = default;
+    DeviceAllocation(DeviceAllocation &&other) noexcept : pointer_(other.pointer_), bytes_(other.bytes_)
     {
-        if (need <= bytes)
-            return pointer;
-        release();
-        const std::size_t grown = need + need / 4;  // headroom: fewer regrowths as batches vary
-        check(cudaMalloc(&pointer, grown), what);
-        bytes = grown;
-        return pointer;
+        other.pointer_ = nullptr;
+        other.bytes_ = 0;
     }
+    DeviceAllocation &operator=(DeviceAllocation &&) = delete;
+    DeviceAllocation(const DeviceAllocation &) = delete;
+    DeviceAllocation &operator=(const DeviceAllocation &) = delete;
+    ~DeviceAllocation() { release(); }
+
+    void *pointer() const { return pointer_; }
+    std::size_t bytes() const { return bytes_; }
+
+    /** \brief Holds at least \a need bytes after it: a quarter more when \a most allows (fewer
+        regrowths as batches vary), else exactly \a need. False when the device has no room (the
+        old contents are gone either way); any other CUDA failure throws. */
+    bool grow(std::size_t need, std::size_t most, const char *what)
+    {
+        if (need <= bytes_)
+            return true;
+        release();
+        for (const std::size_t size : {std::max(need, std::min(need + need / 4, most)), need})
+        {
+            const cudaError_t status = cudaMalloc(&pointer_, size);
+            if (status == cudaSuccess)
+            {
+                bytes_ = size;
+                return true;
+            }
+            pointer_ = nullptr;
+            if (status != cudaErrorMemoryAllocation)
+                check(status, what);
+            cudaGetLastError();  // out of memory is not sticky: clear it
+        }
+        return false;
+    }
+
     void release()
     {
-        if (pointer)
-            cudaFree(pointer);
-        pointer = nullptr;
-        bytes = 0;
+        if (pointer_)
+            cudaFree(pointer_);
+        pointer_ = nullptr;
+        bytes_ = 0;
     }
+
+private:
+    void *pointer_ = nullptr;
+    std::size_t bytes_ = 0;
 };
 
 class CudaExecutor
@@ -71,22 +105,20 @@ public:
     CudaExecutor() { check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate"); }
     ~CudaExecutor()
     {
-        for (DeviceAllocation &a : buffers_)
-            a.release();
-        temp_.release();
-        keysAlt_.release();
-        valuesAlt_.release();
-        count_.release();
+        releaseScratch();
         cudaStreamDestroy(stream_);
     }
     CudaExecutor(const CudaExecutor &) = delete;
     CudaExecutor &operator=(const CudaExecutor &) = delete;
 
+    /** \brief StageBudget::maxScratchBytes: the most all scratch buffers may hold together. */
+    void limitScratch(std::size_t bytes) { maxScratchBytes_ = bytes; }
+
     template <class T>
     T *buffer(int slot, std::size_t count)
     {
-        return static_cast<T *>(buffers_[static_cast<std::size_t>(slot)].reserve(std::max<std::size_t>(1, count) * sizeof(T),
-                                                                                 "cudaMalloc (stage buffer)"));
+        return static_cast<T *>(reserve(buffers_[static_cast<std::size_t>(slot)],
+                                         std::max<std::size_t>(1, count) * sizeof(T), "cudaMalloc (stage buffer)"));
     }
 
     template <class T>
@@ -119,12 +151,12 @@ public:
 
     std::uint32_t selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected)
     {
-        std::uint32_t *count = static_cast<std::uint32_t *>(count_.reserve(sizeof(std::uint32_t), "cudaMalloc (count)"));
+        std::uint32_t *count = static_cast<std::uint32_t *>(reserve(count_, sizeof(std::uint32_t), "cudaMalloc (count)"));
         const thrust::counting_iterator<std::uint32_t> indices(0);
         std::size_t bytes = 0;
         check(cub::DeviceSelect::Flagged(nullptr, bytes, indices, flags, selected, count, static_cast<std::int64_t>(n), stream_),
               "cub::DeviceSelect::Flagged (size)");
-        check(cub::DeviceSelect::Flagged(temp_.reserve(bytes, "cudaMalloc (CUB scratch)"), bytes, indices, flags, selected,
+        check(cub::DeviceSelect::Flagged(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, indices, flags, selected,
                                          count, static_cast<std::int64_t>(n), stream_),
               "cub::DeviceSelect::Flagged");
         std::uint32_t result = 0;
@@ -139,7 +171,7 @@ public:
             return 0;
         std::size_t bytes = 0;
         check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, n, stream_), "cub::DeviceScan::ExclusiveSum (size)");
-        check(cub::DeviceScan::ExclusiveSum(temp_.reserve(bytes, "cudaMalloc (CUB scratch)"), bytes, in, out, n, stream_),
+        check(cub::DeviceScan::ExclusiveSum(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, in, out, n, stream_),
               "cub::DeviceScan::ExclusiveSum");
         unsigned long long total = 0;
         download(&total, out + (n - 1), 1);
@@ -152,15 +184,15 @@ public:
         if (n == 0 || numSegments == 0)
             return;
         unsigned long long *keysOut =
-            static_cast<unsigned long long *>(keysAlt_.reserve(n * sizeof(unsigned long long), "cudaMalloc (sort keys)"));
+            static_cast<unsigned long long *>(reserve(keysAlt_, n * sizeof(unsigned long long), "cudaMalloc (sort keys)"));
         std::uint32_t *valuesOut =
-            static_cast<std::uint32_t *>(valuesAlt_.reserve(n * sizeof(std::uint32_t), "cudaMalloc (sort values)"));
+            static_cast<std::uint32_t *>(reserve(valuesAlt_, n * sizeof(std::uint32_t), "cudaMalloc (sort values)"));
         std::size_t bytes = 0;
         check(cub::DeviceSegmentedSort::StableSortPairs(nullptr, bytes, keys, keysOut, values, valuesOut,
                                                         static_cast<std::int64_t>(n), numSegments, starts, starts + 1,
                                                         stream_),
               "cub::DeviceSegmentedSort::StableSortPairs (size)");
-        check(cub::DeviceSegmentedSort::StableSortPairs(temp_.reserve(bytes, "cudaMalloc (CUB scratch)"), bytes, keys,
+        check(cub::DeviceSegmentedSort::StableSortPairs(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, keys,
                                                         keysOut, values, valuesOut, static_cast<std::int64_t>(n),
                                                         numSegments, starts, starts + 1, stream_),
               "cub::DeviceSegmentedSort::StableSortPairs");
@@ -171,7 +203,50 @@ public:
     }
 
 private:
+    /** \brief \a a grown to \a need bytes within the scratch limit. When the limit or the device
+        says no, every scratch buffer is freed (the chunk is abandoned; cudaFree waits for the
+        kernels using them) and StageMemoryExhausted has the chunk split. */
+    void *reserve(DeviceAllocation &a, std::size_t need, const char *what)
+    {
+        if (need <= a.bytes())
+            return a.pointer();
+        std::size_t most = SIZE_MAX;
+        if (maxScratchBytes_ > 0)
+        {
+            const std::size_t others = heldBytes() - a.bytes();
+            most = maxScratchBytes_ > others ? maxScratchBytes_ - others : 0;
+        }
+        if (need > most || !a.grow(need, most, what))
+        {
+            releaseScratch();
+            throw StageMemoryExhausted(std::string(what) + ": no room for " + std::to_string(need) + " bytes" +
+                                       (need > most ? " within the scratch limit of " + std::to_string(maxScratchBytes_) +
+                                                          " bytes"
+                                                    : " on the device"));
+        }
+        return a.pointer();
+    }
+
+    std::size_t heldBytes() const
+    {
+        std::size_t total = temp_.bytes() + keysAlt_.bytes() + valuesAlt_.bytes() + count_.bytes();
+        for (const DeviceAllocation &a : buffers_)
+            total += a.bytes();
+        return total;
+    }
+
+    void releaseScratch()
+    {
+        for (DeviceAllocation &a : buffers_)
+            a.release();
+        temp_.release();
+        keysAlt_.release();
+        valuesAlt_.release();
+        count_.release();
+    }
+
     cudaStream_t stream_ = nullptr;
+    std::size_t maxScratchBytes_ = 0;
     std::array<DeviceAllocation, device::kNumStageBuffers> buffers_;
     DeviceAllocation temp_, keysAlt_, valuesAlt_, count_;
 };
@@ -181,7 +256,10 @@ template <class T>
 const T *uploadOnce(std::vector<DeviceAllocation> &keep, const T *source, std::size_t count)
 {
     keep.emplace_back();
-    void *p = keep.back().reserve(std::max<std::size_t>(1, count) * sizeof(T), "cudaMalloc (model)");
+    const std::size_t bytes = std::max<std::size_t>(1, count) * sizeof(T);
+    if (!keep.back().grow(bytes, bytes, "cudaMalloc (model)"))
+        throw std::runtime_error("CUDA: no device memory for the model (" + std::to_string(bytes) + " bytes)");
+    void *p = keep.back().pointer();
     if (count > 0)
         check(cudaMemcpy(p, source, count * sizeof(T), cudaMemcpyHostToDevice), "cudaMemcpy (model)");
     return static_cast<const T *>(p);
@@ -190,7 +268,7 @@ const T *uploadOnce(std::vector<DeviceAllocation> &keep, const T *source, std::s
 class CudaStageRunner : public StageRunner
 {
 public:
-    CudaStageRunner(const device::ModelArrays &host, std::string deviceName)
+    CudaStageRunner(const device::ModelArrays &host, std::string deviceName, std::size_t memoryLimit)
       : deviceName_(std::move(deviceName))
     {
         const std::size_t m = static_cast<std::size_t>(host.numComponents);
@@ -213,27 +291,30 @@ public:
         model_.convex.pieces = uploadOnce(model_memory_, host.convex.pieces, host.numConvexPieces);
         model_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
 
-        // Budgets from the free memory, leaving half of it to others: bytes per element of each
-        // stage's buffers (fragments: key, value, their sorted copies and the walk's fragment).
+        // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
+        // non-blocking stream that does not wait for the legacy one: wait here.
+        check(cudaDeviceSynchronize(), "cudaDeviceSynchronize (model upload)");
+
+        // Budgets: the caller's limit, else half the free memory (the rest is left to others),
+        // split between the stages' buffers by bytes per element: fragments 56 (key, value, their
+        // sorted copies, the walk's fragment, CUB's own sort buffers), (pair, triangle) items 20,
+        // (state, pair) elements 8, states perState; what is left covers the surviving pairs'
+        // buffers and CUB's scratch. The scratch limit enforces the sum (StageMemoryExhausted).
         std::size_t freeBytes = 0, totalBytes = 0;
         check(cudaMemGetInfo(&freeBytes, &totalBytes), "cudaMemGetInfo");
-        const std::size_t usable = freeBytes / 2;
+        const std::size_t usable = memoryLimit > 0 ? std::min(memoryLimit, freeBytes) : freeBytes / 2;
         const std::size_t perState = 8 * static_cast<std::size_t>(host.numCoordinates + host.numJoints) +
                                      96 * static_cast<std::size_t>(host.numLinks) + 160 * m + 32;
-        budget_.maxFragments = std::max<std::size_t>(1 << 20, usable * 4 / 10 / 32);
-        budget_.maxItems = std::max<std::size_t>(1 << 20, usable * 2 / 10 / 16);
-        budget_.maxPairElements = std::max<std::size_t>(host.numPairs(), usable * 2 / 10 / 8);
+        budget_.maxFragments = std::max<std::size_t>(1, usable / 10 * 4 / 56);
+        budget_.maxItems = std::max<std::size_t>(1, usable / 10 * 2 / 20);
+        budget_.maxPairElements = std::max<std::size_t>(host.numPairs(), usable / 100 * 15 / 8);
         budget_.maxStates = std::max<std::size_t>(1, usable / 10 / perState);
+        budget_.maxScratchBytes = usable;
         // 32-bit indices inside a chunk.
         budget_.maxFragments = std::min<std::size_t>(budget_.maxFragments, 1u << 31);
         budget_.maxItems = std::min<std::size_t>(budget_.maxItems, 1u << 31);
         budget_.maxPairElements = std::min<std::size_t>(budget_.maxPairElements, 1u << 31);
-    }
-
-    ~CudaStageRunner() override
-    {
-        for (DeviceAllocation &a : model_memory_)
-            a.release();
+        executor_.limitScratch(budget_.maxScratchBytes);
     }
 
     std::string name() const override { return "cuda (" + deviceName_ + ")"; }
@@ -299,10 +380,10 @@ bool deviceUsable(std::string &description)
     return true;
 }
 
-std::unique_ptr<StageRunner> makeStageRunner(const device::ModelArrays &model)
+std::unique_ptr<StageRunner> makeStageRunner(const device::ModelArrays &model, std::size_t memoryLimit)
 {
     cudaDeviceProp properties{};
     check(cudaGetDeviceProperties(&properties, 0), "cudaGetDeviceProperties");
-    return std::make_unique<CudaStageRunner>(model, properties.name);
+    return std::make_unique<CudaStageRunner>(model, properties.name, memoryLimit);
 }
 }  // namespace rastercheck::cuda

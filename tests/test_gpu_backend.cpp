@@ -1,6 +1,10 @@
 // The CUDA backend against the CPU backend, state for state, on a real GPU. Every test skips when
-// this build has no CUDA backend or no usable device (ctest label "gpu"); the same driver and
-// per-element code are checked on every machine through the host executor (test_staged_pipeline).
+// this build has no CUDA backend or no usable device (ctest label "gpu"), and fails instead when
+// RASTERCHECK_REQUIRE_GPU is set (scripts/gpu-check.sh sets it: on the GPU machine a skip would
+// hide a device the backend could not use). The same driver and per-element code are checked on
+// every machine through the host executor (test_staged_pipeline).
+#include <cstdlib>
+
 #include <gtest/gtest.h>
 
 #include "BackendSuites.h"
@@ -11,21 +15,26 @@ namespace rc = rastercheck;
 namespace
 {
 /** \brief A checker on the CUDA backend for every batch size, or null (the test then skips). */
-std::unique_ptr<rc::Checker> gpuChecker(const rc::test::StateSuite &suite)
+std::unique_ptr<rc::Checker> gpuChecker(const rc::test::StateSuite &suite, std::size_t deviceMemoryLimit = 0)
 {
     rc::CheckerOptions options;
     options.backend = rc::BackendChoice::Cuda;
     options.minDeviceBatch = 1;
+    options.deviceMemoryLimit = deviceMemoryLimit;
     auto checker = std::make_unique<rc::Checker>(suite.robot, suite.scene, options);
     if (checker->backendName().rfind("cuda", 0) != 0)
         return nullptr;
     return checker;
 }
 
-#define REQUIRE_GPU(checker)                                                                                         \
-    if (!(checker))                                                                                                  \
-    GTEST_SKIP() << "no CUDA backend in this build or no usable CUDA device (the staged pipeline is tested on the " \
-                    "CPU by test_staged_pipeline)"
+#define REQUIRE_GPU(checker)                                                                                     \
+    if (!(checker))                                                                                              \
+    {                                                                                                            \
+        if (std::getenv("RASTERCHECK_REQUIRE_GPU"))                                                              \
+            FAIL() << "RASTERCHECK_REQUIRE_GPU is set, but the checker runs on the CPU (its warning says why)"; \
+        GTEST_SKIP() << "no CUDA backend in this build or no usable CUDA device (the staged pipeline is tested " \
+                        "on the CPU by test_staged_pipeline)";                                                   \
+    }
 
 /** \brief The checker's model for a CPU backend beside it (the checker outlives the backend). */
 rc::CollisionModelConstPtr sameModel(const rc::Checker &checker)
@@ -53,6 +62,25 @@ TEST(GpuBackend, SameVerdictsAndFirstContactsAsTheCpuOnTheAccuracySuites)
                                               suite.name + " (" + rc::toString(mode) + ", padding " +
                                                   std::to_string(padding) + ")");
             }
+    }
+}
+
+TEST(GpuBackend, ADeviceMemoryLimitSplitsBatchesWithoutChangingVerdicts)
+{
+    // 1 MiB of scratch holds one pass over a few dozen Panda states: 300 take several passes, and
+    // the crane's or a thin plate's fragments overflow a pass and are halved again.
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(300))
+    {
+        const std::unique_ptr<rc::Checker> gpu = gpuChecker(suite, 1 << 20);
+        REQUIRE_GPU(gpu);
+        const rc::CpuBackend cpu(sameModel(*gpu));
+        for (rc::CollisionMode mode : {rc::CollisionMode::Safe, rc::CollisionMode::Exact})
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            rc::test::expectSameDecisions(gpu->backend(), cpu, gpu->collisionModel(), suite.states, request,
+                                          suite.name + " (" + rc::toString(mode) + ", 1 MiB)");
+        }
     }
 }
 

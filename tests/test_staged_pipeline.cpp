@@ -126,6 +126,44 @@ TEST(StagedPipeline, ChunksTooSmallForTheBatchGiveIdenticalVerdicts)
     }
 }
 
+TEST(StagedPipeline, AScratchLimitSplitsTheBatchWithoutChangingVerdicts)
+{
+    // What a device with little free memory (or CheckerOptions::deviceMemoryLimit) does: a buffer
+    // that would pass the limit abandons the chunk, which is split until its passes fit. 64 KiB
+    // cannot hold one pass over 60 Panda states (their link poses alone take 69 KiB).
+    rc::device::StageBudget small;
+    small.maxScratchBytes = 64 << 10;
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(60))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::CpuBackend cpu(model);
+        const rc::StagedBackend limited(model, poisonedStages(model, small));
+        for (rc::CollisionMode mode : {rc::CollisionMode::Safe, rc::CollisionMode::Exact})
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            rc::test::expectSameDecisions(limited, cpu, *model, suite.states, request,
+                                          label(suite.name, mode) + " within 64 KiB");
+        }
+    }
+    // A limit that not even one state's pass fits is an error that says so, never a wrong answer.
+    const rc::test::StateSuite suite = rc::test::accuracySuites(2)[0];
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    rc::device::StageBudget tiny;
+    tiny.maxScratchBytes = 64;
+    const rc::StagedBackend starved(model, poisonedStages(model, tiny));
+    std::vector<std::uint8_t> valid(2);
+    try
+    {
+        starved.check(suite.states.data(), 2, valid.data(), nullptr, {}, 1);
+        ADD_FAILURE() << "a 64-byte scratch limit was not enforced";
+    }
+    catch (const std::length_error &e)
+    {
+        EXPECT_NE(std::string(e.what()).find("within the scratch limit of 64 bytes"), std::string::npos) << e.what();
+    }
+}
+
 TEST(StagedPipeline, AStateTooLargeForOnePassInRasterModeGetsTheExactAnswer)
 {
     for (const rc::test::StateSuite &suite : rc::test::accuracySuites(60))

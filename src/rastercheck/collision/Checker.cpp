@@ -30,7 +30,7 @@ namespace
 {
 /** \brief The CUDA backend when the build has it and a device can run it; null otherwise, with
     the reason in \a why. */
-std::unique_ptr<Backend> makeCudaBackend(const CollisionModelConstPtr &model, std::string &why)
+std::unique_ptr<Backend> makeCudaBackend(const CollisionModelConstPtr &model, std::size_t memoryLimit, std::string &why)
 {
 #if RASTERCHECK_WITH_CUDA
     std::string device;
@@ -41,7 +41,7 @@ std::unique_ptr<Backend> makeCudaBackend(const CollisionModelConstPtr &model, st
     }
     try
     {
-        auto backend = std::make_unique<StagedBackend>(model, cuda::makeStageRunner(hostModelArrays(*model)));
+        auto backend = std::make_unique<StagedBackend>(model, cuda::makeStageRunner(hostModelArrays(*model), memoryLimit));
         logInfo("using the CUDA backend on " + device);
         return backend;
     }
@@ -52,6 +52,7 @@ std::unique_ptr<Backend> makeCudaBackend(const CollisionModelConstPtr &model, st
     }
 #else
     (void)model;
+    (void)memoryLimit;
     why = "this build has no CUDA backend";
     return nullptr;
 #endif
@@ -69,7 +70,7 @@ Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOpt
     if (options.backend != BackendChoice::Cpu)
     {
         std::string why;
-        backend_ = makeCudaBackend(model_, why);
+        backend_ = makeCudaBackend(model_, options.deviceMemoryLimit, why);
         if (!backend_)
         {
             const std::string notice = why + "; using the CPU backend";

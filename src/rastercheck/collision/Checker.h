@@ -33,6 +33,11 @@ struct CheckerOptions
     /** \brief Smallest batch sent to the GPU backend: a smaller one (a single isValid, a short
         motion) runs on the CPU backend, where it does not pay the GPU pass's fixed latency. */
     std::size_t minDeviceBatch = 32;
+    /** \brief Most device memory, in bytes, the GPU backend's batch buffers may take (the model
+        comes on top); 0 = half the memory free when the checker is built. A batch that needs more
+        is split into passes that fit, with the same verdicts; so is one that meets a device
+        filled by other programs. */
+    std::size_t deviceMemoryLimit = 0;
 };
 
 /** \brief Decides whether robot configurations collide with the scene or themselves, one state or

@@ -4,12 +4,39 @@
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "rastercheck/device/BatchPipeline.h"
 
 namespace rastercheck
 {
+/** \brief Thrown by an executor whose scratch cannot grow: past StageBudget::maxScratchBytes, or
+    refused by the allocator (device memory taken by others). The executor has freed its scratch;
+    runStagesInChunks then splits the chunk, as for a chunk over the count limits. */
+struct StageMemoryExhausted : std::runtime_error
+{
+    using std::runtime_error::runtime_error;
+};
+
+/** \brief runStageChunk, with an executor out of scratch memory counted as a chunk over budget. */
+template <class Exec>
+bool runStageChunkWithin(Exec &ex, const device::ModelArrays &model, const device::StageSettings &settings,
+                         const device::StageBudget &budget, const double *q, const std::uint8_t *admissible,
+                         std::uint32_t count, const device::PairOutcome *&outcomes, std::uint32_t &numOutcomes,
+                         std::string &why)
+{
+    try
+    {
+        return device::runStageChunk(ex, model, settings, budget, q, admissible, count, outcomes, numOutcomes);
+    }
+    catch (const StageMemoryExhausted &e)
+    {
+        why = e.what();
+        return false;
+    }
+}
+
 /** \brief Runs the stages over \a n states in chunks that fit \a budget: a chunk that overflows is
     halved and run again, so a batch of any size gets the verdicts it would get in one pass. A
     single state that still overflows is run without rasterizing: its pairs go to the exact phase,
@@ -32,8 +59,9 @@ void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device:
         const std::size_t count = std::min(chunk, n - start);
         const device::PairOutcome *chunkOutcomes = nullptr;
         std::uint32_t numOutcomes = 0;
-        if (!device::runStageChunk(ex, model, settings, budget, q + start * dof, admissible + start,
-                                   static_cast<std::uint32_t>(count), chunkOutcomes, numOutcomes))
+        std::string why = "over the stage budget";
+        if (!runStageChunkWithin(ex, model, settings, budget, q + start * dof, admissible + start,
+                                 static_cast<std::uint32_t>(count), chunkOutcomes, numOutcomes, why))
         {
             if (count > 1)
             {
@@ -42,9 +70,10 @@ void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device:
             }
             device::StageSettings unrasterized = settings;
             unrasterized.rasterize = false;
-            if (!device::runStageChunk(ex, model, unrasterized, budget, q + start * dof, admissible + start, 1,
-                                       chunkOutcomes, numOutcomes))
-                throw std::length_error("one state's pairs exceed the stage budget");
+            if (!runStageChunkWithin(ex, model, unrasterized, budget, q + start * dof, admissible + start, 1,
+                                     chunkOutcomes, numOutcomes, why))
+                throw std::length_error("the stages cannot hold one state's pairs, even without rasterizing (" +
+                                        why + ")");
         }
         part.resize(numOutcomes);
         ex.download(part.data(), chunkOutcomes, numOutcomes);

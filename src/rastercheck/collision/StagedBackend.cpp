@@ -4,7 +4,7 @@
 #include <array>
 #include <cstring>
 #include <numeric>
-
+#include <string>
 
 #include "rastercheck/collision/StageChunks.h"
 
@@ -65,14 +65,26 @@ namespace
 class HostExecutor
 {
 public:
-    explicit HostExecutor(HostScratch scratch) : scratch_(scratch) {}
+    HostExecutor(HostScratch scratch, std::size_t maxScratchBytes) : scratch_(scratch), maxScratchBytes_(maxScratchBytes)
+    {
+    }
 
     template <class T>
     T *buffer(int slot, std::size_t count)
     {
         std::vector<unsigned char> &storage = buffers_[static_cast<std::size_t>(slot)];
         if (storage.size() < count * sizeof(T))
+        {
+            if (maxScratchBytes_ > 0 && heldBytes() - storage.size() + count * sizeof(T) > maxScratchBytes_)
+            {
+                for (std::vector<unsigned char> &b : buffers_)
+                    std::vector<unsigned char>().swap(b);
+                throw StageMemoryExhausted("stage buffer " + std::to_string(slot) + ": no room for " +
+                                           std::to_string(count * sizeof(T)) + " bytes within the scratch limit of " +
+                                           std::to_string(maxScratchBytes_) + " bytes");
+            }
             storage.resize(count * sizeof(T));
+        }
         if (scratch_ == HostScratch::Poisoned)
             std::memset(storage.data(), 0xFF, count * sizeof(T));
         return reinterpret_cast<T *>(storage.data());
@@ -147,7 +159,16 @@ public:
     }
 
 private:
+    std::size_t heldBytes() const
+    {
+        std::size_t total = 0;
+        for (const std::vector<unsigned char> &b : buffers_)
+            total += b.size();
+        return total;
+    }
+
     HostScratch scratch_;
+    std::size_t maxScratchBytes_;
     std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
 };
 
@@ -155,7 +176,7 @@ class HostStageRunner : public StageRunner
 {
 public:
     HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch)
-      : model_(std::move(model)), arrays_(hostModelArrays(*model_)), budget_(budget), executor_(scratch)
+      : model_(std::move(model)), arrays_(hostModelArrays(*model_)), budget_(budget), executor_(scratch, budget.maxScratchBytes)
     {
     }
 

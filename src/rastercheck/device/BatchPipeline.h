@@ -116,6 +116,11 @@ struct StageBudget
     std::size_t maxPairElements = std::size_t(1) << 30;  // states x pairs in a chunk
     std::size_t maxItems = std::size_t(1) << 27;         // (pair, triangle) elements in a chunk
     std::size_t maxFragments = std::size_t(1) << 27;
+    /** The executor's scratch buffers together (0: no limit but the allocator's). The limits above
+        size chunks from counts; this one is enforced when a buffer grows: an executor that would
+        pass it, or whose allocator refuses, frees its scratch and throws StageMemoryExhausted,
+        and the chunk is split. */
+    std::size_t maxScratchBytes = 0;
 };
 
 /** \brief The executor's scratch buffers, one per stage output; sized per chunk, reused. */
