@@ -1253,6 +1253,26 @@ TEST(BadInput, NanPadding)
         << run.output;
 }
 
+TEST(BadInput, DeviceMemoryLimitOnTheCommandLine)
+{
+    // A negative or non-integer amount is refused naming the option; a valid one is accepted, and
+    // where the run is on the CPU (no device here, or --backend cpu) the verdicts are unchanged.
+    for (const char *bad : {"-1", "nan", "1.5"})
+    {
+        const rc::test::CommandRun run =
+            rc::test::runCli(std::string("check --robot x.urdf --states x.csv --device-memory ") + bad);
+        EXPECT_NE(run.status, 0) << bad;
+        EXPECT_NE(run.output.find("--device-memory"), std::string::npos) << bad << ": " << run.output;
+    }
+    const std::string folder = makeTempDir("bad");
+    const std::string urdf = writeFile(folder + "/arm.urdf", foldingArm());
+    const std::string states = writeFile(folder + "/states.csv", "j1,j2\n0,0\n0,3.14159\n");
+    const rc::test::CommandRun run =
+        rc::test::runCli("check --backend cpu --device-memory 16 --robot " + urdf + " --states " + states);
+    EXPECT_EQ(run.status, 0) << run.output;
+    EXPECT_NE(run.output.find("states=2 invalid=1"), std::string::npos) << run.output;
+}
+
 TEST(BadInput, ZeroPixelSize)
 {
     // 0 means automatic: CollisionModel::defaultPixelSize.

@@ -29,6 +29,7 @@ struct CheckOptions
     int threads = 0;
     double padding = 0.0;
     double pixel = 0.0;
+    std::size_t deviceMemoryMiB = 0;
 };
 
 void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<std::uint8_t> &valid,
@@ -64,6 +65,7 @@ int runCheck(const CheckOptions &options)
     CheckerOptions checkerOptions;
     checkerOptions.backend = parseBackendChoice(options.backend);
     checkerOptions.threads = options.threads;
+    checkerOptions.deviceMemoryLimit = options.deviceMemoryMiB << 20;
     const Checker checker(problem.robot, problem.scene, checkerOptions);
     CollisionRequest request;
     request.mode = parseCollisionMode(options.mode);
@@ -107,6 +109,10 @@ void addCheckCommand(CLI::App &app)
         ->check(CLI::IsMember({"safe", "raster", "exact"}));
     command->add_option("--backend", options->backend, "auto, cpu or cuda")->check(CLI::IsMember({"auto", "cpu", "cuda"}));
     command->add_option("--threads", options->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+    command->add_option("--device-memory", options->deviceMemoryMiB,
+                        "MiB of GPU memory the batch buffers may take (0 = half the free memory); a batch that "
+                        "needs more runs in several passes, with the same verdicts")
+        ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 30));
     command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
     command->add_option("--pixel", options->pixel, "raster pixel size in scene units (0 = automatic)")
         ->check(CLI::NonNegativeNumber);
