@@ -70,7 +70,8 @@ public:
         if (need <= bytes_)
             return true;
         release();
-        for (const std::size_t size : {std::max(need, std::min(need + need / 4, most)), need})
+        const std::size_t roomy = std::max(need, std::min(need + need / 4, most));
+        for (const std::size_t size : {roomy, need})
         {
             const cudaError_t status = cudaMalloc(&pointer_, size);
             if (status == cudaSuccess)
@@ -82,6 +83,8 @@ public:
             if (status != cudaErrorMemoryAllocation)
                 check(status, what);
             cudaGetLastError();  // out of memory is not sticky: clear it
+            if (size == need)
+                break;  // no smaller size to try
         }
         return false;
     }
@@ -210,19 +213,11 @@ private:
     {
         if (need <= a.bytes())
             return a.pointer();
-        std::size_t most = SIZE_MAX;
-        if (maxScratchBytes_ > 0)
-        {
-            const std::size_t others = heldBytes() - a.bytes();
-            most = maxScratchBytes_ > others ? maxScratchBytes_ - others : 0;
-        }
-        if (need > most || !a.grow(need, most, what))
+        const std::size_t room = scratchRoom(maxScratchBytes_, heldBytes() - a.bytes());
+        if (need > room || !a.grow(need, room, what))
         {
             releaseScratch();
-            throw StageMemoryExhausted(std::string(what) + ": no room for " + std::to_string(need) + " bytes" +
-                                       (need > most ? " within the scratch limit of " + std::to_string(maxScratchBytes_) +
-                                                          " bytes"
-                                                    : " on the device"));
+            throw scratchExhausted(what, need, room, maxScratchBytes_);
         }
         return a.pointer();
     }

@@ -19,6 +19,25 @@ struct StageMemoryExhausted : std::runtime_error
     using std::runtime_error::runtime_error;
 };
 
+/** \brief The most bytes one scratch buffer may grow to while the others hold \a heldByOthers,
+    under \a limit (StageBudget::maxScratchBytes; 0 = no limit). */
+inline std::size_t scratchRoom(std::size_t limit, std::size_t heldByOthers)
+{
+    if (limit == 0)
+        return SIZE_MAX;
+    return limit > heldByOthers ? limit - heldByOthers : 0;
+}
+
+/** \brief What an executor throws when \a buffer cannot grow to \a need bytes: past \a limit when
+    \a need exceeds \a room (scratchRoom), else because the allocator refused. */
+inline StageMemoryExhausted scratchExhausted(const std::string &buffer, std::size_t need, std::size_t room,
+                                             std::size_t limit)
+{
+    return StageMemoryExhausted(buffer + ": no room for " + std::to_string(need) + " bytes" +
+                                (need > room ? " within the scratch limit of " + std::to_string(limit) + " bytes"
+                                             : " on the device"));
+}
+
 /** \brief runStageChunk, with an executor out of scratch memory counted as a chunk over budget. */
 template <class Exec>
 bool runStageChunkWithin(Exec &ex, const device::ModelArrays &model, const device::StageSettings &settings,

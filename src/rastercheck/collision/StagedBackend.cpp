@@ -73,20 +73,20 @@ public:
     T *buffer(int slot, std::size_t count)
     {
         std::vector<unsigned char> &storage = buffers_[static_cast<std::size_t>(slot)];
-        if (storage.size() < count * sizeof(T))
+        const std::size_t need = count * sizeof(T);
+        if (storage.size() < need)
         {
-            if (maxScratchBytes_ > 0 && heldBytes() - storage.size() + count * sizeof(T) > maxScratchBytes_)
+            const std::size_t room = scratchRoom(maxScratchBytes_, heldBytes() - storage.size());
+            if (need > room)
             {
                 for (std::vector<unsigned char> &b : buffers_)
                     std::vector<unsigned char>().swap(b);
-                throw StageMemoryExhausted("stage buffer " + std::to_string(slot) + ": no room for " +
-                                           std::to_string(count * sizeof(T)) + " bytes within the scratch limit of " +
-                                           std::to_string(maxScratchBytes_) + " bytes");
+                throw scratchExhausted("stage buffer " + std::to_string(slot), need, room, maxScratchBytes_);
             }
-            storage.resize(count * sizeof(T));
+            storage.resize(need);
         }
         if (scratch_ == HostScratch::Poisoned)
-            std::memset(storage.data(), 0xFF, count * sizeof(T));
+            std::memset(storage.data(), 0xFF, need);
         return reinterpret_cast<T *>(storage.data());
     }
 
