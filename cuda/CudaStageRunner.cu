@@ -285,6 +285,7 @@ public:
         model_.convex.hullPoints = uploadOnce(model_memory_, host.convex.hullPoints, host.numConvexHullDoubles);
         model_.convex.pieces = uploadOnce(model_memory_, host.convex.pieces, host.numConvexPieces);
         model_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
+        model_.convex.planes = uploadOnce(model_memory_, host.convex.planes, host.numConvexPlaneDoubles);
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
         // non-blocking stream that does not wait for the legacy one: wait here.

@@ -10,6 +10,7 @@
 #include "TestSupport.h"
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/geometry/MeshBvh.h"
+#include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/geometry/Primitives.h"
 #include "rastercheck/model/Kinematics.h"
 
@@ -25,18 +26,30 @@ public:
     std::size_t add(const rc::Mesh &mesh, bool closed = true)
     {
         meshes_.push_back(std::make_unique<rc::Mesh>(mesh));  // the BVH reads the mesh it was built on
-        convex_.add(mesh);
+        convex_.add(mesh, closed);
         bvhs_.push_back(std::make_unique<rc::MeshBvh>(*meshes_.back()));
         closed_.push_back(closed);
         return convex_.numSolids() - 1;
     }
 
+    /** \brief The hull test, overlaps proven too (as when no contact is asked). */
+    rc::device::HullRelation relation(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b,
+                                      const Eigen::Isometry3d &poseB, double padding, bool proveOverlap = true) const
+    {
+        return rc::device::relateSolids(convex_.arrays(), static_cast<std::uint32_t>(a), rc::toDevicePose(poseA),
+                                        static_cast<std::uint32_t>(b), rc::toDevicePose(poseB), padding, proveOverlap);
+    }
+
     bool provenApart(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b, const Eigen::Isometry3d &poseB,
                      double padding) const
     {
-        return rc::device::solidsProvablySeparated(convex_.arrays(), static_cast<std::uint32_t>(a),
-                                                   rc::toDevicePose(poseA), static_cast<std::uint32_t>(b),
-                                                   rc::toDevicePose(poseB), padding);
+        return relation(a, poseA, b, poseB, padding, false) == rc::device::HullRelation::Apart;
+    }
+
+    bool provenOverlapping(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b,
+                           const Eigen::Isometry3d &poseB, double padding) const
+    {
+        return relation(a, poseA, b, poseB, padding) == rc::device::HullRelation::Overlapping;
     }
 
     bool oracleOverlaps(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b, const Eigen::Isometry3d &poseB,
@@ -51,6 +64,11 @@ public:
         return convex_.arrays().pieces[convex_.arrays().solidPieces[s]];
     }
     double radius(std::size_t s) const { return whole(s).radius; }
+    /** \brief Whether piece \a k of solid \a s (0: the whole mesh) keeps face planes (overlap proofs). */
+    bool hasPlanes(std::size_t s, std::size_t k = 0) const
+    {
+        return convex_.arrays().pieces[convex_.arrays().solidPieces[s] + k].numPlanes > 0;
+    }
     std::size_t numPieces(std::size_t s) const { return convex_.numPieces(s); }
 
 private:
@@ -102,27 +120,40 @@ Eigen::Isometry3d randomPose(std::mt19937 &rng, double reach)
     return pose;
 }
 
+/** \brief What checkAgainstTheOracle counted. */
+struct OracleTally
+{
+    int apart = 0;        ///< pairs the oracle calls apart
+    int provenApart = 0;  ///< of those, settled by the hull test
+    int overlapping = 0;  ///< pairs the oracle calls colliding
+    int provenOverlapping = 0;
+};
+
 /** \brief Over random poses of solids \a a and \a b (B's origin within \a reach of A's): every
-    proof agrees with the oracle. Returns how many pairs the oracle calls apart and how many of
-    those the proof settled. */
-std::pair<int, int> checkAgainstTheOracle(const Solids &solids, std::size_t a, std::size_t b, double reach, int trials,
-                                          unsigned seed)
+    proof, of separation or of overlap, agrees with the oracle. */
+OracleTally checkAgainstTheOracle(const Solids &solids, std::size_t a, std::size_t b, double reach, int trials,
+                                  unsigned seed)
 {
     std::mt19937 rng(seed);
     const double paddings[] = {0.0, 0.002, 0.02};
-    int apart = 0, proven = 0;
+    OracleTally tally;
     for (int trial = 0; trial < trials; ++trial)
     {
         const Eigen::Isometry3d poseA = randomPose(rng, 0.1 * reach), poseB = poseA * randomPose(rng, reach);
         const double padding = paddings[trial % 3];
-        const bool proof = solids.provenApart(a, poseA, b, poseB, padding);
+        const rc::device::HullRelation relation = solids.relation(a, poseA, b, poseB, padding);
         const bool overlaps = solids.oracleOverlaps(a, poseA, b, poseB, padding);
-        EXPECT_FALSE(proof && overlaps) << "trial " << trial << ": proven apart, but the oracle finds them within "
-                                        << padding;
-        apart += overlaps ? 0 : 1;
-        proven += proof ? 1 : 0;
+        EXPECT_FALSE(relation == rc::device::HullRelation::Apart && overlaps)
+            << "trial " << trial << ": proven apart, but the oracle finds them within " << padding;
+        EXPECT_FALSE(relation == rc::device::HullRelation::Overlapping && !overlaps)
+            << "trial " << trial << ": proven overlapping, but the oracle finds them apart";
+        // Without overlap proofs, the separation proofs are the same.
+        EXPECT_EQ(solids.provenApart(a, poseA, b, poseB, padding), relation == rc::device::HullRelation::Apart);
+        (overlaps ? tally.overlapping : tally.apart) += 1;
+        tally.provenApart += relation == rc::device::HullRelation::Apart ? 1 : 0;
+        tally.provenOverlapping += relation == rc::device::HullRelation::Overlapping ? 1 : 0;
     }
-    return {apart, proven};
+    return tally;
 }
 }  // namespace
 
@@ -176,6 +207,111 @@ TEST(Separation, FineSpheresAreProvenApartAlongTheirCentreLineThroughTheirHullPo
     EXPECT_FALSE(solids.provenApart(sphere, at(0), sphere, apart, 0.0501));
 }
 
+namespace
+{
+/** \brief A closed U, one shell: the outline (0,0) (3,0) (3,2) (2,2) (2,1) (1,1) (1,2) (0,2) in
+    the x-z plane, extruded from y = -0.5 to 0.5; its notch, x 1..2 and z 1..2, is empty. */
+rc::Mesh uShape()
+{
+    const double outline[8][2] = {{0, 0}, {3, 0}, {3, 2}, {2, 2}, {2, 1}, {1, 1}, {1, 2}, {0, 2}};
+    rc::Mesh mesh;
+    for (double y : {-0.5, 0.5})
+        for (const auto &p : outline)
+            mesh.vertices.emplace_back(p[0], y, p[1]);
+    // The outline in six triangles, counter-clockwise in (x, z): their normal is x cross z = -y.
+    const std::uint32_t cap[6][3] = {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {0, 4, 5}, {0, 5, 7}, {5, 6, 7}};
+    for (const auto &t : cap)
+    {
+        mesh.triangles.push_back({t[0], t[1], t[2]});              // y = -0.5, facing -y
+        mesh.triangles.push_back({t[0] + 8, t[2] + 8, t[1] + 8});  // y = +0.5, facing +y
+    }
+    for (std::uint32_t i = 0; i < 8; ++i)
+    {
+        const std::uint32_t j = (i + 1) % 8;
+        mesh.triangles.push_back({i, j + 8, j});
+        mesh.triangles.push_back({i, i + 8, j + 8});
+    }
+    EXPECT_GT(rc::signedVolume(mesh), 0.0);  // outward
+    return mesh;
+}
+
+/** \brief A unit cube (centred on the origin) whose top face dips to a point \a dent below its
+    centre: four triangles from the corners to (0, 0, 0.5 - dent). */
+rc::Mesh dentedCube(double dent)
+{
+    rc::Mesh mesh = rc::makeBox(Vec(1, 1, 1));
+    mesh.vertices.emplace_back(0.0, 0.0, 0.5 - dent);
+    mesh.triangles.erase(mesh.triangles.begin() + 2, mesh.triangles.begin() + 4);  // the flat top
+    for (const rc::Mesh::Triangle &t : {rc::Mesh::Triangle{4, 5, 8}, rc::Mesh::Triangle{5, 7, 8},
+                                        rc::Mesh::Triangle{7, 6, 8}, rc::Mesh::Triangle{6, 4, 8}})
+        mesh.triangles.push_back(t);
+    EXPECT_GT(rc::signedVolume(mesh), 0.0);  // outward
+    return mesh;
+}
+}  // namespace
+
+TEST(Separation, OnlyClosedShellsNearlyConvexProveOverlaps)
+{
+    Solids solids;
+    const std::size_t box = solids.add(rc::makeBox(Vec(0.6, 0.6, 0.6)));
+    const std::size_t openBox = solids.add(rc::makeBox(Vec(0.6, 0.6, 0.6)), false);
+    const std::size_t u = solids.add(uShape());
+    ASSERT_TRUE(solids.hasPlanes(box));
+    EXPECT_FALSE(solids.hasPlanes(openBox));  // an open surface has no inside
+    EXPECT_FALSE(solids.hasPlanes(u));        // the notch is far too deep to look behind every face
+    rc::Mesh insideOut = rc::makeBox(Vec(0.6, 0.6, 0.6));
+    for (rc::Mesh::Triangle &t : insideOut.triangles)
+        std::swap(t[1], t[2]);
+    EXPECT_FALSE(solids.hasPlanes(solids.add(insideOut)));  // "behind" its faces is outside
+    const Eigen::Isometry3d here = at(0);
+    // The U is outward-oriented and closed, as the oracle needs.
+    EXPECT_TRUE(solids.oracleOverlaps(u, here, box, at(0.5, 0, 0.5), 0.0));
+
+    // Two boxes, the second 0.3 into the first: proven overlapping, but not when a contact is asked.
+    EXPECT_TRUE(solids.provenOverlapping(box, here, box, at(0.3, 0.1, -0.05), 0.0));
+    EXPECT_EQ(solids.relation(box, here, box, at(0.3, 0.1, -0.05), 0.0, false), rc::device::HullRelation::Unknown);
+    // One box wholly inside another (surfaces apart): the solids overlap, and the hulls prove it.
+    const std::size_t small = solids.add(rc::makeBox(Vec(0.1, 0.1, 0.1)));
+    EXPECT_TRUE(solids.oracleOverlaps(box, here, small, at(0.05, 0, 0), 0.0));
+    EXPECT_TRUE(solids.provenOverlapping(box, here, small, at(0.05, 0, 0), 0.0));
+    // The open box is only its surface: the small box inside it does not touch it.
+    EXPECT_FALSE(solids.oracleOverlaps(openBox, here, small, at(0.05, 0, 0), 0.0));
+    EXPECT_FALSE(solids.provenOverlapping(openBox, here, small, at(0.05, 0, 0), 0.0));
+    EXPECT_FALSE(solids.provenOverlapping(openBox, here, box, at(0.3, 0, 0), 0.0));
+
+    // The box in the U's notch: the hulls overlap deeply, the solids are 0.2 apart.
+    const Eigen::Isometry3d notch = at(1.5, 0, 1.5);
+    const std::size_t cube = solids.add(rc::makeBox(Vec(0.6, 0.6, 0.6)));
+    EXPECT_FALSE(solids.oracleOverlaps(u, here, cube, notch, 0.0));
+    EXPECT_EQ(solids.relation(u, here, cube, notch, 0.0), rc::device::HullRelation::Unknown);
+    EXPECT_EQ(solids.relation(u, here, cube, notch, 0.3), rc::device::HullRelation::Unknown);
+    // Sunk 0.5 into the U's base: the oracle finds the overlap; the U's hull cannot prove it.
+    EXPECT_TRUE(solids.oracleOverlaps(u, here, cube, at(1.5, 0, 0.9), 0.0));
+    EXPECT_EQ(solids.relation(u, here, cube, at(1.5, 0, 0.9), 0.0), rc::device::HullRelation::Unknown);
+}
+
+TEST(Separation, OverlapProofsLookOnlyBehindEveryFaceOfANearlyConvexShell)
+{
+    // A cube whose top dips 0.015 at its centre (1.5 % of its size, below the 2 % limit): its hull
+    // holds the dip, the solid does not.
+    Solids solids;
+    const std::size_t dented = solids.add(dentedCube(0.015));
+    const std::size_t speck = solids.add(rc::makeBox(Vec(0.01, 0.01, 0.01)));
+    ASSERT_TRUE(solids.hasPlanes(dented));
+    ASSERT_TRUE(solids.hasPlanes(speck));
+    const Eigen::Isometry3d here = at(0);
+    // In the dip (z 0.4875 to 0.4975 above its lowest point 0.485): outside the solid, inside its hull.
+    EXPECT_FALSE(solids.oracleOverlaps(dented, here, speck, at(0, 0, 0.4925), 0.0));
+    EXPECT_EQ(solids.relation(dented, here, speck, at(0, 0, 0.4925), 0.0), rc::device::HullRelation::Unknown);
+    // Inside, near the dip and deep in the middle: proven.
+    EXPECT_TRUE(solids.oracleOverlaps(dented, here, speck, at(0, 0, 0.47), 0.0));
+    EXPECT_TRUE(solids.provenOverlapping(dented, here, speck, at(0, 0, 0.47), 0.0));
+    EXPECT_TRUE(solids.provenOverlapping(dented, here, speck, at(0.1, -0.2, 0.0), 0.0));
+    // A dip of 5 % is beyond the limit: no planes, no overlap proofs.
+    Solids deeper;
+    EXPECT_FALSE(deeper.hasPlanes(deeper.add(dentedCube(0.05))));
+}
+
 TEST(Separation, SolidsOfSeveralShellsAreSeparatedShellByShellWhenTheirHullsInterlock)
 {
     // Two L shapes of two boxes each (a link with two collision elements), hooked into each
@@ -207,11 +343,13 @@ TEST(Separation, ProofsNeverContradictTheOracleAndSettleConvexPairsThatAreClearl
     const std::size_t slab = solids.add(rc::makeBox(Vec(2.0, 1.2, 0.04)));
     const std::size_t shapes[] = {box, cylinder, cone, slab};
     std::mt19937 rng(7);
-    int settled = 0, clearlyApart = 0;
+    int settled = 0, clearlyApart = 0, overlapping = 0, provenOverlapping = 0;
     for (std::size_t a : shapes)
         for (std::size_t b : shapes)
         {
-            checkAgainstTheOracle(solids, a, b, 1.2, 300, static_cast<unsigned>(10 * a + b));
+            const OracleTally t = checkAgainstTheOracle(solids, a, b, 1.2, 300, static_cast<unsigned>(10 * a + b));
+            overlapping += t.overlapping;
+            provenOverlapping += t.provenOverlapping;
             // Completeness for convex solids: apart by more than the padding (and a micrometre for
             // GJK's convergence), the proof is found, though GJK starts from a subset of vertices.
             const double slack = 1e-6;
@@ -226,6 +364,12 @@ TEST(Separation, ProofsNeverContradictTheOracleAndSettleConvexPairsThatAreClearl
         }
     ASSERT_GT(clearlyApart, 300);
     EXPECT_EQ(settled, clearlyApart);
+    // Closed convex solids: most overlapping pairs are proven so (not those that barely touch, nor
+    // those within the padding but apart).
+    std::printf("clearly apart %d, proven %d; overlapping %d, proven %d\n", clearlyApart, settled, overlapping,
+                provenOverlapping);
+    ASSERT_GT(overlapping, 300);
+    EXPECT_GT(provenOverlapping, overlapping / 2) << provenOverlapping << " of " << overlapping;
 }
 
 TEST(Separation, ProofsNeverContradictTheOracleOnThePandasLinks)
@@ -238,17 +382,26 @@ TEST(Separation, ProofsNeverContradictTheOracleOnThePandasLinks)
     std::vector<std::size_t> links;
     for (const rc::Component &component : problem.robot->components)
         links.push_back(solids.add(component.mesh, component.topology.closed));
-    int apart = 0, proven = 0;
+    OracleTally all;
     for (std::size_t i = 0; i < links.size(); ++i)
     {
         const std::size_t j = (i * 5 + 3) % links.size();  // a spread of pairs, link6 (open) included
-        const auto [a, p] = checkAgainstTheOracle(solids, links[i], links[j], 0.25, 400, static_cast<unsigned>(i));
-        apart += a;
-        proven += p;
+        const OracleTally t = checkAgainstTheOracle(solids, links[i], links[j], 0.25, 400, static_cast<unsigned>(i));
+        all.apart += t.apart;
+        all.provenApart += t.provenApart;
+        all.overlapping += t.overlapping;
+        all.provenOverlapping += t.provenOverlapping;
     }
     // Links are not convex, so some apart pairs have overlapping hulls; most do not.
-    ASSERT_GT(apart, 1000);
-    EXPECT_GT(proven, apart / 2) << proven << " of " << apart << " apart pairs proven";
+    ASSERT_GT(all.apart, 1000);
+    EXPECT_GT(all.provenApart, all.apart / 2) << all.provenApart << " of " << all.apart << " apart pairs proven";
+    std::printf("apart %d, proven %d; overlapping %d, proven %d\n", all.apart, all.provenApart, all.overlapping,
+                all.provenOverlapping);
+    // The closed links are nearly convex (dents under 1 % of their size), so many colliding pairs
+    // that do not involve the open link6 are proven overlapping.
+    ASSERT_GT(all.overlapping, 300);
+    EXPECT_GT(all.provenOverlapping, all.overlapping / 3)
+        << all.provenOverlapping << " of " << all.overlapping << " overlapping pairs proven";
 }
 
 namespace
@@ -279,8 +432,8 @@ double largestOvershoot(const rc::device::ConvexArrays &arrays, const rc::device
 TEST(Separation, TheHullSlackBoundsHowFarVerticesStickOutOfTheHullPointsHull)
 {
     rc::ConvexSolids convex;
-    convex.add(rc::makeBox(Vec(0.4, 0.1, 0.25)));  // 8 vertices: all hull points, no slack
-    convex.add(rc::makeSphere(1.0, 1e-4));         // 60 000 vertices on the unit sphere
+    convex.add(rc::makeBox(Vec(0.4, 0.1, 0.25)), true);  // 8 vertices: all hull points, no slack
+    convex.add(rc::makeSphere(1.0, 1e-4), true);         // 60 000 vertices on the unit sphere
     std::vector<std::string> names = {"box", "sphere"};
     const std::string root = rc::test::sharedData();
     if (!root.empty())
@@ -288,7 +441,7 @@ TEST(Separation, TheHullSlackBoundsHowFarVerticesStickOutOfTheHullPointsHull)
         const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
         for (const rc::Component &component : problem.robot->components)
         {
-            convex.add(component.mesh);
+            convex.add(component.mesh, component.topology.closed);
             names.push_back(component.name);
         }
     }

@@ -27,6 +27,50 @@ CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, const Eigen:
     return slice;
 }
 
+/** \brief Largest vertices x triangles product a piece's convexity is measured over: a finer
+    piece gets no face planes (its hull proves only separation), which bounds load time. */
+constexpr std::size_t kMaxConvexityTests = std::size_t(4) << 20;
+
+/** \brief A closed piece keeps its face planes for overlap proofs only when no vertex lies farther
+    than this fraction of its box diagonal in front of a face's plane: beyond, the region behind
+    every plane (where proofs look) is too small to be found often, and each failed look costs a
+    pass over the planes. The Panda's MotionBenchMaker links (convex shapes with small dents) are
+    within 0.7 %. */
+constexpr double kMaxConvexityDefect = 0.02;
+
+/** \brief A face whose edges' cross product is shorter than this fraction of the product of
+    their lengths (an angle under 0.006 degrees) has a normal that rounding may tilt by more than
+    device::kPlaneSlack allows for; a piece with one gets no planes. */
+constexpr double kMinFaceSine = 1e-4;
+
+/** \brief Unit outward normal and offset of each triangle of \a mesh (x y z d), a closed shell, or
+    none when the mesh is too fine to measure, too far from convex (kMaxConvexityDefect), has a
+    sliver face (kMinFaceSine), or is not oriented outward. */
+std::vector<double> facePlanes(const Mesh &mesh)
+{
+    std::vector<double> planes;
+    if (mesh.triangles.empty() || mesh.numVertices() * mesh.numTriangles() > kMaxConvexityTests ||
+        !(signedVolume(mesh) > 0.0))
+        return planes;
+    const double limit = kMaxConvexityDefect * (mesh.bounds().max - mesh.bounds().min).norm();
+    for (const Mesh::Triangle &t : mesh.triangles)
+    {
+        const Eigen::Vector3d &a = mesh.vertices[t[0]];
+        const Eigen::Vector3d e1 = mesh.vertices[t[1]] - a, e2 = mesh.vertices[t[2]] - a;
+        const Eigen::Vector3d n = e1.cross(e2);
+        const double length = n.norm();
+        if (!(length > kMinFaceSine * e1.norm() * e2.norm()))
+            return {};
+        const Eigen::Vector3d unit = n / length;
+        const double offset = unit.dot(a);
+        for (const Eigen::Vector3d &v : mesh.vertices)
+            if (unit.dot(v) - offset > limit)
+                return {};
+        planes.insert(planes.end(), {unit.x(), unit.y(), unit.z(), offset});
+    }
+    return planes;
+}
+
 device::OrientedBox toDeviceBox(const Obb &box)
 {
     device::OrientedBox b;
@@ -41,11 +85,23 @@ device::OrientedBox toDeviceBox(const Obb &box)
 }
 }  // namespace
 
-void ConvexSolids::addPiece(const Mesh &mesh)
+void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
 {
     device::ConvexPiece piece{static_cast<std::uint32_t>(vertices_.size() / 3),
                               static_cast<std::uint32_t>(mesh.numVertices()),
-                              static_cast<std::uint32_t>(hullPoints_.size() / 3), 0, 0.0, 0.0};
+                              static_cast<std::uint32_t>(hullPoints_.size() / 3),
+                              0,
+                              0.0,
+                              0.0,
+                              static_cast<std::uint32_t>(planes_.size() / 4),
+                              0,
+                              {0.0, 0.0, 0.0}};
+    if (closedShell)
+    {
+        const std::vector<double> planes = facePlanes(mesh);
+        planes_.insert(planes_.end(), planes.begin(), planes.end());
+        piece.numPlanes = static_cast<std::uint32_t>(planes.size() / 4);
+    }
     for (const Eigen::Vector3d &v : mesh.vertices)
     {
         vertices_.insert(vertices_.end(), v.data(), v.data() + 3);
@@ -54,8 +110,13 @@ void ConvexSolids::addPiece(const Mesh &mesh)
     const std::vector<std::uint32_t> extreme = mesh.extremeVertices(kConvexHullDirections);
     piece.numHullPoints = static_cast<std::uint32_t>(extreme.size());
     const std::size_t firstHullDouble = hullPoints_.size();
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (std::uint32_t i : extreme)
+    {
         hullPoints_.insert(hullPoints_.end(), mesh.vertices[i].data(), mesh.vertices[i].data() + 3);
+        centre += mesh.vertices[i] / static_cast<double>(extreme.size());
+    }
+    std::copy(centre.data(), centre.data() + 3, piece.centre);
     if (extreme.size() < mesh.numVertices())
     {
         // How far the other vertices may stick out of the hull points' hull: with it, a gap
@@ -78,26 +139,37 @@ void ConvexSolids::addPiece(const Mesh &mesh)
     pieces_.push_back(piece);
 }
 
-void ConvexSolids::add(const Mesh &mesh)
+void ConvexSolids::add(const Mesh &mesh, bool closed)
 {
-    addPiece(mesh);
     std::size_t shells = 0;
     const std::vector<std::uint32_t> shellOf = triangleShells(mesh, shells);
+    // The whole mesh proves overlaps only as a single shell: the region behind every face of
+    // several shells is rarely more than their overlap.
+    addPiece(mesh, closed && shells == 1);
     if (shells >= 2 && shells <= kMaxConvexShells)
     {
-        // Each shell's vertices as a mesh of its own (a piece needs no triangles). Shells are linked
-        // through shared vertices, so every vertex belongs to one shell.
+        // Each shell as a mesh of its own. Shells are linked through shared vertices, so every
+        // vertex belongs to one shell; a closed mesh's shells are each closed.
         std::vector<Mesh> parts(shells);
-        std::vector<std::uint8_t> taken(mesh.numVertices(), 0);
+        std::vector<std::uint32_t> renumbered(mesh.numVertices(), ~0u);
         for (std::size_t t = 0; t < mesh.numTriangles(); ++t)
-            for (std::uint32_t v : mesh.triangles[t])
-                if (!taken[v])
+        {
+            Mesh &part = parts[shellOf[t]];
+            Mesh::Triangle triangle{};
+            for (int k = 0; k < 3; ++k)
+            {
+                const std::uint32_t v = mesh.triangles[t][k];
+                if (renumbered[v] == ~0u)
                 {
-                    taken[v] = 1;
-                    parts[shellOf[t]].vertices.push_back(mesh.vertices[v]);
+                    renumbered[v] = static_cast<std::uint32_t>(part.vertices.size());
+                    part.vertices.push_back(mesh.vertices[v]);
                 }
+                triangle[k] = renumbered[v];
+            }
+            part.triangles.push_back(triangle);
+        }
         for (const Mesh &part : parts)
-            addPiece(part);
+            addPiece(part, closed);
     }
     solidPieces_.push_back(static_cast<std::uint32_t>(pieces_.size()));
 }
@@ -131,7 +203,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         componentLocalBoxes.push_back(toDeviceBox(box));
         componentLink.push_back(component.link);
         componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh));
-        convex.add(component.mesh);
+        convex.add(component.mesh, component.topology.closed);
         diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
     }
     componentSubtreeEnd = robot->componentSubtreeEnd;
@@ -154,7 +226,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         }
         objectBoxes.push_back(box);
         objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh));
-        convex.add(object.mesh);
+        convex.add(object.mesh, object.topology.closed);
     }
 
     for (std::size_t a = 0; a < components.size(); ++a)

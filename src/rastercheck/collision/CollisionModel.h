@@ -25,32 +25,37 @@ constexpr std::size_t kConvexHullDirections = 128;
     product, and a solid of more shells (a scene mesh of loose parts) is tried whole only. */
 constexpr std::size_t kMaxConvexShells = 8;
 
-/** \brief The separation cull's arrays (device::ConvexArrays), in double, each solid in its own
-    frame: its whole mesh as one piece, then each of its closed shells when it has 2 to
-    kMaxConvexShells of them. */
+/** \brief The hull test's arrays (device::ConvexArrays), in double, each solid in its own frame:
+    its whole mesh as one piece, then each of its shells when it has 2 to kMaxConvexShells of them.
+    A closed shell close to convex keeps its face planes, so that overlaps can be proven too. */
 class ConvexSolids
 {
 public:
-    /** \brief Appends \a mesh as the next solid. */
-    void add(const Mesh &mesh);
+    /** \brief Appends \a mesh as the next solid; \a closed: its topology is closed (MeshTopology,
+        outward-oriented), without which no overlap is ever proven (an open mesh is its surface). */
+    void add(const Mesh &mesh, bool closed);
     std::size_t numSolids() const { return solidPieces_.size() - 1; }
     /** \brief Pieces of solid \a s: its whole mesh, then its shells (none when it has one). */
     std::size_t numPieces(std::size_t s) const { return solidPieces_[s + 1] - solidPieces_[s]; }
     device::ConvexArrays arrays() const
     {
-        return device::ConvexArrays{vertices_.data(), hullPoints_.data(), pieces_.data(), solidPieces_.data()};
+        return device::ConvexArrays{vertices_.data(), hullPoints_.data(), pieces_.data(), solidPieces_.data(),
+                                    planes_.data()};
     }
     std::size_t numVertexDoubles() const { return vertices_.size(); }
     std::size_t numHullPointDoubles() const { return hullPoints_.size(); }
     std::size_t numAllPieces() const { return pieces_.size(); }
+    std::size_t numPlaneDoubles() const { return planes_.size(); }
 
 private:
-    void addPiece(const Mesh &mesh);
+    /** \brief \a closedShell: the piece is one closed, outward-oriented shell (it may keep planes). */
+    void addPiece(const Mesh &mesh, bool closedShell);
 
     std::vector<double> vertices_;    // n_piece_vertices x 3
     std::vector<double> hullPoints_;  // n_hull_points x 3
     std::vector<device::ConvexPiece> pieces_;
     std::vector<std::uint32_t> solidPieces_{0};  // n_solids + 1
+    std::vector<double> planes_;                 // n_planes x 4
 };
 
 /** \brief Flat, immutable arrays of one robot and one scene, laid out for the pipeline stages (and

@@ -40,7 +40,8 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.convex.arrays(),
                                model.convex.numVertexDoubles(),
                                model.convex.numHullPointDoubles(),
-                               model.convex.numAllPieces()};
+                               model.convex.numAllPieces(),
+                               model.convex.numPlaneDoubles()};
 }
 
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)
@@ -56,6 +57,9 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
     // phase on every pair; without contacts a raster hit is proof enough.
     settings.rasterize = request.mode == CollisionMode::Raster || (request.mode == CollisionMode::Safe && !contactsAsked);
     settings.confirmMisses = request.mode == CollisionMode::Safe;
+    // An overlap the hulls prove names no triangle: only when no contact is asked. Not in raster
+    // mode, whose verdicts (misses included) must not depend on whether contacts are asked.
+    settings.proveOverlaps = !contactsAsked && request.mode != CollisionMode::Raster;
     return settings;
 }
 

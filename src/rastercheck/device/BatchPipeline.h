@@ -67,6 +67,7 @@ struct ModelArrays
     std::size_t numConvexVertexDoubles;
     std::size_t numConvexHullDoubles;
     std::size_t numConvexPieces;
+    std::size_t numConvexPlaneDoubles;
 
     RC_HD std::uint32_t numPairs() const
     {
@@ -86,6 +87,9 @@ struct StageSettings
     bool checkSelfCollision;
     /** \brief Rasterize surviving pairs (raster mode, and safe mode when no contacts are asked). */
     bool rasterize;
+    /** \brief Settle pairs whose closed convex shells provably overlap as colliding, without a
+        triangle or place (when no contacts are asked). */
+    bool proveOverlaps;
     /** \brief A pair the raster does not hit stays open for the exact phase (safe mode); otherwise
         it is settled as apart unless padding asks for distances. */
     bool confirmMisses;
@@ -96,7 +100,7 @@ enum PairStatus : std::int32_t
 {
     PairApart = 0,     ///< settled: does not collide
     PairOpen = 1,      ///< left to the exact narrow phase
-    PairOverlaps = 2   ///< a ray found the solids overlapping (triangle and position set)
+    PairOverlaps = 2   ///< a ray found the solids overlapping (triangle and position set), or the hulls did (neither)
 };
 
 /** \brief One pair that survived the culls. Outcomes come sorted by (state, pair). */
@@ -188,23 +192,23 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
     b = component(self[1]);
 }
 
-/** \brief The convex separation cull of a pair (CpuBackend's hullsApart): true when a plane
-    between the solids' hulls proves them more than \a padding apart. \a links are the state's
-    link poses (double, world frame), as the CPU backend's. */
-RC_HD bool pairHullsApart(const ModelArrays &model, std::uint32_t pair, const Pose<double> *links, double padding)
+/** \brief The hull test of a pair (CpuBackend's hullRelation). \a links are the state's link poses
+    (double, world frame), as the CPU backend's. */
+RC_HD HullRelation pairHullRelation(const ModelArrays &model, std::uint32_t pair, const Pose<double> *links,
+                                    double padding, bool proveOverlap)
 {
     const std::uint32_t m = static_cast<std::uint32_t>(model.numComponents);
     const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
     if (pair < environmentPairs)
     {
         const std::uint32_t c = pair % m, o = pair / m;
-        return solidsProvablySeparated(model.convex, c, links[model.componentLink[c]], m + o,
-                                       Pose<double>::identity(), padding);
+        return relateSolids(model.convex, c, links[model.componentLink[c]], m + o, Pose<double>::identity(), padding,
+                            proveOverlap);
     }
     const int *self = model.selfPairs + 2 * (pair - environmentPairs);
-    return solidsProvablySeparated(model.convex, static_cast<std::uint32_t>(self[0]),
-                                   links[model.componentLink[self[0]]], static_cast<std::uint32_t>(self[1]),
-                                   links[model.componentLink[self[1]]], padding);
+    return relateSolids(model.convex, static_cast<std::uint32_t>(self[0]), links[model.componentLink[self[0]]],
+                        static_cast<std::uint32_t>(self[1]), links[model.componentLink[self[1]]], padding,
+                        proveOverlap);
 }
 
 RC_HD Vec3<float> stageVertex(const StageSolid &solid, std::uint32_t index)
@@ -329,9 +333,13 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         StageSolid a, b;
         pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
         const Box window = pairWindow(a.bounds, b.bounds, st.padding);
-        if (isEmpty(window) || pairHullsApart(md, pair, links + s * numLinks, st.separationPadding))
+        const HullRelation relation = isEmpty(window) ? HullRelation::Apart
+                                                      : pairHullRelation(md, pair, links + s * numLinks,
+                                                                         st.separationPadding, st.proveOverlaps);
+        if (relation != HullRelation::Unknown)
         {
-            status[c] = PairApart;
+            // An overlap proven by the hulls has no triangle or place (the contact is not asked).
+            status[c] = relation == HullRelation::Apart ? PairApart : PairOverlaps;
             return;
         }
         status[c] = PairOpen;
