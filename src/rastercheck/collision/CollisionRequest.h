@@ -11,7 +11,9 @@ namespace rastercheck
     self-collision with the allowed-collision matrix, and honours padding exactly. In every mode a
     pair that survives the paper's box culls first gets the convex separation proof
     (device/Separation.h), which settles it as apart only when a plane provably keeps the solids
-    more than the padding apart; what the modes differ in is the pairs that proof leaves. */
+    more than the padding apart, and, in safe and exact mode when no contact is asked, as colliding
+    when a point provably lies inside both; what the modes differ in is the pairs those proofs
+    leave. */
 enum class CollisionMode
 {
     /** \brief Default: never calls a colliding state valid. Every pair the proof leaves is decided
