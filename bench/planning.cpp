@@ -2,7 +2,9 @@
 // batched motion validator against FCL (BVHModel<OBBRSS>, as MoveIt and OMPL.app use it) with OMPL's
 // DiscreteMotionValidator. Same state space, edge resolution, planner settings and time limit, in
 // one run, problem by problem. Prints per scenario and overall: success rates, median solve times
-// and their ratio (rastercheck / FCL; below 1 means rastercheck plans faster).
+// and their ratio (rastercheck / FCL; below 1 means rastercheck plans faster). Each run seeds OMPL's
+// random numbers the same for every checker, so they grow the same trees and the times differ by
+// the checking (and the motion validator's order of work) alone.
 //
 // usage: rastercheck_bench_planning [problems_per_scenario=3] [time_limit_s=5] [runs_per_problem=1]
 //                                   [modes=safe,exact] [threads=1]
@@ -21,6 +23,7 @@
 #include <ompl/geometric/SimpleSetup.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/util/Console.h>
+#include <ompl/util/RandomNumbers.h>
 
 #include "BenchSupport.h"
 #include "Reference.h"
@@ -79,16 +82,26 @@ struct Outcome
     /** \brief For a colliding path: the planning checker calls the first colliding dense state valid
         (a checker miss rather than a resolution miss between the planner's samples). */
     bool checkerMissed = false;
+    double length = 0.0;  ///< of the solution path (0 when unsolved): equal lengths mean equal trees
 };
 
-Outcome solve(og::SimpleSetup &setup, double timeLimit, const rastercheck::ompl::StateValidityChecker &oracle)
+/** \brief One planning run. Every RNG OMPL creates from here on (the planner's, its sampler's)
+    draws its seed from \a seed, so two checkers given the same seed grow the same tree (their
+    verdicts are the same) and the difference in time is the checkers'. */
+Outcome solve(og::SimpleSetup &setup, double timeLimit, const rastercheck::ompl::StateValidityChecker &oracle,
+              std::uint_fast32_t seed)
 {
+    // OMPL logs an error when the seed changes after RNGs exist; here, resetting it is the point.
+    ::ompl::msg::setLogLevel(::ompl::msg::LOG_NONE);
+    ::ompl::RNG::setSeed(seed);
+    ::ompl::msg::setLogLevel(::ompl::msg::LOG_WARN);
     setup.clear();
     setup.setPlanner(std::make_shared<og::RRTConnect>(setup.getSpaceInformation()));
     const ob::PlannerStatus status = setup.solve(timeLimit);
     Outcome outcome;
     outcome.solved = status == ob::PlannerStatus::EXACT_SOLUTION;
     outcome.seconds = setup.getLastPlanComputationTime();
+    outcome.length = outcome.solved ? setup.getSolutionPath().length() : 0.0;
     if (outcome.solved)
     {
         CollisionRequest exact;
@@ -168,6 +181,7 @@ int main(int argc, char **argv)
 
     // tallies[mode][scenario]; mode "fcl" is the reference.
     std::map<std::string, std::map<std::string, Tally>> tallies;
+    std::map<std::string, int> sameTree;  // runs whose outcome and path length equal FCL's
     for (const std::string &scenario : bench::mbmScenarios())
         for (int index = 1; index <= problemsPerScenario; ++index)
         {
@@ -200,10 +214,16 @@ int main(int argc, char **argv)
 
             for (int run = 0; run < runsPerProblem; ++run)
             {
-                tallies["fcl"][scenario].add(solve(*fcl, timeLimit, *oracle));
+                const std::uint_fast32_t seed = static_cast<std::uint_fast32_t>(1000 * index + run + 1);
+                const Outcome reference = solve(*fcl, timeLimit, *oracle, seed);
+                tallies["fcl"][scenario].add(reference);
                 for (const std::string &mode : modes)
-                    tallies[mode][scenario].add(
-                        solve(*setups[mode], timeLimit, *rastercheck::ompl::getStateValidityChecker(*setups[mode])));
+                {
+                    const Outcome outcome = solve(*setups[mode], timeLimit,
+                                                  *rastercheck::ompl::getStateValidityChecker(*setups[mode]), seed);
+                    tallies[mode][scenario].add(outcome);
+                    sameTree[mode] += outcome.length == reference.length ? 1 : 0;
+                }
             }
             std::fprintf(stderr, "%s %04d done\n", scenario.c_str(), index);
         }
@@ -214,7 +234,7 @@ int main(int argc, char **argv)
         "Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution; a\n"
         "colliding path is unsolved ('by the checker': the planning checker itself calls the colliding\n"
         "state valid; otherwise the planner's resolution stepped over the obstacle). Time ratio: median of\n"
-        "all runs (unsolved at the limit) over FCL's.\n\n",
+        "all runs (unsolved at the limit) over FCL's. Run k of a problem seeds OMPL alike for every checker.\n\n",
         problemsPerScenario, runsPerProblem, timeLimit, threads);
     std::printf("| scenario | FCL solved | FCL median s |");
     for (const std::string &mode : modes)
@@ -254,5 +274,9 @@ int main(int argc, char **argv)
         row(scenario, byMode);
     }
     row("**overall**", overall);
+    std::printf("\nRuns whose outcome and path length equal FCL's (the same tree, so the times compare checkers):");
+    for (const std::string &mode : modes)
+        std::printf(" %s %d/%d", mode.c_str(), sameTree[mode], overall[mode].attempts);
+    std::printf("\n");
     return 0;
 }

@@ -277,7 +277,13 @@ TEST(Separation, OnlyClosedShellsNearlyConvexProveOverlaps)
     // The open box is only its surface: the small box inside it does not touch it.
     EXPECT_FALSE(solids.oracleOverlaps(openBox, here, small, at(0.05, 0, 0), 0.0));
     EXPECT_FALSE(solids.provenOverlapping(openBox, here, small, at(0.05, 0, 0), 0.0));
-    EXPECT_FALSE(solids.provenOverlapping(openBox, here, box, at(0.3, 0, 0), 0.0));
+    // Its corner (0.3, 0.3, 0.3) inside the closed box: its surface reaches in, proven.
+    EXPECT_TRUE(solids.oracleOverlaps(openBox, here, box, at(0.35, 0.05, 0.02), 0.0));
+    EXPECT_TRUE(solids.provenOverlapping(openBox, here, box, at(0.35, 0.05, 0.02), 0.0));
+    EXPECT_TRUE(solids.provenOverlapping(box, at(0.35, 0.05, 0.02), openBox, here, 0.0));
+    // Its face through the small box, no vertex of either inside the other: left to the exact phase.
+    EXPECT_TRUE(solids.oracleOverlaps(openBox, here, small, at(0.3, 0, 0), 0.0));
+    EXPECT_EQ(solids.relation(openBox, here, small, at(0.3, 0, 0), 0.0), rc::device::HullRelation::Unknown);
 
     // The box in the U's notch: the hulls overlap deeply, the solids are 0.2 apart.
     const Eigen::Isometry3d notch = at(1.5, 0, 1.5);

@@ -95,7 +95,13 @@ void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
                               0.0,
                               static_cast<std::uint32_t>(planes_.size() / 4),
                               0,
-                              {0.0, 0.0, 0.0}};
+                              {0.0, 0.0, 0.0},
+                              0};
+    std::vector<std::uint8_t> used(mesh.numVertices(), 0);
+    for (const Mesh::Triangle &t : mesh.triangles)
+        for (std::uint32_t v : t)
+            used[v] = 1;
+    piece.surfaceVertices = !mesh.triangles.empty() && std::find(used.begin(), used.end(), 0) == used.end() ? 1u : 0u;
     if (closedShell)
     {
         const std::vector<double> planes = facePlanes(mesh);
