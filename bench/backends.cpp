@@ -147,7 +147,7 @@ int main(int argc, char **argv)
 
     // What the stages leave to the host in this mode.
     std::printf(
-        "\n| scene | states | pairs past the box culls / state | settled apart by the stages | raster hits | "
+        "\n| scene | states | pairs past the box culls / state | settled apart by the stages | settled colliding by the stages | "
         "left to the host | host ceiling, states/s per core |\n|---|---|---|---|---|---|---|\n");
     for (const SceneCase &c : cases)
     {
