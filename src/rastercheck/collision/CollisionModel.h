@@ -27,12 +27,14 @@ constexpr std::size_t kMaxConvexShells = 8;
 
 /** \brief The hull test's arrays (device::ConvexArrays), in double, each solid in its own frame:
     its whole mesh as one piece, then each of its shells when it has 2 to kMaxConvexShells of them.
-    A closed shell close to convex keeps its face planes, so that overlaps can be proven too. */
+    A closed shell close to convex keeps its face planes, so that overlaps can be proven too; a
+    piece whose vertices are all on its surface says so (ConvexPiece::surfaceVertices). */
 class ConvexSolids
 {
 public:
     /** \brief Appends \a mesh as the next solid; \a closed: its topology is closed (MeshTopology,
-        outward-oriented), without which no overlap is ever proven (an open mesh is its surface). */
+        outward-oriented), without which its pieces keep no face planes (an open mesh has no
+        inside; its vertices can still prove an overlap with a closed solid). */
     void add(const Mesh &mesh, bool closed);
     std::size_t numSolids() const { return solidPieces_.size() - 1; }
     /** \brief Pieces of solid \a s: its whole mesh, then its shells (none when it has one). */

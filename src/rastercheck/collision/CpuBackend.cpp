@@ -145,10 +145,10 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
 
 /** \brief The hull test (the stages run the same test per surviving pair): Apart when a plane
     between the solids' hulls keeps them more than \a padding apart, Overlapping (only with
-    \a proveOverlap) when closed convex shells of both share a point. Most pairs the box culls pass
-    are still apart, and this settles them for a few thousand multiply-adds where the oracle walks
-    both BVHs (measured on the Panda MBM scenes: 164 node pairs and 367 triangle pairs per pair that
-    turned out apart); most of the rest collide, and with convex shells this settles them too. */
+    \a proveOverlap) when a point provably lies inside both. Most pairs the box culls pass are
+    still apart, and this settles them for a few thousand multiply-adds where the oracle walks both
+    BVHs (measured on the Panda MBM scenes: 164 node pairs and 367 triangle pairs per pair that
+    turned out apart); most of the rest collide, and the overlap proof settles most of those. */
 device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding, bool proveOverlap)
 {
     return device::relateSolids(a.convex, a.convexSolid, *a.hullPose, b.convexSolid, *b.hullPose,

@@ -87,8 +87,8 @@ struct StageSettings
     bool checkSelfCollision;
     /** \brief Rasterize surviving pairs (raster mode, and safe mode when no contacts are asked). */
     bool rasterize;
-    /** \brief Settle pairs whose closed convex shells provably overlap as colliding, without a
-        triangle or place (when no contacts are asked). */
+    /** \brief Settle pairs the hull test proves overlapping as colliding, without a triangle or
+        place (safe and exact mode when no contacts are asked). */
     bool proveOverlaps;
     /** \brief A pair the raster does not hit stays open for the exact phase (safe mode); otherwise
         it is settled as apart unless padding asks for distances. */

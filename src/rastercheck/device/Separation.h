@@ -88,7 +88,7 @@ constexpr double kPlaneSlack = 1e-9;
 enum class HullRelation
 {
     Apart,        ///< proven more than the padding apart
-    Overlapping,  ///< proven to share a point (closed convex shells whose hulls overlap)
+    Overlapping,  ///< proven to share a point (relateHulls says how)
     Unknown       ///< neither: the exact narrow phase decides
 };
 
