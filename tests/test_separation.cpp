@@ -40,6 +40,17 @@ public:
                                         static_cast<std::uint32_t>(b), rc::toDevicePose(poseB), padding, proveOverlap);
     }
 
+    /** \brief The hull test starting from \a direction (a proof's direction at a nearby state, as
+        the CPU backend keeps per pair), which it updates after a proof. */
+    rc::device::HullRelation relationFrom(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b,
+                                          const Eigen::Isometry3d &poseB, double padding,
+                                          rc::device::Vec3<double> &direction) const
+    {
+        return rc::device::relateSolids(convex_.arrays(), static_cast<std::uint32_t>(a), rc::toDevicePose(poseA),
+                                        static_cast<std::uint32_t>(b), rc::toDevicePose(poseB), padding, true,
+                                        &direction);
+    }
+
     bool provenApart(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b, const Eigen::Isometry3d &poseB,
                      double padding) const
     {
@@ -168,6 +179,26 @@ TEST(Separation, CubesAreProvenApartUpToTheirGapAndNoFurther)
     // The same gap on a diagonal offset: the nearest features are still the facing faces.
     EXPECT_TRUE(solids.provenApart(cube, at(0), cube, at(1.5, 0.7, -0.3), 0.49));
     EXPECT_FALSE(solids.provenApart(cube, at(0), cube, at(1.5, 0.7, -0.3), 0.51));
+}
+
+TEST(Separation, AProofDirectionFromANearbyStateStartsTheTestButNeverReplacesTheGap)
+{
+    using rc::device::HullRelation;
+    Solids solids;
+    const std::size_t cube = solids.add(rc::makeBox(Vec(1, 1, 1)));
+    rc::device::Vec3<double> direction{0.0, 0.0, 0.0};
+    ASSERT_EQ(solids.relationFrom(cube, at(0), cube, at(1.5), 0.0, direction), HullRelation::Apart);
+    EXPECT_LT(direction.x, 0.0);  // from B towards A
+    // A nearby state: settled along the kept direction; the gap still has to clear the padding.
+    EXPECT_EQ(solids.relationFrom(cube, at(0), cube, at(1.55, 0.05), 0.49, direction), HullRelation::Apart);
+    EXPECT_EQ(solids.relationFrom(cube, at(0), cube, at(1.5), 0.51, direction), HullRelation::Unknown);
+    // Moved into the first cube, or behind it: the old direction proves nothing wrong.
+    EXPECT_EQ(solids.relationFrom(cube, at(0), cube, at(0.5), 0.0, direction), HullRelation::Overlapping);
+    EXPECT_EQ(solids.relationFrom(cube, at(0), cube, at(-1.5), 0.49, direction), HullRelation::Apart);
+    EXPECT_GT(direction.x, 0.0);
+    // A direction that separates nothing only costs GJK its first step.
+    rc::device::Vec3<double> sideways{0.0, 1.0, 0.0};
+    EXPECT_EQ(solids.relationFrom(cube, at(0), cube, at(1.5), 0.49, sideways), HullRelation::Apart);
 }
 
 TEST(Separation, TouchingOverlappingOrNestedSolidsAreNeverProvenApart)

@@ -149,10 +149,11 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
     still apart, and this settles them for a few thousand multiply-adds where the oracle walks both
     BVHs (measured on the Panda MBM scenes: 164 node pairs and 367 triangle pairs per pair that
     turned out apart); most of the rest collide, and the overlap proof settles most of those. */
-device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding, bool proveOverlap)
+device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding, bool proveOverlap,
+                                  device::Vec3<double> &direction)
 {
     return device::relateSolids(a.convex, a.convexSolid, *a.hullPose, b.convexSolid, *b.hullPose,
-                                std::max(0.0, padding), proveOverlap);
+                                std::max(0.0, padding), proveOverlap, &direction);
 }
 
 /** \brief The exact narrow phase (the oracle): triangle pairs and containment. */
@@ -199,7 +200,7 @@ bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request
     the raster stages (measured on the Panda MBM scenes: rasterizing a pair cost about 5x an exact
     BVH query, and the depth-range proof settled only a quarter of the pairs), so safe mode on this
     backend is the exact phase behind the paper's culls. */
-bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel,
+bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, const CollisionRequest &request, double pixel,
                   const Eigen::Vector3d &origin, bool wantContact, CpuWorkspace &ws, Contact &contact)
 {
     // The box culls already passed; the window test and the hull test are the last cheap exits.
@@ -209,7 +210,8 @@ bool pairCollides(const Solid &a, const Solid &b, const CollisionRequest &reques
     // Overlap proofs name no triangle, and would make raster mode's verdicts depend on whether
     // a contact is asked (stageSettings() draws the same line).
     const device::HullRelation relation =
-        hullRelation(a, b, request.padding, !wantContact && request.mode != CollisionMode::Raster);
+        hullRelation(a, b, request.padding, !wantContact && request.mode != CollisionMode::Raster,
+                     ws.proofDirection[pairNumber]);
     if (relation != device::HullRelation::Unknown)
         return relation == device::HullRelation::Overlapping;
     if (request.mode != CollisionMode::Raster ||
@@ -365,8 +367,8 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     continue;
                 }
                 if (device::orientedBoxOverlapsBox(ws.componentBox[k], objectBox, padding) &&
-                    pairCollides(componentSolid(model, ws, k), object, request, pixel, model.origin, wantContact, ws,
-                                 contact))
+                    pairCollides(componentSolid(model, ws, k), object, static_cast<std::uint32_t>(o * m + k), request,
+                                 pixel, model.origin, wantContact, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -378,12 +380,14 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     }
 
     if (request.checkSelfCollision)
-        for (const auto &[a, b] : model.selfPairs)
+        for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
         {
+            const auto [a, b] = model.selfPairs[i];
             if (!device::orientedBoxesOverlap(ws.componentBox[a], ws.componentBox[b], padding))
                 continue;
-            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b), request, pixel,
-                             model.origin, wantContact, ws, contact))
+            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b),
+                             static_cast<std::uint32_t>(model.numObjects() * m + i), request, pixel, model.origin,
+                             wantContact, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;

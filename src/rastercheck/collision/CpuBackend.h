@@ -26,6 +26,7 @@ struct CpuWorkspace
       , layerBounds(model.numComponents())
       , componentWorld(model.numComponents())
       , componentWorldState(model.numComponents(), 0)
+      , proofDirection(model.numPairs(), device::Vec3<double>{0.0, 0.0, 0.0})
     {
     }
 
@@ -42,6 +43,9 @@ struct CpuWorkspace
     std::vector<std::vector<device::Vec3<float>>> componentWorld;  // n_components x n_vertices
     std::vector<std::uint64_t> componentWorldState;                // n_components
     std::uint64_t state = 0;
+    // Per pair (CollisionModel numbering): the direction that last proved it apart, tried first at
+    // the next state (consecutive states of a motion are close); zero until a proof.
+    std::vector<device::Vec3<double>> proofDirection;  // n_pairs
     std::vector<std::uint32_t> candidatesA, candidatesB;
     std::vector<int> pixelCount;                       // n_pixels
     std::vector<int> pixelStart;                       // n_pixels + 1

@@ -347,7 +347,8 @@ RC_HD double hullDistanceBound(const Vec3<double> &x, const double *points, std:
     oracle's containment test finds). Most pairs that reach the exact narrow phase while planning
     collide (99 % on a Panda cage problem); these proofs settled 76 % of them there. */
 RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, const ConvexProxy &b,
-                               const Pose<double> &poseB, double padding, bool proveOverlap)
+                               const Pose<double> &poseB, double padding, bool proveOverlap,
+                               Vec3<double> *direction = nullptr)
 {
     if (a.numHullPoints == 0 || b.numHullPoints == 0)
         return HullRelation::Unknown;
@@ -356,13 +357,26 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
     // What the gap must clear: the padding and the rounding of coordinates this large.
     const double rounding = kSeparationSlack * (a.radius + b.radius + std::sqrt(dot(ta, ta)) + std::sqrt(dot(tb, tb)));
     const double margin = padding + rounding;
-    Vec3<double> v = ta - tb;
-    if (!(dot(v, v) > 0.0))
-        v = {1.0, 0.0, 0.0};
     // v: the closest point to the origin of the simplex's hull, a part of the Minkowski difference
     // A - B. The simplex starts as one point of A - B, so every step's v is no farther than the last.
-    Vec3<double> onA[4] = {detail::worldSupport(a, poseA, v)};  // A's point of each simplex point
-    v = onA[0] - detail::worldSupport(b, poseB, Vec3<double>{-v.x, -v.y, -v.z});
+    Vec3<double> v = ta - tb, onA[4];  // onA: A's point of each simplex point
+    if (direction && dot(*direction, *direction) > 0.0)
+    {
+        // The direction that proved this pair apart at a nearby state (the caller's last call):
+        // its gap settles most pairs at once; else its support points start GJK.
+        const Vec3<double> d = *direction;
+        onA[0] = detail::worldSupport(a, poseA, Vec3<double>{-d.x, -d.y, -d.z});
+        v = onA[0] - detail::worldSupport(b, poseB, d);
+        if (dot(d, v) > (margin + a.hullSlack + b.hullSlack) * std::sqrt(dot(d, d)))
+            return HullRelation::Apart;
+    }
+    else
+    {
+        if (!(dot(v, v) > 0.0))
+            v = {1.0, 0.0, 0.0};
+        onA[0] = detail::worldSupport(a, poseA, v);
+        v = onA[0] - detail::worldSupport(b, poseB, Vec3<double>{-v.x, -v.y, -v.z});
+    }
     Vec3<double> simplex[4] = {v};
     double weights[4] = {1.0, 0.0, 0.0, 0.0};  // v = sum of weights[i] * simplex[i]
     int count = 1;
@@ -396,6 +410,13 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         }
         return false;
     };
+    // A proof's direction, kept for the caller's next call on the same pair (a nearby state).
+    const auto apart = [&](const Vec3<double> &proof)
+    {
+        if (direction)
+            *direction = proof;
+        return HullRelation::Apart;
+    };
     bool proofTried = false;
     for (int iteration = 0; iteration < kMaxIterations; ++iteration)
     {
@@ -411,12 +432,12 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         // without reading every vertex; one that clears the margin alone is worth that reading.
         const double length = std::sqrt(vv);
         if (vw > (margin + a.hullSlack + b.hullSlack) * length)
-            return HullRelation::Apart;
+            return apart(v);
         if (!proofTried && vw > margin * length)
         {
             proofTried = true;
             if (gapAlong(v, a, poseA, b, poseB) > margin * length)
-                return HullRelation::Apart;
+                return apart(v);
         }
         if (vv - vw <= 1e-10 * vv)
             break;  // converged: v is the hull points' nearest direction within rounding
@@ -439,8 +460,7 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         for (int i = 0; i < 4; ++i)
             weights[i] = stepWeights[i];
     }
-    return gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(dot(v, v)) ? HullRelation::Apart
-                                                                          : HullRelation::Unknown;
+    return gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(dot(v, v)) ? apart(v) : HullRelation::Unknown;
 }
 
 /** \brief Are solids \a a and \a b (ConvexArrays numbering, placed by their poses) provably more
@@ -452,14 +472,15 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
     (the boom foot between the superstructure's plates) are settled so; a single non-convex shell
     is not. */
 RC_HD HullRelation relateSolids(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
-                                std::uint32_t b, const Pose<double> &poseB, double padding, bool proveOverlap)
+                                std::uint32_t b, const Pose<double> &poseB, double padding, bool proveOverlap,
+                                Vec3<double> *direction = nullptr)
 {
     const std::uint32_t a0 = arrays.solidPieces[a], a1 = arrays.solidPieces[a + 1];
     const std::uint32_t b0 = arrays.solidPieces[b], b1 = arrays.solidPieces[b + 1];
     if (a0 == a1 || b0 == b1)
         return HullRelation::Unknown;
     const HullRelation whole =
-        relateHulls(convexProxy(arrays, a0), poseA, convexProxy(arrays, b0), poseB, padding, proveOverlap);
+        relateHulls(convexProxy(arrays, a0), poseA, convexProxy(arrays, b0), poseB, padding, proveOverlap, direction);
     if (whole != HullRelation::Unknown || (a1 - a0 == 1 && b1 - b0 == 1))
         return whole;
     const std::uint32_t aShells = a1 - a0 > 1 ? a0 + 1 : a0, bShells = b1 - b0 > 1 ? b0 + 1 : b0;
