@@ -126,7 +126,7 @@ void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
     if (extreme.size() < mesh.numVertices())
     {
         // How far the other vertices may stick out of the hull points' hull: with it, a gap
-        // between hull points alone can prove a pair apart (device::provablySeparated). The
+        // between hull points alone can prove a pair apart (device::relateHulls). The
         // slack added covers the rounding of the bound's inside test.
         std::vector<std::uint8_t> isHullPoint(mesh.numVertices(), 0);
         for (std::uint32_t i : extreme)

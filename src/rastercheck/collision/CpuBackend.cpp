@@ -367,8 +367,9 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     continue;
                 }
                 if (device::orientedBoxOverlapsBox(ws.componentBox[k], objectBox, padding) &&
-                    pairCollides(componentSolid(model, ws, k), object, static_cast<std::uint32_t>(o * m + k), request,
-                                 pixel, model.origin, wantContact, ws, contact))
+                    pairCollides(componentSolid(model, ws, k), object,
+                                 device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m)),
+                                 request, pixel, model.origin, wantContact, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);

@@ -323,13 +323,13 @@ RC_HD double hullDistanceBound(const Vec3<double> &x, const double *points, std:
 
 /** \brief Are pieces A and B (placed by their poses, world frame) provably more than \a padding
     apart, or, when \a proveOverlap and both have face planes (ConvexPiece::numPlanes), provably
-    overlapping? GJK (van den Bergen's distance loop) over the hull points proposes the
-    direction between the solids' nearest points. The hull points' gap along it proves the pair apart when it clears
-    the padding plus both pieces' hull slacks (most pairs end there, after a few hundred
+    overlapping? GJK (van den Bergen's distance loop) over the hull points proposes the direction
+    between the solids' nearest points. The hull points' gap along it proves the pair apart when it
+    clears the padding plus both pieces' hull slacks (most pairs end there, after a few hundred
     multiply-adds); otherwise gapAlong() tries the proof over every vertex, once along the first
-    direction that looks good enough and once along the converged one. True
-    only with a proof, so the answer is conservative whatever GJK does; a false sends the pair on to
-    the exact narrow phase. For convex meshes of no more than rastercheck::kConvexHullDirections
+    direction that looks good enough and once along the converged one. Apart or Overlapping only
+    with a proof, so the answer is conservative whatever GJK does; Unknown sends the pair on to the
+    exact narrow phase. For convex meshes of no more than rastercheck::kConvexHullDirections
     (128) vertices, every vertex is a hull point and the proof is found whenever the solids are
     apart by more than the padding; finer meshes need a little more (the hull points' direction is
     off by up to the directions' spacing: two unit spheres of 60 000 vertices, 0.0499 apart, are
@@ -443,22 +443,15 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
             break;  // converged: v is the hull points' nearest direction within rounding
         onA[count] = pointOfA;
         simplex[count++] = w;
-        Vec3<double> next = v;  // written by closestOnSimplex when it gets closer
-        double stepWeights[4];
-        const detail::SimplexStep step = detail::closestOnSimplex(simplex, count, next, onA, stepWeights);
+        Vec3<double> next = v;  // written by closestOnSimplex when it gets closer, with its weights
+        const detail::SimplexStep step = detail::closestOnSimplex(simplex, count, next, onA, weights);
         if (step == detail::SimplexStep::OriginInside)
-        {
-            for (int i = 0; i < 4; ++i)
-                weights[i] = stepWeights[i];
             return overlapProven() ? HullRelation::Overlapping : HullRelation::Unknown;
-        }
         if (step != detail::SimplexStep::Closer)
             return HullRelation::Unknown;  // the hull points' hulls meet, or GJK lost its footing
         if (!(dot(next, next) < vv))
             break;  // no progress left
         v = next;
-        for (int i = 0; i < 4; ++i)
-            weights[i] = stepWeights[i];
     }
     return gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(dot(v, v)) ? apart(v) : HullRelation::Unknown;
 }
