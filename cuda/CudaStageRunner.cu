@@ -280,12 +280,14 @@ public:
         model_.objectTriangles = uploadOnce(model_memory_, host.objectTriangles, host.numObjectTriangleIndices);
         model_.objects = uploadOnce(model_memory_, host.objects, o);
         model_.objectBoxes = uploadOnce(model_memory_, host.objectBoxes, o);
+        model_.objectOrientedBoxes = uploadOnce(model_memory_, host.objectOrientedBoxes, o);
         model_.selfPairs = uploadOnce(model_memory_, host.selfPairs, 2 * static_cast<std::size_t>(host.numSelfPairs));
         model_.convex.vertices = uploadOnce(model_memory_, host.convex.vertices, host.numConvexVertexDoubles);
         model_.convex.hullPoints = uploadOnce(model_memory_, host.convex.hullPoints, host.numConvexHullDoubles);
         model_.convex.pieces = uploadOnce(model_memory_, host.convex.pieces, host.numConvexPieces);
         model_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
         model_.convex.planes = uploadOnce(model_memory_, host.convex.planes, host.numConvexPlaneDoubles);
+        model_.convex.edges = uploadOnce(model_memory_, host.convex.edges, host.numConvexEdgeIndices);
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
         // non-blocking stream that does not wait for the legacy one: wait here.

@@ -10,6 +10,7 @@
 #include "Reference.h"
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
+#include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/core/Log.h"
 #include "rastercheck/geometry/Primitives.h"
 #include "rastercheck/io/MoveItYaml.h"
@@ -280,6 +281,70 @@ TEST(Checker, VerdictsAndContactsAreIdenticalAcrossThreadCounts)
             EXPECT_EQ(contacts[t][i].triangle, contacts[0][i].triangle);
             EXPECT_EQ(contacts[t][i].position, contacts[0][i].position);
         }
+    }
+}
+
+TEST(Checker, ObjectBoxesHoldEveryVertexAndHugRotatedWalls)
+{
+    // A wall turned 30 degrees about z, in site coordinates far from the world origin: its
+    // axis-aligned box is mostly air, its oriented box (the OBB-vs-OBB cull) is not.
+    const Eigen::Vector3d wallCentre(1000.0, -500.0, 3.0);
+    rc::Mesh wall = rc::makeBox(Eigen::Vector3d(2.0, 0.04, 1.0));
+    wall.transform(Eigen::Translation3d(wallCentre) * Eigen::AngleAxisd(M_PI / 6, Eigen::Vector3d::UnitZ()));
+    auto scene = std::make_shared<rc::Scene>();
+    scene->addObject("wall", wall);
+    scene->addObject("crate", boxAt({0.3, 0.3, 0.3}, wallCentre + Eigen::Vector3d(3.0, 2.0, 0.0)));
+    rc::Aabb bounds;
+    bounds.min = wallCentre - Eigen::Vector3d::Constant(5);
+    bounds.max = wallCentre + Eigen::Vector3d::Constant(5);
+    const rc::RobotModelConstPtr robot =
+        rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.2)), bounds);
+
+    const rc::CollisionModel model(robot, scene);
+    for (std::size_t o = 0; o < scene->objects.size(); ++o)
+    {
+        const rc::device::OrientedBox &box = model.objectOrientedBoxes[o];
+        for (const Eigen::Vector3d &vertex : scene->objects[o].mesh.vertices)
+        {
+            const Eigen::Vector3d p = vertex - model.origin;
+            for (int axis = 0; axis < 3; ++axis)
+            {
+                double local = 0.0;
+                for (int r = 0; r < 3; ++r)
+                    local += static_cast<double>(box.axes[3 * r + axis]) * (p[r] - static_cast<double>(box.center[r]));
+                EXPECT_LE(std::abs(local), static_cast<double>(box.half[axis])) << "object " << o << " axis " << axis;
+            }
+        }
+    }
+    const rc::device::OrientedBox &wallBox = model.objectOrientedBoxes[0];
+    const rc::device::Box &wallBounds = model.objectBoxes[0];
+    const double orientedVolume = 8.0 * wallBox.half[0] * wallBox.half[1] * wallBox.half[2];
+    double boundsVolume = 1.0;
+    for (int k = 0; k < 3; ++k)
+        boundsVolume *= wallBounds.max[k] - wallBounds.min[k];
+    EXPECT_LT(orientedVolume, 0.1 * boundsVolume);
+
+    // The cube 5 cm off the wall's face, well inside the wall's axis-aligned box: free, unless the
+    // padding reaches the wall; 5 cm into it: a collision.
+    const Eigen::Vector3d normal(-std::sin(M_PI / 6), std::cos(M_PI / 6), 0.0);  // the wall's thin axis
+    const auto cubeAt = [&](double offFace)
+    {
+        const Eigen::Vector3d c = wallCentre + (0.02 + 0.1 + offFace) * normal;
+        return at(c.x(), c.y(), c.z());
+    };
+    const rc::Checker checker(robot, scene);
+    for (rc::CollisionMode mode : kModes)
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        // The cube is not turned with the wall: its corner reaches 0.1 * (sqrt(2) cos 15deg - 1)
+        // = 0.0366 closer than its centre's offset.
+        EXPECT_TRUE(checker.isValid(cubeAt(0.05 + 0.0366), request)) << rc::toString(mode);
+        EXPECT_FALSE(checker.isValid(cubeAt(-0.05), request)) << rc::toString(mode);
+        request.padding = 0.04;
+        EXPECT_TRUE(checker.isValid(cubeAt(0.05 + 0.0366), request)) << rc::toString(mode);
+        request.padding = 0.06;
+        EXPECT_FALSE(checker.isValid(cubeAt(0.05 + 0.0366), request)) << rc::toString(mode);
     }
 }
 

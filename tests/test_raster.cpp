@@ -211,7 +211,7 @@ TEST(Boxes, OrientedBoxTestsAgreeWithSeparationByHand)
     turned.center[0] = 2.5f;  // corner at 1.086: separated along x
     EXPECT_FALSE(rd::orientedBoxesOverlap(unit, turned, 0.0f));
     EXPECT_TRUE(rd::orientedBoxesOverlap(unit, turned, 0.1f));  // padding closes the 0.086 gap
-    const rd::Box box{{1.05f, -1, -1}, {2, 1, 1}};
-    EXPECT_FALSE(rd::orientedBoxOverlapsBox(unit, box, 0.0f));
-    EXPECT_TRUE(rd::orientedBoxOverlapsBox(unit, box, 0.06f));
+    const rd::OrientedBox slab{{1.525f, 0, 0}, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0.475f, 1, 1}};  // x from 1.05 to 2
+    EXPECT_FALSE(rd::orientedBoxesOverlap(unit, slab, 0.0f));
+    EXPECT_TRUE(rd::orientedBoxesOverlap(unit, slab, 0.03f));  // each grows by 0.03: the 0.05 gap closes
 }

@@ -312,9 +312,15 @@ TEST(Separation, OnlyClosedShellsNearlyConvexProveOverlaps)
     EXPECT_TRUE(solids.oracleOverlaps(openBox, here, box, at(0.35, 0.05, 0.02), 0.0));
     EXPECT_TRUE(solids.provenOverlapping(openBox, here, box, at(0.35, 0.05, 0.02), 0.0));
     EXPECT_TRUE(solids.provenOverlapping(box, at(0.35, 0.05, 0.02), openBox, here, 0.0));
-    // Its face through the small box, no vertex of either inside the other: left to the exact phase.
+    // Its face through the small box, no vertex of either inside the other: the face's diagonal
+    // edge runs through the small box's middle, and proves it.
     EXPECT_TRUE(solids.oracleOverlaps(openBox, here, small, at(0.3, 0, 0), 0.0));
-    EXPECT_EQ(solids.relation(openBox, here, small, at(0.3, 0, 0), 0.0), rc::device::HullRelation::Unknown);
+    EXPECT_TRUE(solids.provenOverlapping(openBox, here, small, at(0.3, 0, 0), 0.0));
+    // Off both of the face's diagonals (0.106 from each, the small box reaches 0.071 across them),
+    // no edge of the open box enters the small one, and the open box has no inside of its own:
+    // left to the exact phase.
+    EXPECT_TRUE(solids.oracleOverlaps(openBox, here, small, at(0.3, 0.15, 0), 0.0));
+    EXPECT_EQ(solids.relation(openBox, here, small, at(0.3, 0.15, 0), 0.0), rc::device::HullRelation::Unknown);
 
     // The box in the U's notch: the hulls overlap deeply, the solids are 0.2 apart.
     const Eigen::Isometry3d notch = at(1.5, 0, 1.5);
@@ -322,9 +328,10 @@ TEST(Separation, OnlyClosedShellsNearlyConvexProveOverlaps)
     EXPECT_FALSE(solids.oracleOverlaps(u, here, cube, notch, 0.0));
     EXPECT_EQ(solids.relation(u, here, cube, notch, 0.0), rc::device::HullRelation::Unknown);
     EXPECT_EQ(solids.relation(u, here, cube, notch, 0.3), rc::device::HullRelation::Unknown);
-    // Sunk 0.5 into the U's base: the oracle finds the overlap; the U's hull cannot prove it.
+    // Sunk 0.5 into the U's base: the U keeps no planes, but its surface (a vertex or an edge)
+    // reaches inside the closed cube, which proves the overlap.
     EXPECT_TRUE(solids.oracleOverlaps(u, here, cube, at(1.5, 0, 0.9), 0.0));
-    EXPECT_EQ(solids.relation(u, here, cube, at(1.5, 0, 0.9), 0.0), rc::device::HullRelation::Unknown);
+    EXPECT_TRUE(solids.provenOverlapping(u, here, cube, at(1.5, 0, 0.9), 0.0));
 }
 
 TEST(Separation, OverlapProofsLookOnlyBehindEveryFaceOfANearlyConvexShell)
@@ -347,6 +354,30 @@ TEST(Separation, OverlapProofsLookOnlyBehindEveryFaceOfANearlyConvexShell)
     // A dip of 5 % is beyond the limit: no planes, no overlap proofs.
     Solids deeper;
     EXPECT_FALSE(deeper.hasPlanes(deeper.add(dentedCube(0.05))));
+}
+
+TEST(Separation, AnEdgeReachingInsideAClosedSolidProvesTheOverlap)
+{
+    // A bar through a cube, off its middle: no vertex of either lies inside the other.
+    Solids solids;
+    const std::size_t cube = solids.add(rc::makeBox(Vec(0.6, 0.6, 0.6)));
+    const std::size_t openCube = solids.add(rc::makeBox(Vec(0.6, 0.6, 0.6)), false);
+    const std::size_t openBar = solids.add(rc::makeBox(Vec(2.0, 0.05, 0.05)), false);
+    const std::size_t bar = solids.add(rc::makeBox(Vec(2.0, 0.05, 0.05)));
+    const Eigen::Isometry3d here = at(0), through = at(0, 0.15, 0);
+    // The open bar has no inside, so only its edges, which run through the cube, prove it.
+    EXPECT_TRUE(solids.oracleOverlaps(openBar, through, cube, here, 0.0));
+    EXPECT_TRUE(solids.provenOverlapping(openBar, through, cube, here, 0.0));
+    EXPECT_TRUE(solids.provenOverlapping(cube, here, openBar, through, 0.0));
+    // The other way round, the open cube's edges miss the bar (its face diagonals pass 0.106 from
+    // it; the bar reaches 0.035 across them): the surfaces cross, and only the exact phase says so.
+    EXPECT_TRUE(solids.oracleOverlaps(bar, through, openCube, here, 0.0));
+    EXPECT_EQ(solids.relation(bar, through, openCube, here, 0.0), rc::device::HullRelation::Unknown);
+    // Lifted to 0.01 above the cube: apart, and never proven overlapping.
+    const Eigen::Isometry3d above = at(0, 0.15, 0.3 + 0.025 + 0.01);
+    EXPECT_FALSE(solids.oracleOverlaps(openBar, above, cube, here, 0.0));
+    EXPECT_NE(solids.relation(openBar, above, cube, here, 0.0), rc::device::HullRelation::Overlapping);
+    EXPECT_NE(solids.relation(openBar, above, cube, here, 0.02), rc::device::HullRelation::Overlapping);
 }
 
 TEST(Separation, SolidsOfSeveralShellsAreSeparatedShellByShellWhenTheirHullsInterlock)

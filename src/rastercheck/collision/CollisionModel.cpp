@@ -96,12 +96,23 @@ void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
                               static_cast<std::uint32_t>(planes_.size() / 4),
                               0,
                               {0.0, 0.0, 0.0},
+                              0,
+                              static_cast<std::uint32_t>(edges_.size() / 2),
                               0};
     std::vector<std::uint8_t> used(mesh.numVertices(), 0);
     for (const Mesh::Triangle &t : mesh.triangles)
         for (std::uint32_t v : t)
             used[v] = 1;
     piece.surfaceVertices = !mesh.triangles.empty() && std::find(used.begin(), used.end(), 0) == used.end() ? 1u : 0u;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+    for (const Mesh::Triangle &t : mesh.triangles)
+        for (int k = 0; k < 3; ++k)
+            edges.emplace_back(std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]));
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    for (const auto &[from, to] : edges)
+        edges_.insert(edges_.end(), {from, to});
+    piece.numEdges = static_cast<std::uint32_t>(edges.size());
     if (closedShell)
     {
         const std::vector<double> planes = facePlanes(mesh);
@@ -231,6 +242,10 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
             box.max[k] = static_cast<float>(grown.max[k]);
         }
         objectBoxes.push_back(box);
+        Obb fitted = Obb::fit(object.mesh);
+        fitted.center -= origin;
+        fitted.halfExtents.array() += 1e-5 * fitted.halfExtents.norm() + 1e-6 * distance + 1e-9;
+        objectOrientedBoxes.push_back(toDeviceBox(fitted));
         objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh));
         convex.add(object.mesh, object.topology.closed);
     }

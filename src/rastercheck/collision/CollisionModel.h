@@ -42,12 +42,13 @@ public:
     device::ConvexArrays arrays() const
     {
         return device::ConvexArrays{vertices_.data(), hullPoints_.data(), pieces_.data(), solidPieces_.data(),
-                                    planes_.data()};
+                                    planes_.data(), edges_.data()};
     }
     std::size_t numVertexDoubles() const { return vertices_.size(); }
     std::size_t numHullPointDoubles() const { return hullPoints_.size(); }
     std::size_t numAllPieces() const { return pieces_.size(); }
     std::size_t numPlaneDoubles() const { return planes_.size(); }
+    std::size_t numEdgeIndices() const { return edges_.size(); }
 
 private:
     /** \brief \a closedShell: the piece is one closed, outward-oriented shell (it may keep planes). */
@@ -58,6 +59,7 @@ private:
     std::vector<device::ConvexPiece> pieces_;
     std::vector<std::uint32_t> solidPieces_{0};  // n_solids + 1
     std::vector<double> planes_;                 // n_planes x 4
+    std::vector<std::uint32_t> edges_;           // n_edges x 2
 };
 
 /** \brief Flat, immutable arrays of one robot and one scene, laid out for the pipeline stages (and
@@ -97,6 +99,7 @@ public:
     std::vector<std::uint32_t> objectTriangles;  // n_object_triangles x 3
     std::vector<MeshSlice> objects;              // n_objects
     std::vector<device::Box> objectBoxes;        // n_objects, world frame - origin
+    std::vector<device::OrientedBox> objectOrientedBoxes;  // n_objects, world frame - origin
 
     /** \brief Component pairs (a < b) checked for self-collision: those the ACM does not allow. */
     std::vector<std::pair<int, int>> selfPairs;

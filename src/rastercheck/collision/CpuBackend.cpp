@@ -366,7 +366,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     k = static_cast<std::size_t>(model.componentSubtreeEnd[k]);
                     continue;
                 }
-                if (device::orientedBoxOverlapsBox(ws.componentBox[k], objectBox, padding) &&
+                if (device::orientedBoxesOverlap(ws.componentBox[k], model.objectOrientedBoxes[o], padding) &&
                     pairCollides(componentSolid(model, ws, k), object,
                                  device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m)),
                                  request, pixel, model.origin, wantContact, ws, contact))

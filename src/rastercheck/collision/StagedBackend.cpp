@@ -33,6 +33,7 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.objectTriangles.size(),
                                model.objects.data(),
                                model.objectBoxes.data(),
+                               model.objectOrientedBoxes.data(),
                                static_cast<int>(model.numObjects()),
                                reinterpret_cast<const int *>(model.selfPairs.data()),
                                static_cast<int>(model.selfPairs.size()),
@@ -41,7 +42,8 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.convex.numVertexDoubles(),
                                model.convex.numHullPointDoubles(),
                                model.convex.numAllPieces(),
-                               model.convex.numPlaneDoubles()};
+                               model.convex.numPlaneDoubles(),
+                               model.convex.numEdgeIndices()};
 }
 
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)

@@ -58,6 +58,7 @@ struct ModelArrays
     std::size_t numObjectTriangleIndices;
     const MeshSlice *objects;
     const Box *objectBoxes;
+    const OrientedBox *objectOrientedBoxes;
     int numObjects;
     const int *selfPairs;  // numSelfPairs x 2
     int numSelfPairs;
@@ -68,6 +69,7 @@ struct ModelArrays
     std::size_t numConvexHullDoubles;
     std::size_t numConvexPieces;
     std::size_t numConvexPlaneDoubles;
+    std::size_t numConvexEdgeIndices;
 
     RC_HD std::uint32_t numPairs() const
     {
@@ -305,7 +307,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
                 const Box &objectBox = md.objectBoxes[o];
                 survives = st.checkEnvironment && objectWithinReach(robotSphere[s], objectBox, st.padding) &&
                            layersReach(layers + s * m, md.componentSubtreeEnd, k, objectBox, st.padding) &&
-                           orientedBoxOverlapsBox(boxes[s * m + k], objectBox, st.padding);
+                           orientedBoxesOverlap(boxes[s * m + k], md.objectOrientedBoxes[o], st.padding);
             }
             else
             {

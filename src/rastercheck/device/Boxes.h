@@ -142,18 +142,4 @@ RC_HD bool orientedBoxesOverlap(const OrientedBox &a, const OrientedBox &b, floa
     }
     return true;
 }
-
-/** \brief Oriented box against an axis-aligned one (the paper's OBB-vs-AABB cull). */
-RC_HD bool orientedBoxOverlapsBox(const OrientedBox &a, const Box &b, float margin)
-{
-    OrientedBox asOriented;
-    for (int k = 0; k < 3; ++k)
-    {
-        asOriented.center[k] = 0.5f * (b.min[k] + b.max[k]);
-        asOriented.half[k] = 0.5f * (b.max[k] - b.min[k]);
-    }
-    for (int k = 0; k < 9; ++k)
-        asOriented.axes[k] = (k % 4 == 0) ? 1.0f : 0.0f;
-    return orientedBoxesOverlap(a, asOriented, margin);
-}
 }  // namespace rastercheck::device

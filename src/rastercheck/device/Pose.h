@@ -91,6 +91,21 @@ RC_HD Pose<T> compose(const Pose<T> &a, const Pose<T> &b)
     return c;
 }
 
+/** \brief to^-1 * from: the pose of \a from's frame in \a to's frame (rigid poses). */
+template <class T>
+RC_HD Pose<T> relativePose(const Pose<T> &to, const Pose<T> &from)
+{
+    Pose<T> c;
+    const T *a = to.m, *b = from.m;
+    for (int r = 0; r < 3; ++r)
+    {
+        for (int col = 0; col < 3; ++col)
+            c.m[4 * r + col] = a[r] * b[col] + a[4 + r] * b[4 + col] + a[8 + r] * b[8 + col];
+        c.m[4 * r + 3] = a[r] * (b[3] - a[3]) + a[4 + r] * (b[7] - a[7]) + a[8 + r] * (b[11] - a[11]);
+    }
+    return c;
+}
+
 /** \brief Rotation by \a angle (rad) about unit \a axis, Rodrigues' formula. */
 template <class T>
 RC_HD Pose<T> axisAngle(const Vec3<T> &axis, T angle)
