@@ -214,4 +214,18 @@ TEST(Boxes, OrientedBoxTestsAgreeWithSeparationByHand)
     const rd::OrientedBox slab{{1.525f, 0, 0}, {1, 0, 0, 0, 1, 0, 0, 0, 1}, {0.475f, 1, 1}};  // x from 1.05 to 2
     EXPECT_FALSE(rd::orientedBoxesOverlap(unit, slab, 0.0f));
     EXPECT_TRUE(rd::orientedBoxesOverlap(unit, slab, 0.03f));  // each grows by 0.03: the 0.05 gap closes
+
+    // The pair cull: world AABBs first, then OBBs. Turned 45 degrees at (2.2, 2.2), the box's AABB
+    // reaches the unit box's (x and y from 0.786), the box itself stays 0.697 away along the diagonal.
+    const auto mayMeet = [](const rd::OrientedBox &a, const rd::OrientedBox &b, float margin)
+    { return rd::solidsMayMeet(rd::boundsOf(a), a, rd::boundsOf(b), b, margin); };
+    rd::OrientedBox diagonal{{2.2f, 2.2f, 0}, {c, -c, 0, c, c, 0, 0, 0, 1}, {1, 1, 1}};
+    EXPECT_TRUE(rd::boxesOverlap(rd::boundsOf(unit), rd::boundsOf(diagonal), 0.0f));
+    EXPECT_FALSE(mayMeet(unit, diagonal, 0.0f));
+    EXPECT_FALSE(mayMeet(unit, diagonal, 0.1f));
+    EXPECT_TRUE(mayMeet(unit, diagonal, 0.3f));  // grown by 0.3 each, they meet along the diagonal
+    // Their AABBs 0.586 apart along x: a margin below that is settled by the AABBs alone.
+    turned.center[0] = 3.0f;
+    EXPECT_FALSE(mayMeet(unit, turned, 0.5f));
+    EXPECT_TRUE(mayMeet(unit, turned, 0.6f));
 }

@@ -27,17 +27,10 @@ struct Solid
     int component;                    // index for the per-state vertex cache; -1 for objects
     device::Box bounds;              // world
     const MeshBvh *bvh;
-    const Eigen::Isometry3d *exactPose;
-    device::ConvexArrays convex;             // the separation cull's arrays
-    std::uint32_t convexSolid;               // this solid's number there
-    const device::Pose<double> *hullPose;    // exactPose in device layout
+    device::ConvexArrays convex;          // the separation cull's arrays
+    std::uint32_t convexSolid;            // this solid's number there
+    const device::Pose<double> *pose64;   // the double pose of the hull test and the exact phase
 };
-
-const Eigen::Isometry3d &identityPose()
-{
-    static const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
-    return identity;
-}
 
 const device::Pose<double> &identityDevicePose()
 {
@@ -152,7 +145,7 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
 device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding, bool proveOverlap,
                                   device::Vec3<double> &direction)
 {
-    return device::relateSolids(a.convex, a.convexSolid, *a.hullPose, b.convexSolid, *b.hullPose,
+    return device::relateSolids(a.convex, a.convexSolid, *a.pose64, b.convexSolid, *b.pose64,
                                 std::max(0.0, padding), proveOverlap, &direction);
 }
 
@@ -160,7 +153,8 @@ device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding
 bool exactOverlap(const Solid &a, const Solid &b, double padding, Contact &contact)
 {
     MeshContact meshContact;
-    if (!solidsOverlap(*a.bvh, *a.exactPose, a.slice->closed, *b.bvh, *b.exactPose, b.slice->closed, padding,
+    if (!solidsOverlap(*a.bvh, fromDevicePose(*a.pose64), a.slice->closed, *b.bvh, fromDevicePose(*b.pose64),
+                       b.slice->closed, padding,
                        &meshContact))
         return false;
     contact.triangle = meshContact.triangleB;
@@ -239,9 +233,7 @@ void refit(const CollisionModel &model, const double *q, CpuWorkspace &ws)
     const std::size_t m = model.numComponents();
     for (std::size_t c = 0; c < m; ++c)
     {
-        const device::Pose<double> &exact = ws.linkPoses[model.componentLink[c]];
-        ws.componentExactPose[c] = fromDevicePose(exact);
-        ws.componentPose[c] = device::toFloatPose(exact, model.origin.data());
+        ws.componentPose[c] = device::toFloatPose(ws.linkPoses[model.componentLink[c]], model.origin.data());
         ws.componentBox[c] = device::transformBox(ws.componentPose[c], model.componentLocalBoxes[c]);
         ws.componentBounds[c] = device::boundsOf(ws.componentBox[c]);
     }
@@ -258,7 +250,6 @@ Solid componentSolid(const CollisionModel &model, CpuWorkspace &ws, std::size_t 
                  static_cast<int>(c),
                  ws.componentBounds[c],
                  model.componentBvhs[c].get(),
-                 &ws.componentExactPose[c],
                  model.convex.arrays(),
                  static_cast<std::uint32_t>(c),
                  &ws.linkPoses[model.componentLink[c]]};
@@ -273,7 +264,6 @@ Solid objectSolid(const CollisionModel &model, std::size_t o)
                  -1,
                  model.objectBoxes[o],
                  model.objectBvhs[o].get(),
-                 &identityPose(),
                  model.convex.arrays(),
                  static_cast<std::uint32_t>(model.numComponents() + o),
                  &identityDevicePose()};
@@ -366,7 +356,8 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     k = static_cast<std::size_t>(model.componentSubtreeEnd[k]);
                     continue;
                 }
-                if (device::orientedBoxesOverlap(ws.componentBox[k], model.objectOrientedBoxes[o], padding) &&
+                if (device::solidsMayMeet(ws.componentBounds[k], ws.componentBox[k], objectBox,
+                                          model.objectOrientedBoxes[o], padding) &&
                     pairCollides(componentSolid(model, ws, k), object,
                                  device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m)),
                                  request, pixel, model.origin, wantContact, ws, contact))
@@ -384,7 +375,8 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
         {
             const auto [a, b] = model.selfPairs[i];
-            if (!device::orientedBoxesOverlap(ws.componentBox[a], ws.componentBox[b], padding))
+            if (!device::solidsMayMeet(ws.componentBounds[a], ws.componentBox[a], ws.componentBounds[b],
+                                           ws.componentBox[b], padding))
                 continue;
             if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b),
                              static_cast<std::uint32_t>(model.numObjects() * m + i), request, pixel, model.origin,

@@ -20,7 +20,6 @@ struct CpuWorkspace
       : jointValues(model.robot->joints.size())
       , linkPoses(model.robot->links.size())
       , componentPose(model.numComponents())
-      , componentExactPose(model.numComponents())
       , componentBox(model.numComponents())
       , componentBounds(model.numComponents())
       , layerBounds(model.numComponents())
@@ -33,7 +32,6 @@ struct CpuWorkspace
     std::vector<double> jointValues;                       // n_joints
     std::vector<device::Pose<double>> linkPoses;           // n_links
     std::vector<device::Pose<float>> componentPose;        // n_components
-    std::vector<Eigen::Isometry3d> componentExactPose;     // n_components
     std::vector<device::OrientedBox> componentBox;         // n_components, world
     std::vector<device::Box> componentBounds;              // n_components, world
     std::vector<device::Box> layerBounds;                  // n_components: bounds of layer k's subtree

@@ -307,13 +307,15 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
                 const Box &objectBox = md.objectBoxes[o];
                 survives = st.checkEnvironment && objectWithinReach(robotSphere[s], objectBox, st.padding) &&
                            layersReach(layers + s * m, md.componentSubtreeEnd, k, objectBox, st.padding) &&
-                           orientedBoxesOverlap(boxes[s * m + k], md.objectOrientedBoxes[o], st.padding);
+                           solidsMayMeet(bounds[s * m + k], boxes[s * m + k], objectBox, md.objectOrientedBoxes[o],
+                                         st.padding);
             }
             else
             {
                 const int *self = md.selfPairs + 2 * (pair - environmentPairs);
                 survives = st.checkSelfCollision &&
-                           orientedBoxesOverlap(boxes[s * m + self[0]], boxes[s * m + self[1]], st.padding);
+                           solidsMayMeet(bounds[s * m + self[0]], boxes[s * m + self[0]], bounds[s * m + self[1]],
+                                             boxes[s * m + self[1]], st.padding);
             }
         }
         flags[i] = survives ? 1 : 0;

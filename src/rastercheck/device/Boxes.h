@@ -142,4 +142,13 @@ RC_HD bool orientedBoxesOverlap(const OrientedBox &a, const OrientedBox &b, floa
     }
     return true;
 }
+
+/** \brief The box cull of a pair of solids (two components, or a component and an object): their
+    world AABBs (six comparisons) settle most pairs far apart, their OBBs (15 axes) most of the
+    rest. */
+RC_HD bool solidsMayMeet(const Box &boundsA, const OrientedBox &boxA, const Box &boundsB, const OrientedBox &boxB,
+                             float margin)
+{
+    return boxesOverlap(boundsA, boundsB, margin) && orientedBoxesOverlap(boxA, boxB, margin);
+}
 }  // namespace rastercheck::device
