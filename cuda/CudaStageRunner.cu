@@ -288,6 +288,7 @@ public:
         model_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
         model_.convex.planes = uploadOnce(model_memory_, host.convex.planes, host.numConvexPlaneDoubles);
         model_.convex.edges = uploadOnce(model_memory_, host.convex.edges, host.numConvexEdgeIndices);
+        model_.convex.hullGroups = uploadOnce(model_memory_, host.convex.hullGroups, host.numConvexHullGroups);
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
         // non-blocking stream that does not wait for the legacy one: wait here.

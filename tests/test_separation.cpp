@@ -530,3 +530,57 @@ TEST(Separation, TheHullSlackBoundsHowFarVerticesStickOutOfTheHullPointsHull)
                     piece.numVertices, piece.numHullPoints, piece.radius, piece.hullSlack, overshoot);
     }
 }
+
+TEST(Separation, TheClusteredSupportSearchFindsWhatReadingEveryHullPointFinds)
+{
+    rc::ConvexSolids convex;
+    convex.add(rc::makeBox(Vec(0.4, 0.1, 0.25)), true);  // 8 hull points: searched one by one
+    convex.add(rc::makeSphere(1.0, 1e-4), true);         // 128 hull points in clusters
+    rc::Mesh rod = rc::makeCylinder(0.05, 2.0, 1e-4);  // long and thin, far from its frame's origin
+    rod.transform(Eigen::Isometry3d(Eigen::Translation3d(30.0, -20.0, 50.0)));
+    convex.add(rod, true);
+    std::vector<std::string> names = {"box", "sphere", "cylinder"};
+    const std::string root = rc::test::sharedData();
+    if (!root.empty())
+    {
+        const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
+        for (const rc::Component &component : problem.robot->components)
+        {
+            convex.add(component.mesh, component.topology.closed);
+            names.push_back(component.name);
+        }
+    }
+    const rc::device::ConvexArrays arrays = convex.arrays();
+    EXPECT_EQ(arrays.pieces[0].numHullGroups, 0u);
+    EXPECT_GT(arrays.pieces[1].numHullGroups, 8u);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> normal;
+    std::uniform_real_distribution<double> exponent(-3.0, 3.0);
+    for (std::size_t s = 0; s < convex.numSolids(); ++s)
+    {
+        const rc::device::ConvexProxy piece = rc::device::convexProxy(arrays, arrays.solidPieces[s]);
+        std::uint32_t grouped = 0;
+        for (std::uint32_t g = 0; g < piece.numHullGroups; ++g)
+        {
+            const rc::device::HullGroup &group = piece.hullGroups[g];
+            grouped += group.numPoints;
+            for (std::uint32_t i = group.firstPoint; i < group.firstPoint + group.numPoints; ++i)
+            {
+                const double *p = piece.hullPoints + 3 * i;
+                EXPECT_LE(Vec(p[0] - group.centre[0], p[1] - group.centre[1], p[2] - group.centre[2]).norm(),
+                          group.radius)
+                    << names[s];
+            }
+        }
+        if (piece.numHullGroups > 0)
+            EXPECT_EQ(grouped, piece.numHullPoints) << names[s];  // every point in one cluster
+        for (int trial = 0; trial < 20000; ++trial)
+        {
+            const double scale = std::pow(10.0, exponent(rng));
+            const rc::device::Vec3<double> d{scale * normal(rng), scale * normal(rng), scale * normal(rng)};
+            const double everyPoint = rc::device::supportValue(piece.hullPoints, piece.numHullPoints, d);
+            const double *found = piece.hullPoints + 3 * rc::device::detail::hullSupportIndex(piece, d);
+            ASSERT_EQ(d.x * found[0] + d.y * found[1] + d.z * found[2], everyPoint) << names[s] << " trial " << trial;
+        }
+    }
+}

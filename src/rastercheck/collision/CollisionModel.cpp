@@ -71,6 +71,56 @@ std::vector<double> facePlanes(const Mesh &mesh)
     return planes;
 }
 
+/** \brief \a points (a piece's hull points) in at most device::kMaxHullGroups compact clusters,
+    each a list of indices: farthest-point seeds, then a few rounds of Lloyd's k-means. About the
+    square root of twice the count, which balances the bounds read against the points searched.
+    None for so few points that a plain search is as quick. */
+std::vector<std::vector<std::uint32_t>> hullClusters(const std::vector<Eigen::Vector3d> &points)
+{
+    const std::size_t n = points.size();
+    const std::size_t k = std::min<std::size_t>(device::kMaxHullGroups,
+                                                static_cast<std::size_t>(std::ceil(std::sqrt(2.0 * static_cast<double>(n)))));
+    if (n < 32)
+        return {};
+    std::vector<Eigen::Vector3d> centres{points[0]};
+    std::vector<double> nearest(n, std::numeric_limits<double>::infinity());
+    while (centres.size() < k)
+    {
+        std::size_t farthest = 0;
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            nearest[i] = std::min(nearest[i], (points[i] - centres.back()).squaredNorm());
+            if (nearest[i] > nearest[farthest])
+                farthest = i;
+        }
+        centres.push_back(points[farthest]);
+    }
+    std::vector<std::size_t> owner(n, 0);
+    for (int round = 0; round < 8; ++round)
+    {
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t c = 1; c < k; ++c)
+                if ((points[i] - centres[c]).squaredNorm() < (points[i] - centres[owner[i]]).squaredNorm())
+                    owner[i] = c;
+        std::vector<Eigen::Vector3d> sums(k, Eigen::Vector3d::Zero());
+        std::vector<std::size_t> counts(k, 0);
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            sums[owner[i]] += points[i];
+            ++counts[owner[i]];
+        }
+        for (std::size_t c = 0; c < k; ++c)
+            if (counts[c] > 0)
+                centres[c] = sums[c] / static_cast<double>(counts[c]);
+    }
+    std::vector<std::vector<std::uint32_t>> clusters(k);
+    for (std::size_t i = 0; i < n; ++i)
+        clusters[owner[i]].push_back(static_cast<std::uint32_t>(i));
+    clusters.erase(std::remove_if(clusters.begin(), clusters.end(), [](const auto &c) { return c.empty(); }),
+                   clusters.end());
+    return clusters;
+}
+
 device::OrientedBox toDeviceBox(const Obb &box)
 {
     device::OrientedBox b;
@@ -98,6 +148,8 @@ void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
                               {0.0, 0.0, 0.0},
                               0,
                               static_cast<std::uint32_t>(edges_.size() / 2),
+                              0,
+                              static_cast<std::uint32_t>(hullGroups_.size()),
                               0};
     std::vector<std::uint8_t> used(mesh.numVertices(), 0);
     for (const Mesh::Triangle &t : mesh.triangles)
@@ -124,8 +176,37 @@ void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
         vertices_.insert(vertices_.end(), v.data(), v.data() + 3);
         piece.radius = std::max(piece.radius, v.norm());
     }
-    const std::vector<std::uint32_t> extreme = mesh.extremeVertices(kConvexHullDirections);
+    std::vector<std::uint32_t> extreme = mesh.extremeVertices(kConvexHullDirections);
     piece.numHullPoints = static_cast<std::uint32_t>(extreme.size());
+    {
+        // Stored cluster by cluster, each cluster's bound beside it (device::HullGroup).
+        std::vector<Eigen::Vector3d> points;
+        for (std::uint32_t i : extreme)
+            points.push_back(mesh.vertices[i]);
+        const std::vector<std::vector<std::uint32_t>> clusters = hullClusters(points);
+        const double size = std::max_element(points.begin(), points.end(), [](const auto &a, const auto &b)
+                                             { return a.norm() < b.norm(); })->norm();
+        std::vector<std::uint32_t> grouped;
+        for (const std::vector<std::uint32_t> &cluster : clusters)
+        {
+            Aabb box;
+            for (std::uint32_t i : cluster)
+                box.extend(points[i]);
+            const Eigen::Vector3d centre = 0.5 * (box.min + box.max);
+            double radius = 0.0;
+            for (std::uint32_t i : cluster)
+                radius = std::max(radius, (points[i] - centre).norm());
+            hullGroups_.push_back(device::HullGroup{{centre.x(), centre.y(), centre.z()},
+                                                    radius + 1e-12 * (size + centre.norm()),
+                                                    static_cast<std::uint32_t>(grouped.size()),
+                                                    static_cast<std::uint32_t>(cluster.size())});
+            for (std::uint32_t i : cluster)
+                grouped.push_back(extreme[i]);
+        }
+        if (!clusters.empty())
+            extreme = grouped;
+        piece.numHullGroups = static_cast<std::uint32_t>(clusters.size());
+    }
     const std::size_t firstHullDouble = hullPoints_.size();
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (std::uint32_t i : extreme)

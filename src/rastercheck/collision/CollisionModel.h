@@ -42,13 +42,14 @@ public:
     device::ConvexArrays arrays() const
     {
         return device::ConvexArrays{vertices_.data(), hullPoints_.data(), pieces_.data(), solidPieces_.data(),
-                                    planes_.data(), edges_.data()};
+                                    planes_.data(), edges_.data(), hullGroups_.data()};
     }
     std::size_t numVertexDoubles() const { return vertices_.size(); }
     std::size_t numHullPointDoubles() const { return hullPoints_.size(); }
     std::size_t numAllPieces() const { return pieces_.size(); }
     std::size_t numPlaneDoubles() const { return planes_.size(); }
     std::size_t numEdgeIndices() const { return edges_.size(); }
+    std::size_t numHullGroups() const { return hullGroups_.size(); }
 
 private:
     /** \brief \a closedShell: the piece is one closed, outward-oriented shell (it may keep planes). */
@@ -60,6 +61,7 @@ private:
     std::vector<std::uint32_t> solidPieces_{0};  // n_solids + 1
     std::vector<double> planes_;                 // n_planes x 4
     std::vector<std::uint32_t> edges_;           // n_edges x 2
+    std::vector<device::HullGroup> hullGroups_;  // n_groups
 };
 
 /** \brief Flat, immutable arrays of one robot and one scene, laid out for the pipeline stages (and

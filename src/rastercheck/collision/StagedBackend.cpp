@@ -43,7 +43,8 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.convex.numHullPointDoubles(),
                                model.convex.numAllPieces(),
                                model.convex.numPlaneDoubles(),
-                               model.convex.numEdgeIndices()};
+                               model.convex.numEdgeIndices(),
+                               model.convex.numHullGroups()};
 }
 
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)

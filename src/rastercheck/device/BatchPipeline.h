@@ -70,6 +70,7 @@ struct ModelArrays
     std::size_t numConvexPieces;
     std::size_t numConvexPlaneDoubles;
     std::size_t numConvexEdgeIndices;
+    std::size_t numConvexHullGroups;
 
     RC_HD std::uint32_t numPairs() const
     {

@@ -14,6 +14,21 @@
 
 namespace rastercheck::device
 {
+/** \brief A cluster of one piece's hull points (ConvexArrays::hullGroups): every point lies within
+    \a radius of \a centre (the radius is grown by a trillionth of the piece's size, which dwarfs
+    the rounding of the dot products), so d . centre + |d| radius bounds the group's support value
+    along d, and the support search skips a group whose bound cannot beat the best point found. */
+struct HullGroup
+{
+    double centre[3];
+    double radius;
+    std::uint32_t firstPoint;  ///< within the piece's hull points
+    std::uint32_t numPoints;
+};
+
+/** \brief Most groups a piece's hull points are clustered into (a bound per group is read first). */
+constexpr std::uint32_t kMaxHullGroups = 16;
+
 /** \brief Where one convex piece's points lie in the flat arrays (ConvexArrays): every vertex of the
     piece (the piece lies in their convex hull) and a few of them that span that hull closely (the
     hull points, what GJK searches; no vertex lies farther than hullSlack from their hull). Offsets
@@ -40,6 +55,10 @@ struct ConvexPiece
         another solid proves an overlap, like a vertex. */
     std::uint32_t firstEdge;
     std::uint32_t numEdges;
+    /** \brief The hull points' clusters (ConvexArrays::hullGroups), in the order the hull points
+        are stored; none (0) for a few hull points, which are searched one by one. */
+    std::uint32_t firstHullGroup;
+    std::uint32_t numHullGroups;
 };
 
 /** \brief The separation cull's view of every solid (CollisionModel::convex): solid s owns pieces
@@ -53,6 +72,7 @@ struct ConvexArrays
     const std::uint32_t *solidPieces;
     const double *planes;  ///< n_planes x 4: unit outward normal and offset (n . x = d on the face)
     const std::uint32_t *edges;  ///< n_edges x 2: vertex numbers within the piece
+    const HullGroup *hullGroups;
 };
 
 /** \brief One piece as the separation test reads it: pointers into the flat arrays. */
@@ -70,6 +90,8 @@ struct ConvexProxy
     bool surfaceVertices;
     const std::uint32_t *edges;
     std::uint32_t numEdges;
+    const HullGroup *hullGroups;
+    std::uint32_t numHullGroups;
 };
 
 RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, std::uint32_t piece)
@@ -79,7 +101,8 @@ RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, std::uint32_t piece)
                        arrays.hullPoints + 3 * static_cast<std::size_t>(p.firstHullPoint), p.numHullPoints, p.radius,
                        p.hullSlack, arrays.planes + 4 * static_cast<std::size_t>(p.firstPlane), p.numPlanes,
                        Vec3<double>{p.centre[0], p.centre[1], p.centre[2]}, p.surfaceVertices != 0,
-                       arrays.edges + 2 * static_cast<std::size_t>(p.firstEdge), p.numEdges};
+                       arrays.edges + 2 * static_cast<std::size_t>(p.firstEdge), p.numEdges,
+                       arrays.hullGroups + p.firstHullGroup, p.numHullGroups};
 }
 
 /** \brief Relative rounding slack of the separation proof: a gap must exceed the padding by this
@@ -268,11 +291,50 @@ RC_HD SimplexStep closestOnSimplex(Vec3<double> *simplex, int &count, Vec3<doubl
     return SimplexStep::Closer;
 }
 
-RC_HD Vec3<double> worldSupport(const ConvexProxy &solid, const Pose<double> &pose, const Vec3<double> &d)
+/** \brief The hull point of \a solid extreme along \a d (its own frame): the group with the highest
+    bound first, then only the groups whose bound beats the best point so far (HullGroup). The same
+    maximum as a search of every hull point, for a third of the reads on the Panda's links. */
+RC_HD std::uint32_t hullSupportIndex(const ConvexProxy &solid, const Vec3<double> &d)
 {
     std::uint32_t index = 0;
-    supportValue(solid.hullPoints, solid.numHullPoints, inverseRotate(pose, d), &index);
-    const double *p = solid.hullPoints + 3 * index;
+    if (solid.numHullGroups == 0)
+    {
+        supportValue(solid.hullPoints, solid.numHullPoints, d, &index);
+        return index;
+    }
+    const double length = std::sqrt(dot(d, d));
+    double bound[kMaxHullGroups];
+    std::uint32_t top = 0;
+    for (std::uint32_t g = 0; g < solid.numHullGroups; ++g)
+    {
+        const HullGroup &group = solid.hullGroups[g];
+        bound[g] = d.x * group.centre[0] + d.y * group.centre[1] + d.z * group.centre[2] + length * group.radius;
+        if (bound[g] > bound[top])
+            top = g;
+    }
+    std::uint32_t local = 0;
+    const HullGroup &first = solid.hullGroups[top];
+    double best = supportValue(solid.hullPoints + 3 * static_cast<std::size_t>(first.firstPoint), first.numPoints, d, &local);
+    index = first.firstPoint + local;
+    for (std::uint32_t g = 0; g < solid.numHullGroups; ++g)
+    {
+        const HullGroup &group = solid.hullGroups[g];
+        if (g == top || !(bound[g] > best))
+            continue;
+        const double value =
+            supportValue(solid.hullPoints + 3 * static_cast<std::size_t>(group.firstPoint), group.numPoints, d, &local);
+        if (value > best)
+        {
+            best = value;
+            index = group.firstPoint + local;
+        }
+    }
+    return index;
+}
+
+RC_HD Vec3<double> worldSupport(const ConvexProxy &solid, const Pose<double> &pose, const Vec3<double> &d)
+{
+    const double *p = solid.hullPoints + 3 * hullSupportIndex(solid, inverseRotate(pose, d));
     return transformPoint(pose, Vec3<double>{p[0], p[1], p[2]});
 }
 
