@@ -497,22 +497,30 @@ double largestOvershoot(const rc::device::ConvexArrays &arrays, const rc::device
 }
 }  // namespace
 
+namespace
+{
+/** \brief Appends the Panda's links (MotionBenchMaker URDF) and their names, when the shared data is there. */
+void addPandaLinks(rc::ConvexSolids &convex, std::vector<std::string> &names)
+{
+    const std::string root = rc::test::sharedData();
+    if (root.empty())
+        return;
+    const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
+    for (const rc::Component &component : problem.robot->components)
+    {
+        convex.add(component.mesh, component.topology.closed);
+        names.push_back(component.name);
+    }
+}
+}  // namespace
+
 TEST(Separation, TheHullSlackBoundsHowFarVerticesStickOutOfTheHullPointsHull)
 {
     rc::ConvexSolids convex;
     convex.add(rc::makeBox(Vec(0.4, 0.1, 0.25)), true);  // 8 vertices: all hull points, no slack
     convex.add(rc::makeSphere(1.0, 1e-4), true);         // 60 000 vertices on the unit sphere
     std::vector<std::string> names = {"box", "sphere"};
-    const std::string root = rc::test::sharedData();
-    if (!root.empty())
-    {
-        const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
-        for (const rc::Component &component : problem.robot->components)
-        {
-            convex.add(component.mesh, component.topology.closed);
-            names.push_back(component.name);
-        }
-    }
+    addPandaLinks(convex, names);
     const rc::device::ConvexArrays arrays = convex.arrays();
     EXPECT_EQ(arrays.pieces[0].hullSlack, 0.0);
     // Between 128 extreme points of the unit sphere a vertex stands out by a few percent at most.
@@ -540,16 +548,7 @@ TEST(Separation, TheClusteredSupportSearchFindsWhatReadingEveryHullPointFinds)
     rod.transform(Eigen::Isometry3d(Eigen::Translation3d(30.0, -20.0, 50.0)));
     convex.add(rod, true);
     std::vector<std::string> names = {"box", "sphere", "cylinder"};
-    const std::string root = rc::test::sharedData();
-    if (!root.empty())
-    {
-        const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
-        for (const rc::Component &component : problem.robot->components)
-        {
-            convex.add(component.mesh, component.topology.closed);
-            names.push_back(component.name);
-        }
-    }
+    addPandaLinks(convex, names);
     const rc::device::ConvexArrays arrays = convex.arrays();
     EXPECT_EQ(arrays.pieces[0].numHullGroups, 0u);
     EXPECT_GT(arrays.pieces[1].numHullGroups, 8u);
