@@ -1,5 +1,6 @@
 // The shared per-element raster functions (device/Raster.h, device/Boxes.h), tested through the CPU:
 // the CUDA kernels call the same code.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
@@ -9,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "rastercheck/device/Raster.h"
+#include "rastercheck/device/Stages.h"
 
 namespace rd = rastercheck::device;
 using V = rd::Vec3<float>;
@@ -228,4 +230,35 @@ TEST(Boxes, OrientedBoxTestsAgreeWithSeparationByHand)
     turned.center[0] = 3.0f;
     EXPECT_FALSE(mayMeet(unit, turned, 0.5f));
     EXPECT_TRUE(mayMeet(unit, turned, 0.6f));
+}
+
+TEST(Boxes, LayerBoundsJoinEveryComponentOfTheSubtree)
+{
+    // Components in depth-first order: 0 carries 1 (which carries 2 and 3), 4 (which carries 5) and 6.
+    const int subtreeEnd[7] = {7, 4, 3, 4, 6, 6, 7};
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> coordinate(-5.0f, 5.0f);
+    for (int trial = 0; trial < 100; ++trial)
+    {
+        rd::Box bounds[7], layers[7];
+        for (rd::Box &b : bounds)
+            for (int k = 0; k < 3; ++k)
+            {
+                const float a = coordinate(rng), c = coordinate(rng);
+                b.min[k] = std::min(a, c);
+                b.max[k] = std::max(a, c);
+            }
+        rd::computeLayerBounds(bounds, subtreeEnd, 7, layers);
+        for (int k = 0; k < 7; ++k)
+        {
+            rd::Box expected = bounds[k];
+            for (int j = k + 1; j < subtreeEnd[k]; ++j)
+                rd::extend(expected, bounds[j]);
+            for (int axis = 0; axis < 3; ++axis)
+            {
+                EXPECT_EQ(layers[k].min[axis], expected.min[axis]) << "layer " << k;
+                EXPECT_EQ(layers[k].max[axis], expected.max[axis]) << "layer " << k;
+            }
+        }
+    }
 }

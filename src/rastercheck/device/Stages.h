@@ -59,11 +59,14 @@ RC_HD bool objectWithinReach(const Sphere &robot, const Box &objectBox, float pa
     component's link and everything the chain carries beyond it. */
 RC_HD void computeLayerBounds(const Box *componentBounds, const int *subtreeEnd, int numComponents, Box *layers)
 {
+    // Children before parents; in depth-first order k's children are k + 1, then each one's
+    // subtree end, so each layer joins its own box and its children's layers (min and max are
+    // exact: the same boxes as joining every box of the subtree).
     for (int k = numComponents - 1; k >= 0; --k)
     {
         layers[k] = componentBounds[k];
-        for (int j = k + 1; j < subtreeEnd[k]; ++j)
-            extend(layers[k], componentBounds[j]);
+        for (int child = k + 1; child < subtreeEnd[k]; child = subtreeEnd[child])
+            extend(layers[k], layers[child]);
     }
 }
 
