@@ -184,8 +184,9 @@ void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
         for (std::uint32_t i : extreme)
             points.push_back(mesh.vertices[i]);
         const std::vector<std::vector<std::uint32_t>> clusters = hullClusters(points);
-        const double size = std::max_element(points.begin(), points.end(), [](const auto &a, const auto &b)
-                                             { return a.norm() < b.norm(); })->norm();
+        double size = 0.0;
+        for (const Eigen::Vector3d &p : points)
+            size = std::max(size, p.norm());
         std::vector<std::uint32_t> grouped;
         for (const std::vector<std::uint32_t> &cluster : clusters)
         {
