@@ -116,8 +116,8 @@ constexpr double kSeparationSlack = 1e-12;
 constexpr double kPlaneSlack = 1e-9;
 
 /** \brief Most vertex x face-plane tests the overlap proof spends scanning every vertex of one piece
-    against the other's planes (surfaceVertexInside), when the hulls meet and the cheaper candidates
-    failed. Most vertices fail at the first planes, so a scan costs far less than its bound; it
+    against the other's planes (surfaceVertexInside), and edge x face-plane tests clipping every
+    edge (surfaceEdgeInside), when the hulls meet and the cheaper candidates failed. Most vertices fail at the first planes, so a scan costs far less than its bound; it
     replaces an exact narrow phase that walks both BVHs. */
 constexpr double kVertexScanBudget = 65536.0;
 
