@@ -379,8 +379,9 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                                            ws.componentBox[b], padding))
                 continue;
             if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b),
-                             static_cast<std::uint32_t>(model.numObjects() * m + i), request, pixel, model.origin,
-                             wantContact, ws, contact))
+                             device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()),
+                                              static_cast<int>(m)),
+                             request, pixel, model.origin, wantContact, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;

@@ -165,6 +165,13 @@ RC_HD std::uint32_t environmentPair(int object, int component, int numComponents
            static_cast<std::uint32_t>(component);
 }
 
+/** \brief The number of self pair \a index (CollisionModel::selfPairs order) in the same numbering:
+    after every environment pair. */
+RC_HD std::uint32_t selfPair(int index, int numObjects, int numComponents)
+{
+    return environmentPair(numObjects, index, numComponents);
+}
+
 /** \brief Largest c in [0, n) with starts[c] <= i; starts ascending, starts[0] <= i. Maps an item of
     a flattened list back to its segment (the last of several empty segments that start there is
     the one holding the item). */
