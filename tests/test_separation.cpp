@@ -572,7 +572,9 @@ TEST(Separation, TheClusteredSupportSearchFindsWhatReadingEveryHullPointFinds)
             }
         }
         if (piece.numHullGroups > 0)
+        {
             EXPECT_EQ(grouped, piece.numHullPoints) << names[s];  // every point in one cluster
+        }
         for (int trial = 0; trial < 20000; ++trial)
         {
             const double scale = std::pow(10.0, exponent(rng));
