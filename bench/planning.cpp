@@ -204,7 +204,7 @@ int main(int argc, char **argv)
             // FCL: a setup of its own (same robot, scene, space and resolution), OMPL's default
             // DiscreteMotionValidator, the FCL checker.
             rastercheck::ompl::SetupOptions fclOptions;
-            fclOptions.batchMotionValidator = false;
+            fclOptions.edges = rastercheck::ompl::EdgeChecking::Discrete;
             fclOptions.checker.backend = BackendChoice::Cpu;
             og::SimpleSetupPtr fcl = rastercheck::ompl::makeSimpleSetup(problem, fclOptions);
             rastercheck::ompl::setStartAndGoal(*fcl, request);

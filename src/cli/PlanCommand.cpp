@@ -51,6 +51,8 @@ struct PlanOptions
     int threads = 0;
     double padding = 0.0;
     double segmentFraction = 0.01;
+    std::string edges = "batched";
+    double margin = 0.0;
     unsigned int recheckFactor = 10;
     std::string logPath;
     long long seed = -1;
@@ -143,6 +145,8 @@ int runPlan(const PlanOptions &options)
     setupOptions.request.mode = parseCollisionMode(options.mode);
     setupOptions.request.padding = options.padding;
     setupOptions.longestValidSegmentFraction = options.segmentFraction;
+    setupOptions.edges = ompl::parseEdgeChecking(options.edges);
+    setupOptions.certified.margin = options.margin;
     for (const std::string &text : options.held)
     {
         const auto [name, value] = splitAssignment(text, "--hold");
@@ -219,6 +223,7 @@ int runPlan(const PlanOptions &options)
     }
     benchmark.addExperimentParameter("collision_mode", "ENUM", options.mode);
     benchmark.addExperimentParameter("recheck_factor", "INTEGER", std::to_string(options.recheckFactor));
+    benchmark.addExperimentParameter("edge_checking", "ENUM", options.edges);
 
     CollisionRequest exact = setupOptions.request;
     exact.mode = CollisionMode::Exact;
@@ -263,7 +268,7 @@ int runPlan(const PlanOptions &options)
 
     ot::Benchmark::Request request(timeLimit, memoryLimit, static_cast<unsigned int>(runs), 0.05, false, false,
                                    !options.noSimplify);
-    std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.mode << ", "
+    std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.mode << ", " << options.edges << " edges, "
               << runs << " run(s) of " << timeLimit << " s per planner\n";
     benchmark.benchmark(request);
     if (!options.logPath.empty() && !benchmark.saveResultsToFile(options.logPath.c_str()))
@@ -341,6 +346,16 @@ void addPlanCommand(CLI::App &app)
         ->add_option("--segment-fraction", options->segmentFraction,
                      "longest valid segment, as a fraction of the space's extent (OMPL default 0.01)")
         ->check(CLI::Range(1e-6, 1.0));
+    command
+        ->add_option("--edges", options->edges,
+                     "edge checking: batched (default; DiscreteMotionValidator's states, in batches), discrete "
+                     "(OMPL's own) or certified (collision-free at every point of an edge; safe or exact mode)")
+        ->check(CLI::IsMember({"batched", "discrete", "certified"}));
+    command
+        ->add_option("--margin", options->margin,
+                     "certified edges: clearance margin of the coarsest samples, scene units (default 2 % of the "
+                     "robot's size)")
+        ->check(CLI::NonNegativeNumber);
     command
         ->add_option("--recheck-factor", options->recheckFactor,
                      "solution paths are re-checked at this many times the planner's resolution (default 10)")

@@ -6,6 +6,7 @@
 #include <ompl/base/SpaceInformation.h>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/ompl/EdgeChecks.h"
 
 namespace ob = ::ompl::base;
 
@@ -29,28 +30,6 @@ Scratch &scratch()
     thread_local Scratch buffers;
     return buffers;
 }
-
-/** \brief Indices 1 .. nd in rake order: nd (the end state) first, then the midpoints of a
-    breadth-first bisection of [1, nd - 1], so that every prefix is spread over the whole edge. */
-void rakeOrder(unsigned int nd, Scratch &w)
-{
-    w.order.clear();
-    w.order.push_back(nd);
-    if (nd < 2)
-        return;
-    w.intervals.clear();
-    w.intervals.emplace_back(1u, nd - 1);
-    for (std::size_t head = 0; head < w.intervals.size(); ++head)
-    {
-        const auto [first, last] = w.intervals[head];
-        const unsigned int mid = first + (last - first) / 2;
-        w.order.push_back(mid);
-        if (first < mid)
-            w.intervals.emplace_back(first, mid - 1);
-        if (last > mid)
-            w.intervals.emplace_back(mid + 1, last);
-    }
-}
 }  // namespace
 
 MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, StateMappingConstPtr mapping,
@@ -62,12 +41,7 @@ MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, StateMapping
       rakeWidth_(rakeWidth),
       space_(si->getStateSpace().get())
 {
-    if (!mapping_ || !checker_)
-        throw ConfigurationError("MotionValidator needs a state mapping and a checker");
-    if (si->getStateSpace() != mapping_->getStateSpace())
-        throw ConfigurationError("MotionValidator: the space information's state space is not the mapping's");
-    if (checker_->dof() != mapping_->numCoordinates())
-        throw ConfigurationError("MotionValidator: the checker's robot does not match the mapping's");
+    detail::requireMatchingParts(si, mapping_, checker_, "MotionValidator");
     if (rakeWidth_ == 0)
         throw ConfigurationError("MotionValidator: the rake width must be at least 1");
 }
@@ -79,20 +53,11 @@ MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, const StateV
 {
 }
 
-void MotionValidator::count(bool valid) const
-{
-    // The base class's counters are plain integers that OMPL's getters read; update them atomically.
-    if (valid)
-        __atomic_fetch_add(&valid_, 1u, __ATOMIC_RELAXED);
-    else
-        __atomic_fetch_add(&invalid_, 1u, __ATOMIC_RELAXED);
-}
-
 unsigned int MotionValidator::findInvalid(const ob::State *s1, const ob::State *s2, unsigned int nd,
                                           bool wantFirst) const
 {
     Scratch &w = scratch();
-    rakeOrder(nd, w);
+    detail::rakeOrder(nd, w.order, w.intervals);
     const std::size_t dof = mapping_->numCoordinates();
     ob::State *test = si_->allocState();
     unsigned int found = 0;
@@ -155,7 +120,7 @@ bool MotionValidator::checkMotion(const ob::State *s1, const ob::State *s2) cons
 {
     const unsigned int nd = std::max(1u, space_->validSegmentCount(s1, s2));
     const bool valid = findInvalid(s1, s2, nd, false) == 0;
-    count(valid);
+    detail::countMotion(valid_, invalid_, valid);
     return valid;
 }
 
@@ -170,7 +135,7 @@ bool MotionValidator::checkMotion(const ob::State *s1, const ob::State *s2,
         if (lastValid.first != nullptr)
             space_->interpolate(s1, s2, lastValid.second, lastValid.first);
     }
-    count(first == 0);
+    detail::countMotion(valid_, invalid_, first == 0);
     return first == 0;
 }
 }  // namespace rastercheck::ompl

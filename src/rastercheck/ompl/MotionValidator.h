@@ -63,7 +63,6 @@ private:
         when \a wantFirst. */
     unsigned int findInvalid(const ::ompl::base::State *s1, const ::ompl::base::State *s2, unsigned int nd,
                              bool wantFirst) const;
-    void count(bool valid) const;
 
     StateMappingConstPtr mapping_;
     CheckerConstPtr checker_;

@@ -30,9 +30,29 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
     const ob::SpaceInformationPtr &si = setup->getSpaceInformation();
     auto validityChecker = std::make_shared<StateValidityChecker>(si, mapping, checker, options.request);
     setup->setStateValidityChecker(validityChecker);
-    if (options.batchMotionValidator)
-        si->setMotionValidator(std::make_shared<MotionValidator>(si, *validityChecker, options.rakeWidth));
+    switch (options.edges)
+    {
+        case EdgeChecking::Batched:
+            si->setMotionValidator(std::make_shared<MotionValidator>(si, *validityChecker, options.rakeWidth));
+            break;
+        case EdgeChecking::Certified:
+            si->setMotionValidator(std::make_shared<CertifiedMotionValidator>(si, *validityChecker, options.certified));
+            break;
+        case EdgeChecking::Discrete:
+            break;  // SpaceInformation's default
+    }
     return setup;
+}
+
+EdgeChecking parseEdgeChecking(const std::string &text)
+{
+    if (text == "batched")
+        return EdgeChecking::Batched;
+    if (text == "discrete")
+        return EdgeChecking::Discrete;
+    if (text == "certified")
+        return EdgeChecking::Certified;
+    throw ConfigurationError("unknown edge checking '" + text + "' (expected batched, discrete or certified)");
 }
 
 StateValidityCheckerPtr getStateValidityChecker(const og::SimpleSetup &setup)

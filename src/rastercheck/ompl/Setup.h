@@ -10,10 +10,27 @@
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/OmplAppProblem.h"
 #include "rastercheck/io/Problem.h"
+#include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
 
 namespace rastercheck::ompl
 {
+/** \brief Which motion validator checks the planner's edges. */
+enum class EdgeChecking
+{
+    /** \brief rastercheck::ompl::MotionValidator: DiscreteMotionValidator's states and verdicts, checked
+        in batches (default). Collision-free at the sampled states only. */
+    Batched,
+    /** \brief OMPL's own DiscreteMotionValidator, one state at a time (the reference for Batched). */
+    Discrete,
+    /** \brief CertifiedMotionValidator: collision-free at every point of an accepted edge. Needs safe or
+        exact mode. */
+    Certified
+};
+
+/** \brief "batched", "discrete" or "certified"; throws ConfigurationError otherwise. */
+EdgeChecking parseEdgeChecking(const std::string &text);
+
 /** \brief How makeSimpleSetup builds a planning context. */
 struct SetupOptions
 {
@@ -27,11 +44,12 @@ struct SetupOptions
     /** \brief StateSpace::setLongestValidSegmentFraction: edge resolution as a fraction of the space's
         maximum extent (OMPL's default is 0.01). */
     double longestValidSegmentFraction = 0.01;
-    /** \brief true: edges are checked by rastercheck::ompl::MotionValidator (batches, same verdicts);
-        false: by OMPL's DiscreteMotionValidator (one state at a time). */
-    bool batchMotionValidator = true;
+    /** \brief How edges are checked (EdgeChecking). */
+    EdgeChecking edges = EdgeChecking::Batched;
     /** \brief First batch size of the batched motion validator. */
     unsigned int rakeWidth = 8;
+    /** \brief Margin, levels and rake width of the certified motion validator. */
+    CertifiedMotionOptions certified;
 };
 
 /** \brief A SimpleSetup for \a problem: the StateMapping's space (bounds = the model bounds; for an

@@ -1,0 +1,71 @@
+#pragma once
+
+#include <vector>
+
+#include "rastercheck/model/RobotModel.h"
+
+namespace rastercheck
+{
+/** \brief Bounds how far a robot's collision geometry can travel along a straight edge in
+    configuration space: the basis of certified (continuous) edge checking.
+
+    The edge from configuration qa to qb is the path the planner's state space interpolates
+    (ompl::StateMapping's space): each coordinate linearly, except a continuous revolute joint's
+    angle and a planar joint's angle, which turn the shorter way round (SO2), and a floating
+    joint's quaternion, which turns along the shorter great arc (slerp). Every joint then moves at
+    a constant rate, so a point x of a component has speed at most
+
+        sum over joints j of  (translation rate of j) + (turn rate of j) * reach(j),
+
+    where reach(j) bounds the distance from the centre joint j turns about (its child frame's
+    origin) to any point of the geometry it carries, in every configuration within the bounds:
+    the child link's component radius, and for each joint below it the length of its origin offset
+    plus the farthest its own coordinates can shift the next frame (prismatic and floating /
+    planar translations, by their bounds), recursively. Hence for the positions x(s), x(t) of the
+    same material point at fractions s, t of the edge
+
+        |x(t) - x(s)| <= |t - s| * sweep(qa, qb),
+
+    in the model's length unit. The bound is conservative, never tight on purpose: it ignores the
+    directions of the axes. Immutable; thread-safe. */
+class MotionBound
+{
+public:
+    /** \brief Never throws. A coordinate without finite bounds that shifts a frame (an unbounded
+        floating or planar base) makes the reach of the joints above it infinite: edges that turn
+        those joints get an infinite sweep. */
+    explicit MotionBound(const RobotModel &robot);
+
+    /** \brief The largest distance, in the model's length unit, that any point of any component travels
+        from \a qa to \a qb (numCoordinates() values each; quaternions need not be normalised, a zero
+        one counts as the identity). Infinite when the edge has a non-finite coordinate, turns a
+        joint of infinite reach, or moves a continuous joint the short way across +-pi while a mimic
+        joint follows it (the follower's value jumps there). */
+    double sweep(const double *qa, const double *qb) const;
+
+    /** \brief reach(j) for every joint (model order): the bound on the distance from the centre joint
+        j turns about to any point of the components below it. 0 for a joint that carries no
+        geometry. */
+    const std::vector<double> &jointReach() const { return reach_; }
+
+    /** \brief The largest finite reach of any joint: the robot's size as its joints see it (used to
+        scale default margins; 0 when no joint carries geometry). */
+    double size() const { return size_; }
+
+private:
+    /** \brief What sweep() needs of a joint that carries geometry. */
+    struct MovingJoint
+    {
+        JointKind kind;
+        int firstCoordinate;  ///< of the joint itself, or of the joint it mimics
+        bool wraps;           ///< a continuous revolute joint (its angle turns the shorter way round)
+        bool mimic;
+        double multiplier;  ///< mimic multiplier (1 otherwise)
+        double reach;
+    };
+
+    std::vector<MovingJoint> moving_;
+    std::vector<double> reach_;
+    double size_ = 0.0;
+};
+}  // namespace rastercheck

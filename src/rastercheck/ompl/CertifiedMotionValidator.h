@@ -1,0 +1,100 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include <ompl/base/MotionValidator.h>
+
+#include "rastercheck/collision/Checker.h"
+#include "rastercheck/model/MotionBound.h"
+#include "rastercheck/ompl/StateMapping.h"
+#include "rastercheck/ompl/StateValidityChecker.h"
+
+namespace rastercheck::ompl
+{
+/** \brief Options of a CertifiedMotionValidator. */
+struct CertifiedMotionOptions
+{
+    /** \brief Clearance margin of the first, coarsest samples of an edge (the model's length unit,
+        metres for URDF robots); 0 = 2 % of the robot's size (MotionBound::size). Larger: fewer samples in open space, more refinement near obstacles. */
+    double margin = 0.0;
+    /** \brief How often a sample's margin may be halved where the robot comes closer than it; the
+        finest margin is margin / 2^levels (6 um for the Panda's default). An edge that passes
+        nearer than that without touching cannot be certified and is rejected. At most 40. */
+    unsigned int levels = 12;
+    /** \brief Coarsest samples checked in the first batch (>= 1); later batches double (the rake
+        order of MotionValidator, so a collision anywhere on the edge is met early). */
+    unsigned int rakeWidth = 8;
+};
+
+/** \brief A motion validator whose accepted edges are collision-free at every point, not only at
+    sampled states: continuous collision checking for the planner's straight edges.
+
+    For an edge s1 -> s2, MotionBound gives L, a bound on how far any point of the robot travels
+    along it. A state at fraction t whose check passes with padding p + g (p = the request's
+    padding) certifies the interval of fractions within g / L of it as clear of obstacles by at
+    least p, and within g / (2 L) of it as clear of the robot's own links by at least p (each
+    point moves at most g / 2 there, two of them together at most g). The edge is covered by
+    intervals of equal length, each certified by its midpoint at the padding its length needs
+    (the largest g <= margin); where a midpoint fails, its interval is checked at padding p (a real
+    collision ends the search) and otherwise halved, each half needing half the margin, down to
+    margin / 2^levels. Intervals of one size are checked together in one batch
+    (Checker::check: many states in one pass), the coarsest in rake order.
+
+    Semantics: checkMotion(s1, s2) returns true only when every state of the edge, s1 and s2
+    included, satisfies the bounds and is valid at the request's padding (in Safe or Exact mode,
+    whose verdicts are exact; Raster mode is refused). It may return false for an edge that does
+    not collide but passes within margin / 2^levels of a collision, or whose L is infinite (a
+    non-finite coordinate, a mimic joint following a continuous joint across +-pi).
+    checkMotion(s1, s2, lastValid) returns the largest fraction up to which the edge was certified
+    (the start of the first interval that could not be), and that state. s1 is not assumed valid:
+    it is certified with the rest.
+
+    Thread safe: scratch buffers are thread-local, the counters atomic. */
+class CertifiedMotionValidator : public ::ompl::base::MotionValidator
+{
+public:
+    /** \brief The edge checker of an existing StateValidityChecker: same mapping, checker and
+        request. Throws ConfigurationError for a Raster-mode request, a negative or non-finite
+        margin, levels above 40 or a zero rake width. */
+    CertifiedMotionValidator(const ::ompl::base::SpaceInformationPtr &si, const StateValidityChecker &validityChecker,
+                             const CertifiedMotionOptions &options = {});
+
+    bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2) const override;
+    bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2,
+                     std::pair<::ompl::base::State *, double> &lastValid) const override;
+
+    /** \brief States decided since construction or resetStateCounter(). */
+    std::uint64_t getCheckedStateCount() const { return states_.load(std::memory_order_relaxed); }
+    void resetStateCounter() { states_.store(0, std::memory_order_relaxed); }
+
+    /** \brief The coarsest margin in use (options.margin, or its default). */
+    double getMargin() const { return margin_; }
+    const MotionBound &getMotionBound() const { return bound_; }
+
+private:
+    /** \brief True when the whole edge is certified. Otherwise \a prefix receives the largest
+        fraction t such that [0, t] was certified (0 when an end is outside the bounds), computed
+        only when \a wantFirst: else the search stops at the first sign the edge is not certified. */
+    bool certify(const ::ompl::base::State *s1, const ::ompl::base::State *s2, bool wantFirst, double &prefix) const;
+    /** \brief Checks the midpoints of the intervals [start, start + length) named by \a starts at
+        \a padding; verdicts in the thread's scratch. */
+    void checkMidpoints(const ::ompl::base::State *s1, const ::ompl::base::State *s2, const std::vector<double> &starts,
+                        double length, double padding) const;
+
+    StateMappingConstPtr mapping_;
+    CheckerConstPtr checker_;
+    CollisionRequest request_;
+    MotionBound bound_;
+    double margin_;
+    unsigned int levels_;
+    unsigned int rakeWidth_;
+    ::ompl::base::StateSpace *space_;
+    mutable std::atomic<std::uint64_t> states_{0};
+};
+
+using CertifiedMotionValidatorPtr = std::shared_ptr<CertifiedMotionValidator>;
+}  // namespace rastercheck::ompl

@@ -1,0 +1,180 @@
+// MotionBound: the sweep bound holds for every vertex along OMPL's own interpolation (Panda, crane),
+// and known answers on small robots.
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include <ompl/base/ScopedState.h>
+#include <ompl/base/StateSpace.h>
+
+#include "TestSupport.h"
+#include "rastercheck/io/UrdfLoader.h"
+#include "rastercheck/model/Kinematics.h"
+#include "rastercheck/model/MotionBound.h"
+#include "rastercheck/ompl/StateMapping.h"
+
+namespace rc = rastercheck;
+namespace ob = ompl::base;
+
+namespace
+{
+const std::string kBox = "<collision><origin xyz=\"2 0 0\"/><geometry><box size=\"1 1 1\"/></geometry></collision>";
+
+rc::RobotModelPtr robotFrom(const std::string &body)
+{
+    return rc::loadUrdfString(rc::test::urdfRobot(body), ".");
+}
+
+/** \brief \a worst: the largest ratio (distance a vertex moved between consecutive samples) / (the bound's share
+    of that step) over \a edges random edges of \a robot's planning space, each sampled at \a steps
+    + 1 fractions by the space's own interpolate. Fails the test where a vertex moves farther than
+    the bound allows, from the edge's start or between samples. */
+void measureSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps, double &worst)
+{
+    const rc::ompl::StateMapping mapping(robot);
+    const rc::MotionBound bound(*robot);
+    const ob::StateSpacePtr &space = mapping.getStateSpace();
+    std::mt19937 rng(7);
+    auto sample = [&](ob::State *state)
+    {
+        std::vector<double> q(robot->numCoordinates());
+        for (std::size_t i = 0; i < q.size(); ++i)
+            q[i] = std::uniform_real_distribution<double>(robot->lowerBounds[i], robot->upperBounds[i])(rng);
+        mapping.fromConfiguration(q, state);
+    };
+    ob::ScopedState<> a(space), b(space), s(space);
+    rc::RobotData previous(*robot), current(*robot), start(*robot);
+    worst = 0.0;
+    for (int e = 0; e < edges; ++e)
+    {
+        sample(a.get());
+        sample(b.get());
+        const std::vector<double> qa = mapping.toConfiguration(a.get()), qb = mapping.toConfiguration(b.get());
+        const double sweep = bound.sweep(qa.data(), qb.data());
+        EXPECT_TRUE(std::isfinite(sweep));
+        rc::forwardKinematics(*robot, start, qa);
+        previous = start;
+        for (int k = 1; k <= steps; ++k)
+        {
+            const double t = static_cast<double>(k) / steps;
+            space->interpolate(a.get(), b.get(), t, s.get());
+            rc::forwardKinematics(*robot, current, mapping.toConfiguration(s.get()));
+            for (const rc::Component &c : robot->components)
+                for (const Eigen::Vector3d &v : c.mesh.vertices)
+                {
+                    const auto l = static_cast<std::size_t>(c.link);
+                    const Eigen::Vector3d x = current.oMl[l] * v;
+                    const double step = (x - previous.oMl[l] * v).norm();
+                    const double fromStart = (x - start.oMl[l] * v).norm();
+                    ASSERT_LE(step, sweep / steps * (1 + 1e-9) + 1e-12) << c.name << " edge " << e << " step " << k;
+                    ASSERT_LE(fromStart, sweep * t * (1 + 1e-9) + 1e-12) << c.name << " edge " << e << " step " << k;
+                    worst = std::max(worst, step / (sweep / steps));
+                }
+            std::swap(previous, current);
+        }
+    }
+}
+}  // namespace
+
+TEST(MotionBound, EveryPandaVertexMovesLessThanTheBoundAlongOmplsInterpolation)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem panda = rc::test::pandaProblem(root, "table_pick");
+    double worst = 0.0;
+    measureSweeps(panda.robot, 40, 32, worst);
+    // Not loose beyond use: some vertex moves at least a fifth of what the bound allows.
+    EXPECT_GT(worst, 0.2);
+    std::cout << "Panda: the fastest vertex step is " << worst << " of the bound's\n";
+}
+
+TEST(MotionBound, EveryCraneVertexMovesLessThanTheBound)
+{
+    double worst = 0.0;
+    measureSweeps(rc::test::plant().robot, 40, 32, worst);
+    EXPECT_GT(worst, 0.2);
+    std::cout << "crane: the fastest vertex step is " << worst << " of the bound's\n";
+}
+
+TEST(MotionBound, KnownAnswersOnOneLink)
+{
+    // A 1 m cube centred 2 m along x from a joint: its farthest vertex is sqrt(2.5^2 + 0.5^2 + 0.5^2) away.
+    const double reach = std::sqrt(6.75);
+    for (const std::string type : {"revolute", "continuous", "prismatic"})
+    {
+        const auto robot = robotFrom(rc::test::urdfLink("base") + rc::test::urdfLink("arm", kBox) +
+                                     rc::test::urdfJoint("j", type, "base", "arm",
+                                                         "<axis xyz=\"0 0 1\"/><limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/>"));
+        const rc::MotionBound bound(*robot);
+        ASSERT_EQ(bound.jointReach().size(), 1u);
+        EXPECT_NEAR(bound.jointReach()[0], reach, 1e-12) << type;
+        const double qa[] = {0.25}, qb[] = {0.35};
+        const double expected = type == "prismatic" ? 0.1 : 0.1 * reach;  // a slide moves every point alike
+        EXPECT_NEAR(bound.sweep(qa, qb), expected, 1e-12) << type;
+        EXPECT_NEAR(bound.sweep(qb, qa), expected, 1e-12) << type;
+        EXPECT_EQ(bound.sweep(qa, qa), 0.0) << type;
+        const double nan[] = {std::numeric_limits<double>::quiet_NaN()};
+        EXPECT_EQ(bound.sweep(qa, nan), std::numeric_limits<double>::infinity()) << type;
+    }
+    // A continuous joint turns the short way across +-pi: 3.0 -> -3.0 is 2 pi - 6 rad.
+    const auto wheel = robotFrom(rc::test::urdfLink("base") + rc::test::urdfLink("arm", kBox) +
+                                 rc::test::urdfJoint("j", "continuous", "base", "arm", "<axis xyz=\"0 0 1\"/>"));
+    const double from[] = {3.0}, to[] = {-3.0};
+    EXPECT_NEAR(rc::MotionBound(*wheel).sweep(from, to), (2 * M_PI - 6.0) * reach, 1e-12);
+}
+
+TEST(MotionBound, ReachAddsTheOffsetsAndSlidesBelowAJoint)
+{
+    // shoulder (revolute at the base) -> 1 m offset -> slide of up to 0.5 m -> the cube: every point of
+    // the cube lies within 1 + 0.5 + reach(cube) of the shoulder, whatever the slide does.
+    const auto robot = robotFrom(
+        rc::test::urdfLink("base") + rc::test::urdfLink("upper") + rc::test::urdfLink("arm", kBox) +
+        rc::test::urdfJoint("shoulder", "revolute", "base", "upper",
+                            "<axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>") +
+        rc::test::urdfJoint("slide", "prismatic", "upper", "arm",
+                            "<origin xyz=\"1 0 0\"/><axis xyz=\"1 0 0\"/><limit lower=\"-0.2\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/>"));
+    const rc::MotionBound bound(*robot);
+    const double cube = std::sqrt(6.75);
+    ASSERT_EQ(bound.jointReach().size(), 2u);
+    EXPECT_NEAR(bound.jointReach()[robot->jointIndex("shoulder")], 1.5 + cube, 1e-12);
+    EXPECT_NEAR(bound.jointReach()[robot->jointIndex("slide")], cube, 1e-12);
+    EXPECT_NEAR(bound.size(), 1.5 + cube, 1e-12);
+    const double qa[] = {0.0, 0.0}, qb[] = {0.2, 0.3};  // shoulder 0.2 rad, slide 0.3 m
+    EXPECT_NEAR(bound.sweep(qa, qb), 0.2 * (1.5 + cube) + 0.3, 1e-12);
+}
+
+TEST(MotionBound, AMimicFollowerOfAContinuousJointAcrossPiCannotBeBounded)
+{
+    const auto robot = robotFrom(
+        rc::test::urdfLink("base") + rc::test::urdfLink("wheel") + rc::test::urdfLink("arm", kBox) +
+        rc::test::urdfJoint("drive", "continuous", "base", "wheel", "<axis xyz=\"0 0 1\"/>") +
+        rc::test::urdfJoint("follow", "revolute", "base", "arm",
+                            "<axis xyz=\"0 0 1\"/><limit lower=\"-5\" upper=\"5\" effort=\"1\" velocity=\"1\"/><mimic joint=\"drive\" multiplier=\"0.5\"/>"));
+    const rc::MotionBound bound(*robot);
+    const double qa[] = {3.0}, qb[] = {-3.0}, qc[] = {2.0};
+    // Across pi the drive goes the short way, but its follower jumps from 1.57 to -1.57 rad.
+    EXPECT_EQ(bound.sweep(qa, qb), std::numeric_limits<double>::infinity());
+    // Elsewhere the follower turns half as far as the drive.
+    EXPECT_NEAR(bound.sweep(qa, qc), 0.5 * std::sqrt(6.75), 1e-12);
+}
+
+TEST(MotionBound, AHeldUnboundedBaseDoesNotMakeEveryEdgeUnbounded)
+{
+    // A floating base without bounds under a turning joint: its reach is infinite, but an edge that
+    // leaves the turning joint alone and moves the base a known distance is bounded.
+    const auto robot = robotFrom(rc::test::urdfLink("world") + rc::test::urdfLink("mount") +
+                                 rc::test::urdfLink("body", kBox) +
+                                 rc::test::urdfJoint("yaw", "revolute", "world", "mount",
+                                                     "<axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>") +
+                                 rc::test::urdfJoint("base", "floating", "mount", "body"));
+    const rc::MotionBound bound(*robot);
+    EXPECT_EQ(bound.jointReach()[robot->jointIndex("yaw")], std::numeric_limits<double>::infinity());
+    // yaw, x y z qx qy qz qw
+    const double qa[] = {0.0, 1, 2, 3, 0, 0, 0, 1};
+    const double qb[] = {0.0, 4, 6, 3, 0, 0, std::sin(0.05), std::cos(0.05)};  // 5 m and 0.1 rad about z
+    EXPECT_NEAR(bound.sweep(qa, qb), 5.0 + 0.1 * std::sqrt(6.75), 1e-9);
+    const double qc[] = {0.1, 1, 2, 3, 0, 0, 0, 1};
+    EXPECT_EQ(bound.sweep(qa, qc), std::numeric_limits<double>::infinity());
+}
