@@ -70,7 +70,7 @@ void printHostShare(const std::string &name, const CollisionModelConstPtr &model
                     exact.refitState(q.data() + o.state * dof, *ws);
                 refitted = o.state;
                 Contact contact;
-                exact.exactPair(o.pair, request.padding, *ws, contact);
+                exact.decideOpenPair(o.pair, request, *ws, contact);
             }
         });
     const double perState = 1.0 / static_cast<double>(n);

@@ -14,7 +14,8 @@ namespace rc = rastercheck;
 
 namespace
 {
-const rc::CollisionMode kModes[] = {rc::CollisionMode::Safe, rc::CollisionMode::Raster, rc::CollisionMode::Exact};
+const rc::CollisionMode kModes[] = {rc::CollisionMode::Safe, rc::CollisionMode::Raster, rc::CollisionMode::Exact,
+                                    rc::CollisionMode::Conservative};
 
 std::string label(const std::string &suite, rc::CollisionMode mode)
 {
@@ -234,7 +235,7 @@ TEST(StagedPipeline, TheStagesSettleMostPairsThemselvesAndNeverContradictTheOrac
             }
             oracle.refitState(suite.states.data() + o.state * dof, *ws);
             rc::Contact contact;
-            EXPECT_EQ(oracle.exactPair(o.pair, 0.0, *ws, contact), o.status == rc::device::PairOverlaps)
+            EXPECT_EQ(oracle.decideOpenPair(o.pair, request, *ws, contact), o.status == rc::device::PairOverlaps)
                 << suite.name << ", state " << o.state << ", pair " << o.pair << ", status " << o.status;
         }
         std::printf("%s: %zu pairs survive the box culls, %zu (%.1f %%) left to the host\n", suite.name.c_str(),

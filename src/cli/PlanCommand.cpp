@@ -337,8 +337,8 @@ void addPlanCommand(CLI::App &app)
         ->check(CLI::PositiveNumber);
     command->add_option("--backend", options->backend, "auto, cpu or cuda")
         ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
-    command->add_option("--mode", options->mode, "collision mode while planning: safe (default), raster or exact")
-        ->check(CLI::IsMember({"safe", "raster", "exact"}));
+    command->add_option("--mode", options->mode, "collision mode while planning: safe (default), raster, exact or conservative")
+        ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
     command->add_option("--threads", options->threads, "worker threads of batch checks (0 = all cores)")
         ->check(CLI::NonNegativeNumber);
     command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);

@@ -188,9 +188,9 @@ void addRenderCommand(CLI::App &app)
         ->check(CLI::NonNegativeNumber);
     command
         ->add_option("--mode", options->mode,
-                     "how states are checked for the raster view: safe (default), raster, "
-                     "or exact")
-        ->check(CLI::IsMember({"safe", "raster", "exact"}));
+                     "how states are checked for the raster view: safe (default), raster, exact "
+                     "or conservative")
+        ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
     command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
     command->add_option("--pixel", options->pixel, "raster pixel size in scene units (0 = automatic)")
         ->check(CLI::NonNegativeNumber);

@@ -107,10 +107,22 @@ void Checker::warnOnceIfNotFinite(const double *q, std::size_t n) const
         }
 }
 
+void Checker::validateRequest(const CollisionRequest &request) const
+{
+    validate(request);
+    if (request.pairPadding && (request.pairPadding->environment.size() != model_->numComponents() ||
+                                request.pairPadding->self.size() != model_->selfPairs.size()))
+        throw ConfigurationError("CollisionRequest::pairPadding has " +
+                                 std::to_string(request.pairPadding->environment.size()) + " component and " +
+                                 std::to_string(request.pairPadding->self.size()) + " self-pair entries; robot '" +
+                                 robot().name + "' has " + std::to_string(model_->numComponents()) +
+                                 " components and " + std::to_string(model_->selfPairs.size()) + " self pairs");
+}
+
 void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request,
                     Contact *contacts) const
 {
-    validate(request);
+    validateRequest(request);
     warnOnceIfNotFinite(q, n);
     const Backend &backend = n >= minDeviceBatch_ ? *backend_ : static_cast<const Backend &>(reference_);
     backend.check(q, n, valid, contacts, request, threads_);
@@ -118,7 +130,7 @@ void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const C
 
 bool Checker::isValid(const double *q, const CollisionRequest &request, Contact *contact) const
 {
-    validate(request);
+    validateRequest(request);
     warnOnceIfNotFinite(q, 1);
     std::uint8_t valid = 0;
     const Backend &backend = minDeviceBatch_ <= 1 ? *backend_ : static_cast<const Backend &>(reference_);
@@ -138,7 +150,7 @@ bool Checker::isValid(const std::vector<double> &q, const CollisionRequest &requ
 bool Checker::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
                           RasterImage &image) const
 {
-    validate(request);
+    validateRequest(request);
     return reference_.rasterImage(q, contact, request, image);
 }
 

@@ -16,6 +16,8 @@ std::string toString(CollisionMode mode)
             return "raster";
         case CollisionMode::Exact:
             return "exact";
+        case CollisionMode::Conservative:
+            return "conservative";
     }
     return "unknown";
 }
@@ -28,7 +30,9 @@ CollisionMode parseCollisionMode(const std::string &text)
         return CollisionMode::Raster;
     if (text == "exact")
         return CollisionMode::Exact;
-    throw ConfigurationError("unknown collision mode '" + text + "' (expected safe, raster or exact)");
+    if (text == "conservative")
+        return CollisionMode::Conservative;
+    throw ConfigurationError("unknown collision mode '" + text + "' (expected safe, raster, exact or conservative)");
 }
 
 void validate(const CollisionRequest &request)
@@ -39,6 +43,12 @@ void validate(const CollisionRequest &request)
     if (!std::isfinite(request.pixelSize) || request.pixelSize < 0)
         throw ConfigurationError("CollisionRequest::pixelSize must be finite and >= 0 (0 = automatic), got " +
                                  std::to_string(request.pixelSize));
+    if (request.pairPadding)
+        for (const std::vector<double> *entries : {&request.pairPadding->environment, &request.pairPadding->self})
+            for (const double extra : *entries)
+                if (!std::isfinite(extra) || extra < 0)
+                    throw ConfigurationError("CollisionRequest::pairPadding entries must be finite and >= 0, got " +
+                                             std::to_string(extra));
     if (request.maxImageSide < 1 || request.maxImageSide > 4096)
         throw ConfigurationError("CollisionRequest::maxImageSide must be in [1, 4096], got " +
                                  std::to_string(request.maxImageSide));

@@ -1,7 +1,9 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -30,12 +32,31 @@ enum class CollisionMode
     /** \brief The exact narrow phase (triangle-triangle plus point-in-solid) on every pair the
         proof leaves: exact answers. The tests' oracle (bruteForceCollides) is that narrow phase
         on every pair with no cull at all. */
-    Exact
+    Exact,
+    /** \brief Every pair the proofs leave counts as colliding: a state is valid only when the culls
+        and the separation proof show every pair more than the padding apart. Never calls a
+        colliding state valid; calls a free state invalid where two solids' hulls come within the
+        padding but their meshes do not (a link reaching into a shelf; measured in
+        docs/accuracy.md). The cheapest mode, and the one CertifiedMotionValidator uses for its
+        margins, where a false alarm only costs a finer sample. A contact it cannot place names the
+        pair, triangle -1, at the centre of the region where their boxes meet. */
+    Conservative
 };
 
 std::string toString(CollisionMode mode);
 /** \brief "safe", "raster" or "exact"; throws ConfigurationError otherwise. */
 CollisionMode parseCollisionMode(const std::string &text);
+
+/** \brief Padding added to CollisionRequest::padding for individual pairs. CertifiedMotionValidator
+    gives each pair the distance its two solids can close in over an interval of an edge, so that a
+    pair far from the robot's fast-moving links is not held to their margin. */
+struct PairPadding
+{
+    /** \brief Per component (CollisionModel order), for its pairs with every scene object. */
+    std::vector<double> environment;
+    /** \brief Per self pair, in CollisionModel::selfPairs order. */
+    std::vector<double> self;
+};
 
 /** \brief What to check and how (Coal/FCL style). */
 struct CollisionRequest
@@ -49,6 +70,11 @@ struct CollisionRequest
     int maxImageSide = 64;
     bool checkEnvironment = true;
     bool checkSelfCollision = true;
+    /** \brief Optional extra padding per pair (null: none); a pair's solids collide when closer than
+        padding + their entry. Each entry finite and >= 0, one per component and per self pair of
+        the checker's model (Checker::check throws ConfigurationError otherwise). The GPU stages
+        take one padding for all pairs, so such a request runs on the CPU backend. */
+    std::shared_ptr<const PairPadding> pairPadding;
 };
 
 /** \brief Throws ConfigurationError unless padding is finite and >= 0 (a negative margin has no

@@ -143,10 +143,10 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
     BVHs (measured on the Panda MBM scenes: 164 node pairs and 367 triangle pairs per pair that
     turned out apart); most of the rest collide, and the overlap proof settles most of those. */
 device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding, bool proveOverlap,
-                                  device::Vec3<double> &direction)
+                                  device::Vec3<double> *warmStart)
 {
     return device::relateSolids(a.convex, a.convexSolid, *a.pose64, b.convexSolid, *b.pose64,
-                                std::max(0.0, padding), proveOverlap, &direction);
+                                std::max(0.0, padding), proveOverlap, warmStart);
 }
 
 /** \brief The exact narrow phase (the oracle): triangle pairs and containment. */
@@ -171,10 +171,10 @@ struct PreparedPair
     const Vec3<float> *worldB;
 };
 
-bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pixel, CpuWorkspace &ws,
-                 PreparedPair &pair)
+bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request, double pairPadding, double pixel,
+                 CpuWorkspace &ws, PreparedPair &pair)
 {
-    const float padding = device::floatPadding(request.padding);
+    const float padding = device::floatPadding(pairPadding);
     const device::Box window = device::pairWindow(a.bounds, b.bounds, padding);
     if (device::isEmpty(window))
         return false;
@@ -187,32 +187,48 @@ bool preparePair(const Solid &a, const Solid &b, const CollisionRequest &request
     return true;
 }
 
-/** \brief Decides one pair of solids; fills contact.triangle and contact.position on collision
+/** \brief Conservative mode's verdict on a pair the box culls pass and no proof settles: colliding,
+    placed at the centre of \a window (the region where the pair's boxes, grown by the padding,
+    meet; relative to \a origin, CollisionModel::origin) with no triangle. */
+bool unprovenCollides(const device::Box &window, const Eigen::Vector3d &origin, Contact &contact)
+{
+    contact.triangle = -1;
+    contact.position = origin + 0.5 * Eigen::Vector3d(window.min[0] + window.max[0], window.min[1] + window.max[1],
+                                                      window.min[2] + window.max[2]);
+    return true;
+}
+
+/** \brief Decides one pair of solids, closer than \a padding = colliding; fills contact.triangle and contact.position on collision
     when \a wantContact (without it, in safe and exact mode, a pair the hull test proves
     overlapping is decided there and the contact's place is left unset).
     Only raster mode rasterizes here: on the CPU the exact narrow phase decides a pair faster than
     the raster stages (measured on the Panda MBM scenes: rasterizing a pair cost about 5x an exact
     BVH query, and the depth-range proof settled only a quarter of the pairs), so safe mode on this
     backend is the exact phase behind the paper's culls. */
-bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, const CollisionRequest &request, double pixel,
-                  const Eigen::Vector3d &origin, bool wantContact, CpuWorkspace &ws, Contact &contact)
+bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, const CollisionRequest &request,
+                  double padding, double pixel, const Eigen::Vector3d &origin, bool wantContact, CpuWorkspace &ws,
+                  Contact &contact)
 {
     // The box culls already passed; the window test and the hull test are the last cheap exits.
-    const device::Box window = device::pairWindow(a.bounds, b.bounds, device::floatPadding(request.padding));
+    const device::Box window = device::pairWindow(a.bounds, b.bounds, device::floatPadding(padding));
     if (device::isEmpty(window))
         return false;
     // Overlap proofs name no triangle, and would make raster mode's verdicts depend on whether
     // a contact is asked (stageSettings() draws the same line).
+    // Conservative mode's verdicts are the proof's outcome, so the proof must not depend on what
+    // the workspace decided before (the warm start): it starts cold, as the stages' proof does.
     const device::HullRelation relation =
-        hullRelation(a, b, request.padding, !wantContact && request.mode != CollisionMode::Raster,
-                     ws.proofDirection[pairNumber]);
+        hullRelation(a, b, padding, !wantContact && request.mode != CollisionMode::Raster,
+                     request.mode == CollisionMode::Conservative ? nullptr : &ws.proofDirection[pairNumber]);
     if (relation != device::HullRelation::Unknown)
         return relation == device::HullRelation::Overlapping;
+    if (request.mode == CollisionMode::Conservative)
+        return unprovenCollides(window, origin, contact);
     if (request.mode != CollisionMode::Raster ||
         !device::rasterUsable(a.slice->closed, b.slice->closed, window, static_cast<float>(pixel)))
-        return exactOverlap(a, b, request.padding, contact);
+        return exactOverlap(a, b, padding, contact);
     PreparedPair pair;
-    if (!preparePair(a, b, request, pixel, ws, pair))
+    if (!preparePair(a, b, request, padding, pixel, ws, pair))
         return false;
     if (rasterHit(a, pair.worldA, ws.candidatesA, b, pair.worldB, ws.candidatesB, pair.grid, ws, contact))
     {
@@ -220,7 +236,7 @@ bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, cons
         return true;
     }
     // Padding is always honoured exactly: the raster sees overlaps, not distances.
-    return request.padding > 0 && exactOverlap(a, b, request.padding, contact);
+    return padding > 0 && exactOverlap(a, b, padding, contact);
 }
 
 // Stages: forward kinematics and the hybrid BVH refit (component OBBs, layer AABBs).
@@ -305,7 +321,8 @@ void CpuBackend::giveBack(std::unique_ptr<CpuWorkspace> workspace) const
 
 void CpuBackend::refitState(const double *q, CpuWorkspace &ws) const { refit(*model_, q, ws); }
 
-bool CpuBackend::exactPair(std::uint32_t pair, double padding, CpuWorkspace &ws, Contact &contact) const
+bool CpuBackend::decideOpenPair(std::uint32_t pair, const CollisionRequest &request, CpuWorkspace &ws,
+                                Contact &contact) const
 {
     const CollisionModel &model = *model_;
     model.nameParties(pair, contact);
@@ -313,7 +330,10 @@ bool CpuBackend::exactPair(std::uint32_t pair, double padding, CpuWorkspace &ws,
     const Solid b = contact.kind == Contact::Kind::Environment
                         ? objectSolid(model, static_cast<std::size_t>(contact.object))
                         : componentSolid(model, ws, static_cast<std::size_t>(contact.otherComponent));
-    return exactOverlap(a, b, padding, contact);
+    if (request.mode == CollisionMode::Conservative)
+        return unprovenCollides(device::pairWindow(a.bounds, b.bounds, device::floatPadding(request.padding)),
+                                model.origin, contact);
+    return exactOverlap(a, b, request.padding, contact);
 }
 
 bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut) const
@@ -334,8 +354,20 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     const std::size_t m = model.numComponents();
 
     const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
-    const float padding = device::floatPadding(request.padding);
     const bool wantContact = contactOut != nullptr;
+    // Paddings: the request's, plus its pairPadding entry per pair. The distance set and the layer
+    // culls take the largest padding they stand for.
+    const PairPadding *extra = request.pairPadding.get();
+    auto environmentPadding = [&](std::size_t k) { return request.padding + (extra ? extra->environment[k] : 0.0); };
+    double reachPadding = request.padding;
+    for (std::size_t k = 0; k < m; ++k)
+    {
+        double largest = request.padding;
+        for (int c = static_cast<int>(k); extra && c < model.componentSubtreeEnd[k]; ++c)
+            largest = std::max(largest, environmentPadding(static_cast<std::size_t>(c)));
+        ws.layerPadding[k] = device::floatPadding(largest);
+        reachPadding = std::max(reachPadding, largest);
+    }
     // Stage: distance set and the Alg. 1 box culls, then the pair pipeline.
     if (request.checkEnvironment && model.numObjects() > 0 && m > 0)
     {
@@ -346,21 +378,22 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         for (std::size_t o = 0; o < model.numObjects(); ++o)
         {
             const device::Box &objectBox = model.objectBoxes[o];
-            if (!device::objectWithinReach(robotSphere, objectBox, padding))
+            if (!device::objectWithinReach(robotSphere, objectBox, device::floatPadding(reachPadding)))
                 continue;
             const Solid object = objectSolid(model, o);
             for (std::size_t k = 0; k < m;)
             {
-                if (!device::boxesOverlap(ws.layerBounds[k], objectBox, padding))
+                if (!device::boxesOverlap(ws.layerBounds[k], objectBox, ws.layerPadding[k]))
                 {
                     k = static_cast<std::size_t>(model.componentSubtreeEnd[k]);
                     continue;
                 }
+                const double padding = environmentPadding(k);
                 if (device::solidsMayMeet(ws.componentBounds[k], ws.componentBox[k], objectBox,
-                                          model.objectOrientedBoxes[o], padding) &&
+                                          model.objectOrientedBoxes[o], device::floatPadding(padding)) &&
                     pairCollides(componentSolid(model, ws, k), object,
                                  device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m)),
-                                 request, pixel, model.origin, wantContact, ws, contact))
+                                 request, padding, pixel, model.origin, wantContact, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -375,13 +408,14 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
         {
             const auto [a, b] = model.selfPairs[i];
+            const double padding = request.padding + (extra ? extra->self[i] : 0.0);
             if (!device::solidsMayMeet(ws.componentBounds[a], ws.componentBox[a], ws.componentBounds[b],
-                                           ws.componentBox[b], padding))
+                                       ws.componentBox[b], device::floatPadding(padding)))
                 continue;
             if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b),
                              device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()),
                                               static_cast<int>(m)),
-                             request, pixel, model.origin, wantContact, ws, contact))
+                             request, padding, pixel, model.origin, wantContact, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;
@@ -409,7 +443,7 @@ bool CpuBackend::rasterImage(const double *q, const Contact &contact, const Coll
     const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
     PreparedPair pair;
     Contact scratch;
-    const bool made = preparePair(a, b, request, pixel, *ws, pair);
+    const bool made = preparePair(a, b, request, request.padding, pixel, *ws, pair);
     if (made)
     {
         rasterHit(a, pair.worldA, ws->candidatesA, b, pair.worldB, ws->candidatesB, pair.grid, *ws, scratch, &image);

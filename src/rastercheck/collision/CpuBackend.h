@@ -23,6 +23,7 @@ struct CpuWorkspace
       , componentBox(model.numComponents())
       , componentBounds(model.numComponents())
       , layerBounds(model.numComponents())
+      , layerPadding(model.numComponents())
       , componentWorld(model.numComponents())
       , componentWorldState(model.numComponents(), 0)
       , proofDirection(model.numPairs(), device::Vec3<double>{0.0, 0.0, 0.0})
@@ -35,6 +36,7 @@ struct CpuWorkspace
     std::vector<device::OrientedBox> componentBox;         // n_components, world
     std::vector<device::Box> componentBounds;              // n_components, world
     std::vector<device::Box> layerBounds;                  // n_components: bounds of layer k's subtree
+    std::vector<float> layerPadding;                       // n_components: largest padding in layer k's subtree
 
     // World vertices of each component, transformed once per state on first use (a component
     // meets several objects); componentWorldState says for which state they are current.
@@ -85,13 +87,15 @@ public:
     std::unique_ptr<CpuWorkspace> borrow() const;
     void giveBack(std::unique_ptr<CpuWorkspace> workspace) const;
 
-    /** \brief Forward kinematics and box refit of state \a q into \a workspace: what exactPair needs. */
+    /** \brief Forward kinematics and box refit of state \a q into \a workspace: what decideOpenPair needs. */
     void refitState(const double *q, CpuWorkspace &workspace) const;
-    /** \brief The exact narrow phase of one pair (CollisionModel's numbering) at the state last
-        refitted into \a workspace, with \a padding. On collision fills \a contact completely. The
+    /** \brief Decides one pair (CollisionModel's numbering) that the culls and proofs left open, at
+        the state last refitted into \a workspace: by the exact narrow phase with the request's
+        padding, or in conservative mode as colliding. On collision fills \a contact completely. The
         staged backends finish the pairs their stages could not settle with this; the stages have
         already tried the hull proof on those pairs, so it is not repeated here. */
-    bool exactPair(std::uint32_t pair, double padding, CpuWorkspace &workspace, Contact &contact) const;
+    bool decideOpenPair(std::uint32_t pair, const CollisionRequest &request, CpuWorkspace &workspace,
+                        Contact &contact) const;
 
     /** \brief The raster image of the pair named by \a contact at state \a q (the paper's Fig. 6):
         which pixels each solid covers and where Sort_Search_Pair finds the overlap. For pictures and

@@ -219,6 +219,11 @@ StagedBackend::~StagedBackend() = default;
 void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
                           const CollisionRequest &request, int threads) const
 {
+    if (request.pairPadding)
+    {
+        exact_.check(q, n, valid, contacts, request, threads);  // the stages take one padding for all pairs
+        return;
+    }
     const CollisionModel &model = *model_;
     const std::size_t dof = model.robot->numCoordinates();
     const int workers = batchWorkers(n, threads);
@@ -276,7 +281,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
                     if (!refitted)
                         exact_.refitState(q + i * dof, *ws);
                     refitted = true;
-                    collides = exact_.exactPair(o->pair, request.padding, *ws, contact);
+                    collides = exact_.decideOpenPair(o->pair, request, *ws, contact);
                 }
             }
             valid[i] = collides ? 0 : 1;

@@ -36,7 +36,8 @@ std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, c
     backend's narrow phase) the pairs the stages leave open. Verdicts and first contacts are the
     CPU backend's: in exact mode by construction; in raster mode through the shared per-element
     code; in safe mode a raster hit settles a pair as colliding when no contacts are asked (the
-    fast path), and when contacts are asked every pair is decided exactly, as on the CPU. */
+    fast path), and when contacts are asked every pair is decided exactly, as on the CPU. A request
+    with CollisionRequest::pairPadding runs on the CPU backend (the stages take one padding). */
 class StagedBackend : public Backend
 {
 public:

@@ -96,6 +96,7 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         if (std::isfinite(r))
             size_ = std::max(size_, r);
 
+    std::vector<int> movingIndex(robot.joints.size(), -1);
     for (std::size_t j = 0; j < robot.joints.size(); ++j)
     {
         const Joint &joint = robot.joints[j];
@@ -104,49 +105,112 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         const Joint &driver = joint.mimicOf >= 0 ? robot.joints[static_cast<std::size_t>(joint.mimicOf)] : joint;
         if (driver.firstCoordinate < 0)
             continue;  // held by nothing: cannot move
+        movingIndex[j] = static_cast<int>(moving_.size());
         moving_.push_back({joint.kind, driver.firstCoordinate, driver.continuous,
                            joint.mimicOf >= 0, joint.mimicOf >= 0 ? joint.mimicMultiplier : 1.0, reach_[j]});
     }
+    for (const Component &component : robot.components)
+    {
+        std::vector<int> above;
+        for (int link = component.link; link >= 0;)
+        {
+            const int j = robot.links[static_cast<std::size_t>(link)].parentJoint;
+            if (j < 0)
+                break;
+            if (movingIndex[static_cast<std::size_t>(j)] >= 0)
+                above.push_back(movingIndex[static_cast<std::size_t>(j)]);
+            link = robot.joints[static_cast<std::size_t>(j)].parentLink;
+        }
+        std::sort(above.begin(), above.end());
+        above_.push_back(std::move(above));
+    }
 }
 
-double MotionBound::sweep(const double *qa, const double *qb) const
+void MotionBound::travels(const double *qa, const double *qb, std::vector<double> &travel) const
 {
+    const double infinity = std::numeric_limits<double>::infinity();
     // A joint that does not turn adds nothing, even with an infinite reach (a held floating base).
     auto turn = [](double angle, double reach) { return angle == 0.0 ? 0.0 : angle * reach; };
-    const double infinity = std::numeric_limits<double>::infinity();
-    double bound = 0.0;
-    for (const MovingJoint &joint : moving_)
+    travel.assign(moving_.size(), 0.0);
+    for (std::size_t k = 0; k < moving_.size(); ++k)
     {
+        const MovingJoint &joint = moving_[k];
         const double *a = qa + joint.firstCoordinate;
         const double *b = qb + joint.firstCoordinate;
+        double &out = travel[k];
         switch (joint.kind)
         {
             case JointKind::Revolute:
             case JointKind::Prismatic:
             {
                 const double change = b[0] - a[0];
-                double travel = std::abs(change);
-                if (joint.wraps && travel > kPi)
+                double value = std::abs(change);
+                if (joint.wraps && value > kPi)
                 {
                     if (joint.mimic)
-                        return infinity;  // the source jumps from pi to -pi; its follower jumps too
-                    travel = std::abs(std::remainder(change, 2.0 * kPi));
+                    {
+                        out = infinity;  // the source jumps from pi to -pi; its follower jumps too
+                        break;
+                    }
+                    value = std::abs(std::remainder(change, 2.0 * kPi));
                 }
-                travel *= std::abs(joint.multiplier);
-                bound += joint.kind == JointKind::Revolute ? turn(travel, joint.reach) : travel;
+                value *= std::abs(joint.multiplier);
+                out = joint.kind == JointKind::Revolute ? turn(value, joint.reach) : value;
                 break;
             }
             case JointKind::Planar:
-                bound += std::hypot(b[0] - a[0], b[1] - a[1]) +
-                         turn(std::abs(std::remainder(b[2] - a[2], 2.0 * kPi)), joint.reach);
+                out = std::hypot(b[0] - a[0], b[1] - a[1]) +
+                      turn(std::abs(std::remainder(b[2] - a[2], 2.0 * kPi)), joint.reach);
                 break;
             case JointKind::Floating:
-                bound += length(b[0] - a[0], b[1] - a[1], b[2] - a[2]) + turn(rotationAngle(a + 3, b + 3), joint.reach);
+                out = length(b[0] - a[0], b[1] - a[1], b[2] - a[2]) + turn(rotationAngle(a + 3, b + 3), joint.reach);
                 break;
             default:
                 break;
         }
+        if (std::isnan(out))
+            out = infinity;  // a non-finite coordinate
     }
-    return std::isnan(bound) ? infinity : bound;
+}
+
+double MotionBound::sweep(const double *qa, const double *qb) const
+{
+    std::vector<double> componentSweeps(above_.size());
+    sweeps(qa, qb, {}, componentSweeps.data(), nullptr);
+    double largest = 0.0;
+    for (const double s : componentSweeps)
+        largest = std::max(largest, s);
+    return largest;
+}
+
+void MotionBound::sweeps(const double *qa, const double *qb, const std::vector<std::pair<int, int>> &pairs,
+                         double *componentSweeps, double *pairSweeps) const
+{
+    std::vector<double> travel;
+    travels(qa, qb, travel);
+    for (std::size_t c = 0; c < above_.size(); ++c)
+    {
+        componentSweeps[c] = 0.0;
+        for (const int k : above_[c])
+            componentSweeps[c] += travel[static_cast<std::size_t>(k)];
+    }
+    for (std::size_t i = 0; i < pairs.size(); ++i)
+    {
+        // The joints above exactly one of the two: both lists ascend, so merge them.
+        const std::vector<int> &a = above_[static_cast<std::size_t>(pairs[i].first)];
+        const std::vector<int> &b = above_[static_cast<std::size_t>(pairs[i].second)];
+        double sum = 0.0;
+        std::size_t x = 0, y = 0;
+        while (x < a.size() || y < b.size())
+        {
+            if (y == b.size() || (x < a.size() && a[x] < b[y]))
+                sum += travel[static_cast<std::size_t>(a[x++])];
+            else if (x == a.size() || b[y] < a[x])
+                sum += travel[static_cast<std::size_t>(b[y++])];
+            else
+                ++x, ++y;  // above both
+        }
+        pairSweeps[i] = sum;
+    }
 }
 }  // namespace rastercheck

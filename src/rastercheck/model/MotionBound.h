@@ -1,5 +1,6 @@
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "rastercheck/model/RobotModel.h"
@@ -43,6 +44,15 @@ public:
         joint follows it (the follower's value jumps there). */
     double sweep(const double *qa, const double *qb) const;
 
+    /** \brief Finer bounds for the same edge. \a componentSweeps (numComponents() values): the
+        farthest any point of each component travels (only the joints above it count).
+        \a pairSweeps (one per entry of \a pairs, component indices): how much the distance between
+        a point of the first component and a point of the second can change, which only the joints
+        between them in the tree can do (the joints above both move them rigidly together: the
+        distance is the same in their common ancestor's frame). Infinite where sweep() would be. */
+    void sweeps(const double *qa, const double *qb, const std::vector<std::pair<int, int>> &pairs,
+                double *componentSweeps, double *pairSweeps) const;
+
     /** \brief reach(j) for every joint (model order): the bound on the distance from the centre joint
         j turns about to any point of the components below it. 0 for a joint that carries no
         geometry. */
@@ -64,7 +74,11 @@ private:
         double reach;
     };
 
+    /** \brief travel[k] = how far joint moving_[k] moves a point it carries along the edge. */
+    void travels(const double *qa, const double *qb, std::vector<double> &travel) const;
+
     std::vector<MovingJoint> moving_;
+    std::vector<std::vector<int>> above_;  ///< per component: indices into moving_ of the joints above it, ascending
     std::vector<double> reach_;
     double size_ = 0.0;
 };

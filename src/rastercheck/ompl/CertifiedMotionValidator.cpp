@@ -20,6 +20,7 @@ namespace
 struct Scratch
 {
     std::vector<double> qa, qb;
+    std::vector<double> componentSweeps, pairSweeps;  ///< MotionBound::sweeps of the edge
     std::vector<unsigned int> order;
     std::vector<std::pair<unsigned int, unsigned int>> intervals;
     std::vector<double> pending;  ///< starts of the intervals of the current size still to certify
@@ -39,6 +40,10 @@ Scratch &scratch()
 /** \brief The most coarse intervals one edge is split into (an edge longer than margin x this gets
     intervals needing more than the margin). */
 constexpr double kMaxIntervals = 1 << 20;
+/** \brief Refined midpoints an edge may use: this many per coarse interval plus this many per level
+    (a pass near a corner fails about two to four midpoints per level; a slide does far more). */
+constexpr double kChecksPerInterval = 16;
+constexpr double kChecksPerLevel = 64;
 }  // namespace
 
 CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr &si,
@@ -49,7 +54,7 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
       checker_(validityChecker.getCheckerPtr()),
       request_(validityChecker.getRequest()),
       bound_(mapping_->robot()),
-      margin_(options.margin > 0.0 ? options.margin : 0.02 * bound_.size()),
+      margin_(options.margin > 0.0 ? options.margin : 0.1 * bound_.size()),
       levels_(options.levels),
       rakeWidth_(options.rakeWidth),
       space_(si->getStateSpace().get())
@@ -69,7 +74,7 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
 }
 
 void CertifiedMotionValidator::checkMidpoints(const ob::State *s1, const ob::State *s2, const std::vector<double> &starts,
-                                              double length, double padding) const
+                                              double length, const CollisionRequest &request) const
 {
     Scratch &w = scratch();
     const std::size_t dof = mapping_->numCoordinates();
@@ -82,8 +87,6 @@ void CertifiedMotionValidator::checkMidpoints(const ob::State *s1, const ob::Sta
     }
     si_->freeState(state);
     w.verdicts.resize(starts.size());
-    CollisionRequest request = request_;
-    request.padding = padding;
     checker_->check(w.rows.data(), starts.size(), w.verdicts.data(), request);
     states_.fetch_add(starts.size(), std::memory_order_relaxed);
 }
@@ -101,14 +104,21 @@ bool CertifiedMotionValidator::certify(const ob::State *s1, const ob::State *s2,
     w.qb.resize(dof);
     mapping_->toConfiguration(s1, w.qa.data());
     mapping_->toConfiguration(s2, w.qb.data());
-    const double sweep = bound_.sweep(w.qa.data(), w.qb.data());
-    if (!std::isfinite(sweep))
+    // Over an interval of length h, a component moves at most its sweep x h / 2 from where it is at
+    // the midpoint, and two components close in by at most their pair's sweep x h / 2: a midpoint
+    // clear by that much more than the padding, pair by pair, certifies the interval.
+    const CollisionModel &model = checker_->collisionModel();
+    w.componentSweeps.resize(model.numComponents());
+    w.pairSweeps.resize(model.selfPairs.size());
+    bound_.sweeps(w.qa.data(), w.qb.data(), model.selfPairs, w.componentSweeps.data(), w.pairSweeps.data());
+    double fastest = 0.0;
+    if (request_.checkEnvironment && !w.componentSweeps.empty())
+        fastest = *std::max_element(w.componentSweeps.begin(), w.componentSweeps.end());
+    if (request_.checkSelfCollision && !w.pairSweeps.empty())
+        fastest = std::max(fastest, *std::max_element(w.pairSweeps.begin(), w.pairSweeps.end()));
+    if (!std::isfinite(fastest))
         return false;
-
-    // A midpoint passing at padding p + g certifies its interval when no point moves more than g
-    // from it there (obstacles), and no two points more than g together (self pairs).
-    const double share = request_.checkSelfCollision ? 1.0 : 0.5;
-    const double coarse = std::clamp(std::ceil(share * sweep / margin_), 1.0, kMaxIntervals);
+    const double coarse = std::clamp(std::ceil(0.5 * fastest / margin_), 1.0, kMaxIntervals);
     double length = 1.0 / coarse;
 
     w.pending.clear();
@@ -118,9 +128,23 @@ bool CertifiedMotionValidator::certify(const ob::State *s1, const ob::State *s2,
 
     // Start of the earliest interval known not to be certifiable: nothing from there on matters.
     double stop = std::numeric_limits<double>::infinity();
+    // An edge sliding along an obstacle nearer than the margins resolve doubles its failing
+    // intervals at every level; past this many midpoints it is given up as not certifiable.
+    const double budget = kChecksPerInterval * coarse + kChecksPerLevel * levels_;
+    double spent = 0.0;
     for (unsigned int level = 0;; ++level)
     {
-        const double padding = request_.padding + share * sweep * length;
+        // On top of any pair padding the request itself carries.
+        auto extra = std::make_shared<PairPadding>(request_.pairPadding ? *request_.pairPadding : PairPadding{});
+        extra->environment.resize(w.componentSweeps.size(), 0.0);
+        extra->self.resize(w.pairSweeps.size(), 0.0);
+        for (std::size_t c = 0; c < w.componentSweeps.size(); ++c)
+            extra->environment[c] += 0.5 * w.componentSweeps[c] * length;
+        for (std::size_t i = 0; i < w.pairSweeps.size(); ++i)
+            extra->self[i] += 0.5 * w.pairSweeps[i] * length;
+        CollisionRequest margin = request_;
+        margin.mode = CollisionMode::Conservative;
+        margin.pairPadding = std::move(extra);
         w.failed.clear();
         std::size_t next = 0;
         std::size_t width = level == 0 ? rakeWidth_ : w.pending.size();
@@ -133,7 +157,7 @@ bool CertifiedMotionValidator::certify(const ob::State *s1, const ob::State *s2,
             width *= 2;
             if (w.batch.empty())
                 continue;
-            checkMidpoints(s1, s2, w.batch, length, padding);
+            checkMidpoints(s1, s2, w.batch, length, margin);
             w.close.clear();
             for (std::size_t i = 0; i < w.batch.size(); ++i)
                 if (!w.verdicts[i])
@@ -141,7 +165,7 @@ bool CertifiedMotionValidator::certify(const ob::State *s1, const ob::State *s2,
             if (w.close.empty())
                 continue;
             // Nearer than the margin: a collision at the padding itself ends the search there.
-            checkMidpoints(s1, s2, w.close, length, request_.padding);
+            checkMidpoints(s1, s2, w.close, length, request_);
             for (std::size_t i = 0; i < w.close.size(); ++i)
             {
                 if (w.verdicts[i])
@@ -169,6 +193,14 @@ bool CertifiedMotionValidator::certify(const ob::State *s1, const ob::State *s2,
         }
         if (w.pending.empty())
             break;
+        spent += static_cast<double>(w.pending.size());
+        if (spent > budget)
+        {
+            if (!wantFirst)
+                return false;
+            stop = std::min(stop, *std::min_element(w.pending.begin(), w.pending.end()));
+            break;
+        }
         length *= 0.5;
     }
     prefix = std::min(stop, 1.0);

@@ -19,7 +19,8 @@ namespace rastercheck::ompl
 struct CertifiedMotionOptions
 {
     /** \brief Clearance margin of the first, coarsest samples of an edge (the model's length unit,
-        metres for URDF robots); 0 = 2 % of the robot's size (MotionBound::size). Larger: fewer samples in open space, more refinement near obstacles. */
+        metres for URDF robots); 0 = a tenth of the robot's size (MotionBound::size; 12 cm for the
+        Panda). Larger: fewer samples in open space, more refinement near obstacles. */
     double margin = 0.0;
     /** \brief How often a sample's margin may be halved where the robot comes closer than it; the
         finest margin is margin / 2^levels (6 um for the Panda's default). An edge that passes
@@ -33,21 +34,27 @@ struct CertifiedMotionOptions
 /** \brief A motion validator whose accepted edges are collision-free at every point, not only at
     sampled states: continuous collision checking for the planner's straight edges.
 
-    For an edge s1 -> s2, MotionBound gives L, a bound on how far any point of the robot travels
-    along it. A state at fraction t whose check passes with padding p + g (p = the request's
-    padding) certifies the interval of fractions within g / L of it as clear of obstacles by at
-    least p, and within g / (2 L) of it as clear of the robot's own links by at least p (each
-    point moves at most g / 2 there, two of them together at most g). The edge is covered by
-    intervals of equal length, each certified by its midpoint at the padding its length needs
-    (the largest g <= margin); where a midpoint fails, its interval is checked at padding p (a real
-    collision ends the search) and otherwise halved, each half needing half the margin, down to
-    margin / 2^levels. Intervals of one size are checked together in one batch
-    (Checker::check: many states in one pass), the coarsest in rake order.
+    For an edge s1 -> s2, MotionBound gives, per component, a bound on how far any of its points
+    travels along it, and per self pair, on how much the distance between their points can change
+    (only the joints between the two links count). Over an interval of fractions of length h, a
+    component then moves at most its sweep x h / 2 from where it is at the interval's midpoint, and
+    a self pair closes in by at most its sweep x h / 2: a midpoint whose every pair is clear by
+    that much more than the padding p certifies the whole interval (one check, with
+    CollisionRequest::pairPadding). The edge is covered by intervals of equal length, the
+    longest for which no pair needs more than the margin, each checked in
+    CollisionMode::Conservative: the culls and the convex separation proof alone, since a false
+    alarm there only costs a finer sample. Where a midpoint fails, it is checked at padding p in
+    the request's own mode (a real collision ends the search) and otherwise its interval is
+    halved, each half needing half the margin, down to margin / 2^levels. Intervals of one size
+    are checked together in one batch (Checker::check: many states in one pass), the coarsest in
+    rake order. The base of a robot that does not move is held to the padding p only, and two
+    links a joint apart only to what that joint can do between them.
 
     Semantics: checkMotion(s1, s2) returns true only when every state of the edge, s1 and s2
     included, satisfies the bounds and is valid at the request's padding (in Safe or Exact mode,
     whose verdicts are exact; Raster mode is refused). It may return false for an edge that does
-    not collide but passes within margin / 2^levels of a collision, or whose L is infinite (a
+    not collide but passes within margin / 2^levels of a collision (or, in conservative mode, where
+    the proofs cannot show it clear), or whose L is infinite (a
     non-finite coordinate, a mimic joint following a continuous joint across +-pi).
     checkMotion(s1, s2, lastValid) returns the largest fraction up to which the edge was certified
     (the start of the first interval that could not be), and that state. s1 is not assumed valid:
@@ -80,10 +87,10 @@ private:
         fraction t such that [0, t] was certified (0 when an end is outside the bounds), computed
         only when \a wantFirst: else the search stops at the first sign the edge is not certified. */
     bool certify(const ::ompl::base::State *s1, const ::ompl::base::State *s2, bool wantFirst, double &prefix) const;
-    /** \brief Checks the midpoints of the intervals [start, start + length) named by \a starts at
-        \a padding; verdicts in the thread's scratch. */
+    /** \brief Checks the midpoints of the intervals [start, start + length) named by \a starts with
+        \a request; verdicts in the thread's scratch. */
     void checkMidpoints(const ::ompl::base::State *s1, const ::ompl::base::State *s2, const std::vector<double> &starts,
-                        double length, double padding) const;
+                        double length, const CollisionRequest &request) const;
 
     StateMappingConstPtr mapping_;
     CheckerConstPtr checker_;
