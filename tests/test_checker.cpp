@@ -11,6 +11,7 @@
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
 #include "rastercheck/geometry/Primitives.h"
 #include "rastercheck/io/MoveItYaml.h"
@@ -91,6 +92,49 @@ TEST(Checker, PaddingIsHonouredExactly)
     }
 }
 
+TEST(Checker, PairPaddingActsLikeThePaddingOnItsPairs)
+{
+    const rc::Checker checker(cubeRobot(0.2), tableScene());
+    ASSERT_EQ(checker.collisionModel().numComponents(), 1u);
+    for (rc::CollisionMode mode : kModes)
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        request.padding = 0.004;
+        auto extra = std::make_shared<rc::PairPadding>();
+        const std::vector<double> gap1cm = at(0.2, 0.1, 0.11);
+        extra->environment = {0.005};  // 0.009 in all
+        request.pairPadding = extra;
+        EXPECT_TRUE(checker.isValid(gap1cm, request)) << rc::toString(mode);
+        extra->environment = {0.007};  // 0.011 in all
+        EXPECT_FALSE(checker.isValid(gap1cm, request)) << rc::toString(mode);
+        // The same as the plain padding, state for state, on a batch.
+        std::vector<double> q;
+        for (int i = 0; i < 40; ++i)
+        {
+            const std::vector<double> state = at(0.1 * i - 1.0, 0.05 * (i % 7), 0.09 + 0.002 * (i % 13));
+            q.insert(q.end(), state.begin(), state.end());
+        }
+        std::vector<std::uint8_t> byPair(40), byPadding(40);
+        checker.check(q.data(), 40, byPair.data(), request);
+        rc::CollisionRequest plain;
+        plain.mode = mode;
+        plain.padding = 0.011;
+        checker.check(q.data(), 40, byPadding.data(), plain);
+        EXPECT_EQ(byPair, byPadding) << rc::toString(mode);
+    }
+    // Entries must fit the model and be finite and >= 0.
+    rc::CollisionRequest request;
+    auto extra = std::make_shared<rc::PairPadding>();
+    request.pairPadding = extra;
+    EXPECT_THROW(checker.isValid(at(0, 0, 1), request), rc::ConfigurationError);  // no entry for the component
+    extra->environment = {-0.1};
+    EXPECT_THROW(checker.isValid(at(0, 0, 1), request), rc::ConfigurationError);
+    extra->environment = {0.0};
+    extra->self = {0.0};  // the cube has no self pair
+    EXPECT_THROW(checker.isValid(at(0, 0, 1), request), rc::ConfigurationError);
+}
+
 TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
 {
     // base (cube at origin) -j1-> middle (small cube, adjacent) -j2-> tip (cube 0.6 along its x).
@@ -140,6 +184,25 @@ TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
         EXPECT_EQ(model.components[contact.otherComponent].name, "tip");
         request.checkSelfCollision = false;
         EXPECT_TRUE(checker.isValid(std::vector<double>{0.0, M_PI}, request));
+        // A self pair's pairPadding entry acts like the padding on it (base vs tip is the only pair).
+        ASSERT_EQ(checker.collisionModel().selfPairs.size(), 1u);
+        request.checkSelfCollision = true;
+        rc::CollisionRequest byPair = request;
+        auto extra = std::make_shared<rc::PairPadding>();
+        extra->environment = {0.0, 0.0, 0.0};
+        extra->self = {0.05};
+        byPair.pairPadding = extra;
+        request.padding = 0.05;
+        int differing = 0, invalid = 0;
+        for (double angle = 2.0; angle <= M_PI; angle += 0.01)
+        {
+            const std::vector<double> q{0.0, angle};
+            differing += checker.isValid(q, byPair) != checker.isValid(q, request);
+            invalid += !checker.isValid(q, request);
+        }
+        EXPECT_EQ(differing, 0) << rc::toString(mode);
+        EXPECT_GT(invalid, 10) << rc::toString(mode);
+        EXPECT_LT(invalid, 100) << rc::toString(mode);
     }
     // Allowing the pair silences it.
     shared->setCollisionAllowed(0, 2, true);

@@ -1,5 +1,6 @@
-// MotionBound: the sweep bound holds for every vertex along OMPL's own interpolation (Panda, crane),
-// and known answers on small robots.
+// MotionBound: the bounds hold for every vertex (whole robot, per component) and for the distances
+// between vertices of two components (per pair) along OMPL's own interpolation (Panda, crane), and
+// known answers on small robots.
 
 #include <cmath>
 #include <limits>
@@ -55,6 +56,13 @@ void measureSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps, do
         const std::vector<double> qa = mapping.toConfiguration(a.get()), qb = mapping.toConfiguration(b.get());
         const double sweep = bound.sweep(qa.data(), qb.data());
         EXPECT_TRUE(std::isfinite(sweep));
+        const std::size_t m = robot->numComponents();
+        std::vector<std::pair<int, int>> pairs;
+        for (int i = 0; i < static_cast<int>(m); ++i)
+            for (int j = i + 1; j < static_cast<int>(m); ++j)
+                pairs.emplace_back(i, j);
+        std::vector<double> componentSweeps(m), pairSweeps(pairs.size());
+        bound.sweeps(qa.data(), qb.data(), pairs, componentSweeps.data(), pairSweeps.data());
         rc::forwardKinematics(*robot, start, qa);
         previous = start;
         for (int k = 1; k <= steps; ++k)
@@ -62,17 +70,40 @@ void measureSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps, do
             const double t = static_cast<double>(k) / steps;
             space->interpolate(a.get(), b.get(), t, s.get());
             rc::forwardKinematics(*robot, current, mapping.toConfiguration(s.get()));
-            for (const rc::Component &c : robot->components)
+            auto slack = [](double bound) { return bound * (1 + 1e-9) + 1e-12; };
+            for (std::size_t ci = 0; ci < m; ++ci)
+            {
+                const rc::Component &c = robot->components[ci];
                 for (const Eigen::Vector3d &v : c.mesh.vertices)
                 {
                     const auto l = static_cast<std::size_t>(c.link);
                     const Eigen::Vector3d x = current.oMl[l] * v;
                     const double step = (x - previous.oMl[l] * v).norm();
                     const double fromStart = (x - start.oMl[l] * v).norm();
-                    ASSERT_LE(step, sweep / steps * (1 + 1e-9) + 1e-12) << c.name << " edge " << e << " step " << k;
-                    ASSERT_LE(fromStart, sweep * t * (1 + 1e-9) + 1e-12) << c.name << " edge " << e << " step " << k;
+                    ASSERT_LE(step, slack(sweep / steps)) << c.name << " edge " << e << " step " << k;
+                    ASSERT_LE(fromStart, slack(componentSweeps[ci] * t)) << c.name << " edge " << e << " step " << k;
+                    ASSERT_LE(componentSweeps[ci], sweep);
                     worst = std::max(worst, step / (sweep / steps));
                 }
+            }
+            // Distances between points of two components change by at most the pair's sweep (a
+            // sample of vertices of each, to keep the pairs' product small).
+            for (std::size_t p = 0; p < pairs.size(); ++p)
+            {
+                const rc::Component &ca = robot->components[static_cast<std::size_t>(pairs[p].first)];
+                const rc::Component &cb = robot->components[static_cast<std::size_t>(pairs[p].second)];
+                const auto la = static_cast<std::size_t>(ca.link), lb = static_cast<std::size_t>(cb.link);
+                const std::size_t strideA = ca.mesh.vertices.size() / 12 + 1, strideB = cb.mesh.vertices.size() / 12 + 1;
+                for (std::size_t i = 0; i < ca.mesh.vertices.size(); i += strideA)
+                    for (std::size_t j = 0; j < cb.mesh.vertices.size(); j += strideB)
+                    {
+                        const Eigen::Vector3d &va = ca.mesh.vertices[i], &vb = cb.mesh.vertices[j];
+                        const double now = (current.oMl[la] * va - current.oMl[lb] * vb).norm();
+                        const double then = (start.oMl[la] * va - start.oMl[lb] * vb).norm();
+                        ASSERT_LE(std::abs(now - then), slack(pairSweeps[p] * t))
+                            << ca.name << " / " << cb.name << " edge " << e << " step " << k;
+                    }
+            }
             std::swap(previous, current);
         }
     }

@@ -117,6 +117,22 @@ TEST(PlanCli, CollidingSolutionIsReportedLoudly)
     EXPECT_TRUE(contains(run.output, "1 solution path(s) collide")) << run.output;
 }
 
+TEST(PlanCli, CertifiedEdgesDoNotStepThroughAThinWall)
+{
+    // The wall of the test above with the same coarse resolution: certified edges cannot cross it,
+    // so there is no solution, and no colliding one.
+    const std::string folder = makeTempDir("plan_cli_wall_certified");
+    writeFile(folder + "/robot.obj", objBox("robot", -0.05, -0.05, -0.05, 0.05, 0.05, 0.05, 0));
+    writeFile(folder + "/world.obj", objBox("wall", -0.01, -3, -3, 0.01, 3, 3, 0));
+    writeFile(folder + "/wall.cfg", cfg("rrtconnect=\n"));
+    const CliRun run = runCli("plan " + folder +
+                              "/wall.cfg --runs 1 --time-limit 1 --segment-fraction 0.1 --seed 5 --edges certified");
+    EXPECT_EQ(run.status, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "certified edges")) << run.output;
+    EXPECT_TRUE(contains(run.output, "rrtconnect         0/1         0")) << run.output;
+    EXPECT_FALSE(contains(run.output, "COLLIDES")) << run.output;
+}
+
 TEST(PlanCli, MotionBenchMakerProblem)
 {
     RASTERCHECK_REQUIRE_DATA(root);
@@ -129,6 +145,13 @@ TEST(PlanCli, MotionBenchMakerProblem)
     ASSERT_EQ(run.status, 0) << run.output;
     EXPECT_TRUE(contains(run.output, "experiment scene0001_request0001")) << run.output;
     EXPECT_TRUE(contains(run.output, "rrtconnect         2/2         0")) << run.output;
+
+    const CliRun certified = runCli("plan --robot " + panda + "/panda.urdf --srdf " + panda + "/panda.srdf --scene " +
+                                    problems + "/scene0001.yaml --request " + problems +
+                                    "/request0001.yaml --planner rrtconnect --runs 2 --time-limit 60 --seed 1 "
+                                    "--edges certified");
+    ASSERT_EQ(certified.status, 0) << certified.output;
+    EXPECT_TRUE(contains(certified.output, "rrtconnect         2/2         0")) << certified.output;
 }
 
 TEST(PlanCli, BadArgumentsAreErrors)
@@ -146,4 +169,10 @@ TEST(PlanCli, BadArgumentsAreErrors)
     run = runCli("plan --robot " + folder + "/none.urdf");
     EXPECT_EQ(run.status, 1) << run.output;
     EXPECT_TRUE(contains(run.output, "--request")) << run.output;
+    run = runCli("plan " + folder + "/p.cfg --edges certified --mode raster");
+    EXPECT_EQ(run.status, 1) << run.output;
+    EXPECT_TRUE(contains(run.output, "raster mode can miss thin overlaps")) << run.output;
+    run = runCli("plan " + folder + "/p.cfg --edges sometimes");
+    EXPECT_NE(run.status, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "--edges")) << run.output;
 }
