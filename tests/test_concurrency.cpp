@@ -24,6 +24,7 @@
 #include <ompl/base/SpaceInformation.h>
 
 #include "TestSupport.h"
+#include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/MotionValidator.h"
 #include "rastercheck/ompl/Setup.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
@@ -230,6 +231,30 @@ protected:
         EXPECT_EQ(motion.getCheckedStateCount(), oneThreadMotion.getCheckedStateCount());
     }
 
+    void certifiedEdgesOnEightThreadsAsOnOne()
+    {
+        sampleEdges(perProblem_ / 16);  // a certified edge checks several times the states of a discrete one
+        const ob::SpaceInformationPtr &si = setup_->getSpaceInformation();
+        rco::StateValidityChecker &validity = validityOf(*setup_);
+        const rco::CertifiedMotionValidator shared(si, validity);
+        const rco::StateValidityChecker oneThreadValidity(
+            si, validity.getStateMappingPtr(),
+            std::make_shared<const rc::Checker>(problem_.robot, problem_.scene,
+                                                rc::CheckerOptions{rc::BackendChoice::Cpu, 1}),
+            validity.getRequest());
+        const rco::CertifiedMotionValidator oneThread(si, oneThreadValidity);
+        const std::size_t m = edges_.size();
+        std::vector<EdgeVerdict> serial(m), parallel(m);
+        for (std::size_t j = 0; j < m; ++j)
+            serial[j] = decideEdge(oneThread, j);
+        expectMix(serial, "certified edges");
+        onThreads(m, [&](std::size_t j) { parallel[j] = decideEdge(shared, j); });
+        expectSame(validity.getChecker(), serial, parallel, "certified edges, 8 threads vs 1");
+        EXPECT_EQ(shared.getValidMotionCount(), 2 * countValid(serial));
+        EXPECT_EQ(shared.getCheckedMotionCount(), 2 * m);
+        EXPECT_EQ(shared.getCheckedStateCount(), oneThread.getCheckedStateCount());
+    }
+
     void sameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts()
     {
         // One state at a time on this thread, in order: the reference.
@@ -337,7 +362,7 @@ protected:
     }
 
     /** \brief Both checkMotion overloads on edge \a j through \a motion. */
-    EdgeVerdict decideEdge(const rco::MotionValidator &motion, std::size_t j) const
+    EdgeVerdict decideEdge(const ob::MotionValidator &motion, std::size_t j) const
     {
         const ob::SpaceInformationPtr &si = setup_->getSpaceInformation();
         const auto &[from, to] = edges_[j];
@@ -404,6 +429,10 @@ TEST_F(PandaBookshelf, SameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCoun
 {
     sameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts();
 }
+
+TEST_F(PandaBookshelf, EightThreadsCertifyEdgesAsOneThread) { certifiedEdgesOnEightThreadsAsOnOne(); }
+
+TEST_F(CraneInPlant, EightThreadsCertifyEdgesAsOneThread) { certifiedEdgesOnEightThreadsAsOnOne(); }
 
 TEST_F(CraneInPlant, EightThreadsOnOneCheckerDecideStatesAndEdgesAsOneThread)
 {
