@@ -29,7 +29,7 @@ const std::vector<Setting> &settings()
         {"exact", CollisionMode::Exact, 1},      {"safe (default)", CollisionMode::Safe, 1},
         {"safe, pixel x4", CollisionMode::Safe, 4}, {"raster, pixel x0.5", CollisionMode::Raster, 0.5},
         {"raster, pixel x1", CollisionMode::Raster, 1}, {"raster, pixel x4", CollisionMode::Raster, 4},
-        {"raster, pixel x16", CollisionMode::Raster, 16}};
+        {"raster, pixel x16", CollisionMode::Raster, 16}, {"conservative", CollisionMode::Conservative, 1}};
     return list;
 }
 

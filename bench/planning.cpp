@@ -8,6 +8,9 @@
 //
 // usage: rastercheck_bench_planning [problems_per_scenario=3] [time_limit_s=5] [runs_per_problem=1]
 //                                   [modes=safe,exact] [threads=1]
+// A mode is a collision mode, optionally with the edge checking after a '+': "safe+certified" plans
+// with CertifiedMotionValidator (collision-free edges at every point) instead of the batched
+// discrete one.
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -194,8 +197,12 @@ int main(int argc, char **argv)
             std::map<std::string, og::SimpleSetupPtr> setups;
             for (const std::string &mode : modes)
             {
+                // "safe" or "safe+certified": the mode, then the edge checking (batched by default).
+                const std::size_t plus = mode.find('+');
                 rastercheck::ompl::SetupOptions options;
-                options.request.mode = parseCollisionMode(mode);
+                options.request.mode = parseCollisionMode(mode.substr(0, plus));
+                if (plus != std::string::npos)
+                    options.edges = rastercheck::ompl::parseEdgeChecking(mode.substr(plus + 1));
                 options.checker.backend = BackendChoice::Cpu;
                 options.checker.threads = threads;
                 setups[mode] = rastercheck::ompl::makeSimpleSetup(problem, options);

@@ -174,6 +174,30 @@ TEST(CertifiedMotion, AFreeEdgeNeedsOneCheckPerCoarseInterval)
     EXPECT_EQ(certified.getCheckedStateCount(), 10u);
 }
 
+TEST(CertifiedMotion, ASlideCloserThanTheFinestMarginIsRejectedWithinItsBudget)
+{
+    // The cube slides 0.8 m along the plate's face 1 um away: free, but no margin down to
+    // 0.1 m / 2^12 = 24 um can certify it. It is rejected (a documented false alarm) after a
+    // bounded number of checks: 4 coarse intervals, at most 16 x 4 + 64 x 12 refined midpoints,
+    // each failing one checked once more at the padding.
+    const Context context = makeContext(cubeAndPlate());
+    rco::CertifiedMotionOptions options;
+    options.margin = 0.1;
+    const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
+    ob::ScopedState<> from(context.si), to(context.si), last(context.si);
+    const double x = -0.051 - 1e-6;
+    setPosition(context, from.get(), x, -0.4, 0.0);
+    setPosition(context, to.get(), x, 0.4, 0.0);
+    ASSERT_TRUE(denselyFree(context, certified, from.get(), to.get(), 1.0, 0.002));
+    EXPECT_FALSE(certified.checkMotion(from.get(), to.get()));
+    EXPECT_LE(certified.getCheckedStateCount(), 2u * (4 + 16 * 4 + 64 * 12));
+    EXPECT_GT(certified.getCheckedStateCount(), 100u);  // it did refine before giving up
+    std::pair<ob::State *, double> lastValid(last.get(), -1.0);
+    EXPECT_FALSE(certified.checkMotion(from.get(), to.get(), lastValid));
+    EXPECT_GE(lastValid.second, 0.0);
+    EXPECT_LT(lastValid.second, 1.0);
+}
+
 TEST(CertifiedMotion, RejectsRasterModeAndBadOptions)
 {
     rc::Problem problem = cubeAndPlate();
