@@ -37,6 +37,25 @@ Scratch &scratch()
     return buffers;
 }
 
+/** \brief The request that certifies intervals of \a length (a fraction of the edge) by their
+    midpoints: conservative mode, each pair padded by what it can close in over half the interval
+    (on top of any pair padding \a base carries). */
+CollisionRequest marginRequest(const CollisionRequest &base, const std::vector<double> &componentSweeps,
+                               const std::vector<double> &pairSweeps, double length)
+{
+    auto extra = std::make_shared<PairPadding>(base.pairPadding ? *base.pairPadding : PairPadding{});
+    extra->environment.resize(componentSweeps.size(), 0.0);
+    extra->self.resize(pairSweeps.size(), 0.0);
+    for (std::size_t c = 0; c < componentSweeps.size(); ++c)
+        extra->environment[c] += 0.5 * componentSweeps[c] * length;
+    for (std::size_t i = 0; i < pairSweeps.size(); ++i)
+        extra->self[i] += 0.5 * pairSweeps[i] * length;
+    CollisionRequest margin = base;
+    margin.mode = CollisionMode::Conservative;
+    margin.pairPadding = std::move(extra);
+    return margin;
+}
+
 /** \brief The most coarse intervals one edge is split into (an edge longer than margin x this gets
     intervals needing more than the margin). */
 constexpr double kMaxIntervals = 1 << 20;
@@ -134,17 +153,7 @@ bool CertifiedMotionValidator::certify(const ob::State *s1, const ob::State *s2,
     double spent = 0.0;
     for (unsigned int level = 0;; ++level)
     {
-        // On top of any pair padding the request itself carries.
-        auto extra = std::make_shared<PairPadding>(request_.pairPadding ? *request_.pairPadding : PairPadding{});
-        extra->environment.resize(w.componentSweeps.size(), 0.0);
-        extra->self.resize(w.pairSweeps.size(), 0.0);
-        for (std::size_t c = 0; c < w.componentSweeps.size(); ++c)
-            extra->environment[c] += 0.5 * w.componentSweeps[c] * length;
-        for (std::size_t i = 0; i < w.pairSweeps.size(); ++i)
-            extra->self[i] += 0.5 * w.pairSweeps[i] * length;
-        CollisionRequest margin = request_;
-        margin.mode = CollisionMode::Conservative;
-        margin.pairPadding = std::move(extra);
+        const CollisionRequest margin = marginRequest(request_, w.componentSweeps, w.pairSweeps, length);
         w.failed.clear();
         std::size_t next = 0;
         std::size_t width = level == 0 ? rakeWidth_ : w.pending.size();

@@ -19,11 +19,11 @@ namespace rastercheck::ompl
 struct CertifiedMotionOptions
 {
     /** \brief Clearance margin of the first, coarsest samples of an edge (the model's length unit,
-        metres for URDF robots); 0 = a tenth of the robot's size (MotionBound::size; 12 cm for the
-        Panda). Larger: fewer samples in open space, more refinement near obstacles. */
+        metres for URDF robots); 0 = a tenth of the robot's size (MotionBound::size; 11.3 cm for
+        the Panda). Larger: fewer samples in open space, more refinement near obstacles. */
     double margin = 0.0;
     /** \brief How often a sample's margin may be halved where the robot comes closer than it; the
-        finest margin is margin / 2^levels (6 um for the Panda's default). An edge that passes
+        finest margin is margin / 2^levels (28 um for the Panda's default). An edge that passes
         nearer than that without touching cannot be certified and is rejected. At most 40. */
     unsigned int levels = 12;
     /** \brief Coarsest samples checked in the first batch (>= 1); later batches double (the rake
