@@ -26,7 +26,7 @@
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/model/Kinematics.h"
-#include "rastercheck/ompl/MotionValidator.h"
+#include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/PathCheck.h"
 #include "rastercheck/ompl/Setup.h"
 #include "render/RasterPicture.h"
@@ -215,17 +215,19 @@ int run(const Options &options)
     setupOptions.request.mode = rc::CollisionMode::Safe;
     setupOptions.request.padding = options.padding;
     setupOptions.heldCoordinates = {{"base_x", 0.0}, {"base_y", 0.0}, {"base_yaw", 0.0}};
+    // Certified edges: every point of every edge keeps the clearance, not only states a resolution
+    // apart (CertifiedMotionValidator bounds how far each part of the crane swings along an edge).
+    setupOptions.edges = rc::ompl::EdgeChecking::Certified;
     const og::SimpleSetupPtr setup = rc::ompl::makeSimpleSetup(problem, setupOptions);
     setup->setPlanner(std::make_shared<og::RRTConnect>(setup->getSpaceInformation()));
     rc::ompl::setStartAndGoal(*setup, lift);
-    // Edge resolution in metres of crane motion. The state metric adds radians of slew to metres of
-    // hoist, and one radian of slew or luff moves the boom tip and the load up to 41 m (the longest
-    // boom's reach from the slew axis and the luff pivot), so OMPL's default of 1 % of the space's
-    // extent would let the load jump about 15 m between checked states. With at most kMetresPerUnit
-    // metres per unit of the metric, no point of the crane moves more than options.step between two
-    // checked states: between them the crane keeps padding - step from the plant (so with step <=
-    // padding the swept lift is collision-free, not only its samples) and padding - 2 step between
-    // its own parts (both may move); the exact re-check below samples ten times finer.
+    // The resolution in metres of crane motion paces the exact re-check below (certified edges do not
+    // use it). The state metric adds radians of slew to metres of hoist, and one radian of slew or
+    // luff moves the boom tip and the load up to 41 m (the longest boom's reach from the slew axis
+    // and the luff pivot), so OMPL's default of 1 % of the space's extent would let the load jump
+    // about 15 m between re-checked states. With at most kMetresPerUnit metres per unit of the
+    // metric (tests/test_crane.cpp), no point of the crane moves more than options.step between two
+    // states a resolution apart; the re-check samples ten times finer.
     constexpr double kMetresPerUnit = 45.0;
     const ::ompl::base::StateSpacePtr &space = setup->getStateSpace();
     space->setLongestValidSegmentFraction(options.step / kMetresPerUnit / space->getMaximumExtent());
@@ -246,8 +248,9 @@ int run(const Options &options)
     std::printf("  checker  %s backend, %s mode, %.2f m safety clearance (padding)\n", checker.backendName().c_str(),
                 rc::toString(setupOptions.request.mode).c_str(), options.padding);
     std::printf("  planned  slew, luff, telescope_1, hoist (base_x, base_y, base_yaw held at 0)\n");
-    std::printf("  edges    checked every %.2f m of crane motion (a %.1e fraction of the space's extent)\n\n",
-                options.step, space->getLongestValidSegmentFraction());
+    std::printf("  edges    certified: the clearance holds at every point of an edge, not only at samples\n");
+    std::printf("  recheck  every %.3f m of crane motion (a %.1e fraction of the space's extent)\n\n",
+                options.step / 10, space->getLongestValidSegmentFraction() / 10);
 
     std::printf("start and goal (plant_lift.yaml)\n");
     printCraneState("start: pick", crane, layout, start,
@@ -282,8 +285,8 @@ int run(const Options &options)
     auto phase = std::chrono::steady_clock::now();
     const ::ompl::base::PlannerStatus status = setup->solve(options.time);
     const double planSeconds = secondsSince(phase);
-    const auto edges =
-        std::dynamic_pointer_cast<rc::ompl::MotionValidator>(setup->getSpaceInformation()->getMotionValidator());
+    const auto edges = std::dynamic_pointer_cast<rc::ompl::CertifiedMotionValidator>(
+        setup->getSpaceInformation()->getMotionValidator());
     const std::uint64_t planChecks = validity->getCallCount() + (edges ? edges->getCheckedStateCount() : 0);
     if (!setup->haveExactSolutionPath())
     {

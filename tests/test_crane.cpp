@@ -205,9 +205,9 @@ TEST(Crane, HookBlockStaysVertical)
 
 TEST(Crane, NoPointMovesMoreThan45MetresPerUnitOfTheStateMetric)
 {
-    // examples/crane_lift.cpp sets the planner's edge resolution in metres of crane motion from this
-    // bound: one unit of OMPL's distance (radians of slew + euclidean over luff, telescope, hoist)
-    // moves no vertex of the crane more than 45 m.
+    // examples/crane_lift.cpp paces its exact re-check in metres of crane motion from this bound
+    // (its edges are certified, which needs no resolution): one unit of OMPL's distance (radians of
+    // slew + euclidean over luff, telescope, hoist) moves no vertex of the crane more than 45 m.
     rc::ompl::StateMappingOptions options;
     options.heldCoordinates = {{"base_x", 0.0}, {"base_y", 0.0}, {"base_yaw", 0.0}};
     const rc::ompl::StateMapping mapping(plant().robot, options);
