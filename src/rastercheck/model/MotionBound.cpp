@@ -106,38 +106,44 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         if (driver.firstCoordinate < 0)
             continue;  // held by nothing: cannot move
         movingIndex[j] = static_cast<int>(moving_.size());
-        moving_.push_back({joint.kind, driver.firstCoordinate, driver.continuous,
-                           joint.mimicOf >= 0, joint.mimicOf >= 0 ? joint.mimicMultiplier : 1.0, reach_[j]});
+        moving_.push_back({joint.kind, driver.firstCoordinate, driver.continuous, joint.mimicOf >= 0,
+                           joint.mimicOf >= 0 ? joint.mimicMultiplier : 1.0});
     }
+    // Per component, up its chain: how far its points can lie from each joint's centre (its own
+    // radius, then each joint's offset and shift on the way up). A joint near the base turns a
+    // link near the base through a small radius, whatever the hand below does.
     for (const Component &component : robot.components)
     {
-        std::vector<int> above;
+        double distance = 0.0;
+        for (const Eigen::Vector3d &v : component.mesh.vertices)
+            distance = std::max(distance, v.norm());
+        std::vector<Carrier> above;
         for (int link = component.link; link >= 0;)
         {
             const int j = robot.links[static_cast<std::size_t>(link)].parentJoint;
             if (j < 0)
                 break;
+            const Joint &joint = robot.joints[static_cast<std::size_t>(j)];
             if (movingIndex[static_cast<std::size_t>(j)] >= 0)
-                above.push_back(movingIndex[static_cast<std::size_t>(j)]);
-            link = robot.joints[static_cast<std::size_t>(j)].parentLink;
+                above.push_back({movingIndex[static_cast<std::size_t>(j)], distance});
+            distance += joint.origin.translation().norm() + frameShift(robot, joint);
+            link = joint.parentLink;
         }
-        std::sort(above.begin(), above.end());
+        std::sort(above.begin(), above.end(), [](const Carrier &a, const Carrier &b) { return a.joint < b.joint; });
         above_.push_back(std::move(above));
     }
 }
 
-void MotionBound::travels(const double *qa, const double *qb, std::vector<double> &travel) const
+void MotionBound::travels(const double *qa, const double *qb, std::vector<Travel> &travel) const
 {
     const double infinity = std::numeric_limits<double>::infinity();
-    // A joint that does not turn adds nothing, even with an infinite reach (a held floating base).
-    auto turn = [](double angle, double reach) { return angle == 0.0 ? 0.0 : angle * reach; };
-    travel.assign(moving_.size(), 0.0);
+    travel.assign(moving_.size(), Travel{});
     for (std::size_t k = 0; k < moving_.size(); ++k)
     {
         const MovingJoint &joint = moving_[k];
         const double *a = qa + joint.firstCoordinate;
         const double *b = qb + joint.firstCoordinate;
-        double &out = travel[k];
+        Travel &out = travel[k];
         switch (joint.kind)
         {
             case JointKind::Revolute:
@@ -149,27 +155,28 @@ void MotionBound::travels(const double *qa, const double *qb, std::vector<double
                 {
                     if (joint.mimic)
                     {
-                        out = infinity;  // the source jumps from pi to -pi; its follower jumps too
+                        out.slide = infinity;  // the source jumps from pi to -pi; its follower jumps too
                         break;
                     }
                     value = std::abs(std::remainder(change, 2.0 * kPi));
                 }
                 value *= std::abs(joint.multiplier);
-                out = joint.kind == JointKind::Revolute ? turn(value, joint.reach) : value;
+                (joint.kind == JointKind::Revolute ? out.turn : out.slide) = value;
                 break;
             }
             case JointKind::Planar:
-                out = std::hypot(b[0] - a[0], b[1] - a[1]) +
-                      turn(std::abs(std::remainder(b[2] - a[2], 2.0 * kPi)), joint.reach);
+                out.slide = std::hypot(b[0] - a[0], b[1] - a[1]);
+                out.turn = std::abs(std::remainder(b[2] - a[2], 2.0 * kPi));
                 break;
             case JointKind::Floating:
-                out = length(b[0] - a[0], b[1] - a[1], b[2] - a[2]) + turn(rotationAngle(a + 3, b + 3), joint.reach);
+                out.slide = length(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+                out.turn = rotationAngle(a + 3, b + 3);
                 break;
             default:
                 break;
         }
-        if (std::isnan(out))
-            out = infinity;  // a non-finite coordinate
+        if (std::isnan(out.slide) || std::isnan(out.turn))
+            out = {infinity, 0.0};  // a non-finite coordinate (no NaN may reach the sums)
     }
 }
 
@@ -186,27 +193,34 @@ double MotionBound::sweep(const double *qa, const double *qb) const
 void MotionBound::sweeps(const double *qa, const double *qb, const std::vector<std::pair<int, int>> &pairs,
                          double *componentSweeps, double *pairSweeps) const
 {
-    std::vector<double> travel;
+    std::vector<Travel> travel;
     travels(qa, qb, travel);
+    // How far joint carrier.joint moves a point carrier.distance from its centre. A joint that
+    // does not turn adds only its slide, even at an infinite distance (a held floating base).
+    auto moved = [&](const Carrier &carrier)
+    {
+        const Travel &t = travel[static_cast<std::size_t>(carrier.joint)];
+        return t.slide + (t.turn == 0.0 ? 0.0 : t.turn * carrier.distance);
+    };
     for (std::size_t c = 0; c < above_.size(); ++c)
     {
         componentSweeps[c] = 0.0;
-        for (const int k : above_[c])
-            componentSweeps[c] += travel[static_cast<std::size_t>(k)];
+        for (const Carrier &carrier : above_[c])
+            componentSweeps[c] += moved(carrier);
     }
     for (std::size_t i = 0; i < pairs.size(); ++i)
     {
         // The joints above exactly one of the two: both lists ascend, so merge them.
-        const std::vector<int> &a = above_[static_cast<std::size_t>(pairs[i].first)];
-        const std::vector<int> &b = above_[static_cast<std::size_t>(pairs[i].second)];
+        const std::vector<Carrier> &a = above_[static_cast<std::size_t>(pairs[i].first)];
+        const std::vector<Carrier> &b = above_[static_cast<std::size_t>(pairs[i].second)];
         double sum = 0.0;
         std::size_t x = 0, y = 0;
         while (x < a.size() || y < b.size())
         {
-            if (y == b.size() || (x < a.size() && a[x] < b[y]))
-                sum += travel[static_cast<std::size_t>(a[x++])];
-            else if (x == a.size() || b[y] < a[x])
-                sum += travel[static_cast<std::size_t>(b[y++])];
+            if (y == b.size() || (x < a.size() && a[x].joint < b[y].joint))
+                sum += moved(a[x++]);
+            else if (x == a.size() || b[y].joint < a[x].joint)
+                sum += moved(b[y++]);
             else
                 ++x, ++y;  // above both
         }

@@ -19,11 +19,12 @@ namespace rastercheck
         sum over joints j of  (translation rate of j) + (turn rate of j) * reach(j),
 
     where reach(j) bounds the distance from the centre joint j turns about (its child frame's
-    origin) to any point of the geometry it carries, in every configuration within the bounds:
-    the child link's component radius, and for each joint below it the length of its origin offset
-    plus the farthest its own coordinates can shift the next frame (prismatic and floating /
-    planar translations, by their bounds), recursively. Hence for the positions x(s), x(t) of the
-    same material point at fractions s, t of the edge
+    origin) to the point, in every configuration within the bounds: the point's component radius,
+    and for each joint between them the length of its origin offset plus the farthest its own
+    coordinates can shift the next frame (prismatic and floating / planar translations, by their
+    bounds). Each component gets its own reach per joint above it, so a link near the base is not
+    held to the hand's speed. Hence for the positions x(s), x(t) of the same material point at
+    fractions s, t of the edge
 
         |x(t) - x(s)| <= |t - s| * sweep(qa, qb),
 
@@ -71,14 +72,25 @@ private:
         bool wraps;           ///< a continuous revolute joint (its angle turns the shorter way round)
         bool mimic;
         double multiplier;  ///< mimic multiplier (1 otherwise)
-        double reach;
+    };
+    /** \brief How far a moving joint's centre slides (m) and how far it turns (rad) along an edge. */
+    struct Travel
+    {
+        double slide = 0.0;
+        double turn = 0.0;
+    };
+    /** \brief A moving joint above a component, and the farthest the component's points can lie from
+        its centre. */
+    struct Carrier
+    {
+        int joint;  ///< index into moving_
+        double distance;
     };
 
-    /** \brief travel[k] = how far joint moving_[k] moves a point it carries along the edge. */
-    void travels(const double *qa, const double *qb, std::vector<double> &travel) const;
+    void travels(const double *qa, const double *qb, std::vector<Travel> &travel) const;
 
     std::vector<MovingJoint> moving_;
-    std::vector<std::vector<int>> above_;  ///< per component: indices into moving_ of the joints above it, ascending
+    std::vector<std::vector<Carrier>> above_;  ///< per component, by ascending joint
     std::vector<double> reach_;
     double size_ = 0.0;
 };

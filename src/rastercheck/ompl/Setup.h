@@ -42,7 +42,7 @@ struct SetupOptions
     /** \brief Coordinates held fixed (StateMappingOptions::heldCoordinates). */
     std::map<std::string, double> heldCoordinates;
     /** \brief StateSpace::setLongestValidSegmentFraction: edge resolution as a fraction of the space's
-        maximum extent (OMPL's default is 0.01). */
+        maximum extent (OMPL's default is 0.01). Certified edges do not use it. */
     double longestValidSegmentFraction = 0.01;
     /** \brief How edges are checked (EdgeChecking). */
     EdgeChecking edges = EdgeChecking::Batched;
