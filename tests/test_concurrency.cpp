@@ -136,14 +136,14 @@ std::size_t countValid(const std::vector<T> &verdicts)
         std::count_if(verdicts.begin(), verdicts.end(), [](const T &v) { return v.valid; }));
 }
 
-/** \brief Expects a real mix of valid and invalid outcomes: with one kind only, a checker that
-    answers a constant would pass. */
+/** \brief Expects a real mix of valid and invalid outcomes, more than 1 / \a parts of each: with one
+    kind only, a checker that answers a constant would pass. */
 template <typename T>
-void expectMix(const std::vector<T> &verdicts, const std::string &what)
+void expectMix(const std::vector<T> &verdicts, const std::string &what, std::size_t parts = 10)
 {
     const std::size_t valid = countValid(verdicts), n = verdicts.size();
-    EXPECT_GT(valid, n / 10) << what << ": " << valid << " of " << n << " valid";
-    EXPECT_LT(valid, n - n / 10) << what << ": " << valid << " of " << n << " valid";
+    EXPECT_GT(valid, n / parts) << what << ": " << valid << " of " << n << " valid";
+    EXPECT_LT(valid, n - n / parts) << what << ": " << valid << " of " << n << " valid";
 }
 
 /** \brief One planning problem as makeSimpleSetup builds it, random states and edges in it, and the
@@ -233,7 +233,7 @@ protected:
 
     void certifiedEdgesOnEightThreadsAsOnOne()
     {
-        sampleEdges(perProblem_ / 16);  // a certified edge checks several times the states of a discrete one
+        sampleEdges(perProblem_ / 4);
         const ob::SpaceInformationPtr &si = setup_->getSpaceInformation();
         rco::StateValidityChecker &validity = validityOf(*setup_);
         const rco::CertifiedMotionValidator shared(si, validity);
@@ -247,7 +247,7 @@ protected:
         std::vector<EdgeVerdict> serial(m), parallel(m);
         for (std::size_t j = 0; j < m; ++j)
             serial[j] = decideEdge(oneThread, j);
-        expectMix(serial, "certified edges");
+        expectMix(serial, "certified edges", 20);  // most of these edges are free: ask for 5 % of each
         onThreads(m, [&](std::size_t j) { parallel[j] = decideEdge(shared, j); });
         expectSame(validity.getChecker(), serial, parallel, "certified edges, 8 threads vs 1");
         EXPECT_EQ(shared.getValidMotionCount(), 2 * countValid(serial));
