@@ -223,8 +223,7 @@ TEST(CertifiedMotion, EveryAcceptedPandaEdgeIsCollisionFreeAtEveryPoint)
     {
         const Context context = makeContext(rc::test::pandaProblem(root, scenario));
         // RRT-Connect's default range: a fifth of the space's extent.
-        const std::array<int, 3> counts =
-            checkRandomEdges(context, 40, 0.2 * context.si->getMaximumExtent(), 3);
+        const std::array<int, 3> counts = checkRandomEdges(context, 40, 0.2 * context.si->getMaximumExtent(), 3);
         EXPECT_GT(counts[0], 5) << scenario;  // both answers occur
         EXPECT_GT(counts[1], 5) << scenario;
         std::printf("%s: %d edges certified, %d not (%d of them accepted by the discrete validator)\n", scenario,

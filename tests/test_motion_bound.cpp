@@ -93,7 +93,8 @@ void measureSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps, do
                 const rc::Component &ca = robot->components[static_cast<std::size_t>(pairs[p].first)];
                 const rc::Component &cb = robot->components[static_cast<std::size_t>(pairs[p].second)];
                 const auto la = static_cast<std::size_t>(ca.link), lb = static_cast<std::size_t>(cb.link);
-                const std::size_t strideA = ca.mesh.vertices.size() / 12 + 1, strideB = cb.mesh.vertices.size() / 12 + 1;
+                const std::size_t strideA = ca.mesh.vertices.size() / 12 + 1,
+                                  strideB = cb.mesh.vertices.size() / 12 + 1;
                 for (std::size_t i = 0; i < ca.mesh.vertices.size(); i += strideA)
                     for (std::size_t j = 0; j < cb.mesh.vertices.size(); j += strideB)
                     {
@@ -135,9 +136,10 @@ TEST(MotionBound, KnownAnswersOnOneLink)
     const double reach = std::sqrt(6.75);
     for (const std::string type : {"revolute", "continuous", "prismatic"})
     {
-        const auto robot = robotFrom(rc::test::urdfLink("base") + rc::test::urdfLink("arm", kBox) +
-                                     rc::test::urdfJoint("j", type, "base", "arm",
-                                                         "<axis xyz=\"0 0 1\"/><limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/>"));
+        const auto robot = robotFrom(
+            rc::test::urdfLink("base") + rc::test::urdfLink("arm", kBox) +
+            rc::test::urdfJoint("j", type, "base", "arm",
+                                "<axis xyz=\"0 0 1\"/><limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/>"));
         const rc::MotionBound bound(*robot);
         ASSERT_EQ(bound.jointReach().size(), 1u);
         EXPECT_NEAR(bound.jointReach()[0], reach, 1e-12) << type;
@@ -165,7 +167,8 @@ TEST(MotionBound, ReachAddsTheOffsetsAndSlidesBelowAJoint)
         rc::test::urdfJoint("shoulder", "revolute", "base", "upper",
                             "<axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>") +
         rc::test::urdfJoint("slide", "prismatic", "upper", "arm",
-                            "<origin xyz=\"1 0 0\"/><axis xyz=\"1 0 0\"/><limit lower=\"-0.2\" upper=\"0.5\" effort=\"1\" velocity=\"1\"/>"));
+                            "<origin xyz=\"1 0 0\"/><axis xyz=\"1 0 0\"/><limit lower=\"-0.2\" upper=\"0.5\" "
+                            "effort=\"1\" velocity=\"1\"/>"));
     const rc::MotionBound bound(*robot);
     const double cube = std::sqrt(6.75);
     ASSERT_EQ(bound.jointReach().size(), 2u);
@@ -178,11 +181,12 @@ TEST(MotionBound, ReachAddsTheOffsetsAndSlidesBelowAJoint)
 
 TEST(MotionBound, AMimicFollowerOfAContinuousJointAcrossPiCannotBeBounded)
 {
-    const auto robot = robotFrom(
-        rc::test::urdfLink("base") + rc::test::urdfLink("wheel") + rc::test::urdfLink("arm", kBox) +
-        rc::test::urdfJoint("drive", "continuous", "base", "wheel", "<axis xyz=\"0 0 1\"/>") +
-        rc::test::urdfJoint("follow", "revolute", "base", "arm",
-                            "<axis xyz=\"0 0 1\"/><limit lower=\"-5\" upper=\"5\" effort=\"1\" velocity=\"1\"/><mimic joint=\"drive\" multiplier=\"0.5\"/>"));
+    const auto robot =
+        robotFrom(rc::test::urdfLink("base") + rc::test::urdfLink("wheel") + rc::test::urdfLink("arm", kBox) +
+                  rc::test::urdfJoint("drive", "continuous", "base", "wheel", "<axis xyz=\"0 0 1\"/>") +
+                  rc::test::urdfJoint("follow", "revolute", "base", "arm",
+                                      "<axis xyz=\"0 0 1\"/><limit lower=\"-5\" upper=\"5\" effort=\"1\" "
+                                      "velocity=\"1\"/><mimic joint=\"drive\" multiplier=\"0.5\"/>"));
     const rc::MotionBound bound(*robot);
     const double qa[] = {3.0}, qb[] = {-3.0}, qc[] = {2.0};
     // Across pi the drive goes the short way, but its follower jumps from 1.57 to -1.57 rad.
@@ -195,11 +199,11 @@ TEST(MotionBound, AHeldUnboundedBaseDoesNotMakeEveryEdgeUnbounded)
 {
     // A floating base without bounds under a turning joint: its reach is infinite, but an edge that
     // leaves the turning joint alone and moves the base a known distance is bounded.
-    const auto robot = robotFrom(rc::test::urdfLink("world") + rc::test::urdfLink("mount") +
-                                 rc::test::urdfLink("body", kBox) +
-                                 rc::test::urdfJoint("yaw", "revolute", "world", "mount",
-                                                     "<axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>") +
-                                 rc::test::urdfJoint("base", "floating", "mount", "body"));
+    const auto robot = robotFrom(
+        rc::test::urdfLink("world") + rc::test::urdfLink("mount") + rc::test::urdfLink("body", kBox) +
+        rc::test::urdfJoint("yaw", "revolute", "world", "mount",
+                            "<axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>") +
+        rc::test::urdfJoint("base", "floating", "mount", "body"));
     const rc::MotionBound bound(*robot);
     EXPECT_EQ(bound.jointReach()[robot->jointIndex("yaw")], std::numeric_limits<double>::infinity());
     // yaw, x y z qx qy qz qw

@@ -54,7 +54,8 @@ public:
         invalid state's first contact. Never throws for bad states: they are invalid (a state with a
         NaN or infinite coordinate is Contact::Kind::OutOfBounds, and the first such state a checker
         sees is named in one warning). Throws ConfigurationError for a malformed \a request
-        (validate(), or a pairPadding whose sizes do not fit the model). With an empty scene only self-collision is checked. */
+        (validate(), or a pairPadding whose sizes do not fit the model). With an empty scene only
+        self-collision is checked. */
     void check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request = {},
                Contact *contacts = nullptr) const;
 

@@ -44,7 +44,7 @@ enum class CollisionMode
 };
 
 std::string toString(CollisionMode mode);
-/** \brief "safe", "raster" or "exact"; throws ConfigurationError otherwise. */
+/** \brief "safe", "raster", "exact" or "conservative"; throws ConfigurationError otherwise. */
 CollisionMode parseCollisionMode(const std::string &text);
 
 /** \brief Padding added to CollisionRequest::padding for individual pairs. CertifiedMotionValidator

@@ -198,9 +198,10 @@ bool unprovenCollides(const device::Box &window, const Eigen::Vector3d &origin, 
     return true;
 }
 
-/** \brief Decides one pair of solids, closer than \a padding = colliding; fills contact.triangle and contact.position on collision
-    when \a wantContact (without it, in safe and exact mode, a pair the hull test proves
-    overlapping is decided there and the contact's place is left unset).
+/** \brief Decides one pair of solids (closer than \a padding counts as colliding); fills
+    contact.triangle and contact.position on collision when \a wantContact (without it, in safe
+    and exact mode, a pair the hull test proves overlapping is decided there and the contact's
+    place is left unset).
     Only raster mode rasterizes here: on the CPU the exact narrow phase decides a pair faster than
     the raster stages (measured on the Panda MBM scenes: rasterizing a pair cost about 5x an exact
     BVH query, and the depth-range proof settled only a quarter of the pairs), so safe mode on this

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 
-
 namespace rastercheck
 {
 namespace
@@ -13,7 +12,10 @@ constexpr double kPi = 3.14159265358979323846;
 
 /** \brief sqrt(x^2 + y^2 + z^2), infinite when one is (libstdc++'s three-argument std::hypot
     returns NaN for infinite arguments). */
-double length(double x, double y, double z) { return std::sqrt(x * x + y * y + z * z); }
+double length(double x, double y, double z)
+{
+    return std::sqrt(x * x + y * y + z * z);
+}
 
 /** \brief How far joint \a joint's coordinates can move its child frame's origin from the joint
     frame's (0 for joints that only turn it): by the bounds, infinite where one is infinite (an
@@ -89,8 +91,8 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
             continue;
         reach_[j] = subtreeReach[child];
         carries[parent] = true;
-        subtreeReach[parent] = std::max(subtreeReach[parent],
-                                        joint.origin.translation().norm() + frameShift(robot, joint) + subtreeReach[child]);
+        subtreeReach[parent] = std::max(
+            subtreeReach[parent], joint.origin.translation().norm() + frameShift(robot, joint) + subtreeReach[child]);
     }
     for (const double r : reach_)
         if (std::isfinite(r))

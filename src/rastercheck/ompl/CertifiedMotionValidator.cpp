@@ -80,20 +80,23 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
 {
     detail::requireMatchingParts(si, mapping_, checker_, "CertifiedMotionValidator");
     if (request_.mode == CollisionMode::Raster)
-        throw ConfigurationError("CertifiedMotionValidator: raster mode can miss thin overlaps, so it cannot certify "
-                                 "an edge; use safe or exact mode");
+        throw ConfigurationError(
+            "CertifiedMotionValidator: raster mode can miss thin overlaps, so it cannot certify "
+            "an edge; use safe or exact mode");
     if (!(std::isfinite(options.margin) && options.margin >= 0.0))
         throw ConfigurationError("CertifiedMotionValidator: the margin must be finite and >= 0 (0 = automatic)");
     if (levels_ > 40)
-        throw ConfigurationError("CertifiedMotionValidator: at most 40 levels (the finest margin is margin / 2^levels)");
+        throw ConfigurationError(
+            "CertifiedMotionValidator: at most 40 levels (the finest margin is margin / 2^levels)");
     if (rakeWidth_ == 0)
         throw ConfigurationError("CertifiedMotionValidator: the rake width must be at least 1");
     if (!(margin_ > 0.0))
         margin_ = 1.0;  // a robot without geometry: nothing moves, every edge needs one check at any margin
 }
 
-void CertifiedMotionValidator::checkMidpoints(const ob::State *s1, const ob::State *s2, const std::vector<double> &starts,
-                                              double length, const CollisionRequest &request) const
+void CertifiedMotionValidator::checkMidpoints(const ob::State *s1, const ob::State *s2,
+                                              const std::vector<double> &starts, double length,
+                                              const CollisionRequest &request) const
 {
     Scratch &w = scratch();
     const std::size_t dof = mapping_->numCoordinates();
