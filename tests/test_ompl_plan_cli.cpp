@@ -115,6 +115,7 @@ TEST(PlanCli, CollidingSolutionIsReportedLoudly)
     EXPECT_TRUE(contains(run.output, "wall")) << run.output;
     EXPECT_TRUE(contains(run.output, "rrtconnect         0/1         1")) << run.output;
     EXPECT_TRUE(contains(run.output, "1 solution path(s) collide")) << run.output;
+    EXPECT_TRUE(contains(run.output, "plan with --edges certified")) << run.output;
 }
 
 TEST(PlanCli, CertifiedEdgesDoNotStepThroughAThinWall)

@@ -306,6 +306,9 @@ int runPlan(const PlanOptions &options)
     {
         std::cerr << "rastercheck: ERROR: " << collidingPaths
                   << " solution path(s) collide according to the exact oracle (counted as unsolved above)\n";
+        if (options.edges != "certified")
+            std::cerr << "rastercheck: plan with --edges certified to accept only edges that are collision-free "
+                         "at every point\n";
         return 3;
     }
     return 0;
