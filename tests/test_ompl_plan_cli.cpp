@@ -67,6 +67,15 @@ int countRows(const std::string &database, const std::string &where)
         return -1;
     return std::atoi(run.output.c_str());
 }
+
+/** \brief An OMPL.app problem in \a folder: a 10 cm cube and a 2 cm wall across the whole volume (no
+    path exists); returns the .cfg's path. */
+std::string wallProblem(const std::string &folder)
+{
+    writeFile(folder + "/robot.obj", objBox("robot", -0.05, -0.05, -0.05, 0.05, 0.05, 0.05, 0));
+    writeFile(folder + "/world.obj", objBox("wall", -0.01, -3, -3, 0.01, 3, 3, 0));
+    return writeFile(folder + "/wall.cfg", cfg("rrtconnect=\n"));
+}
 }  // namespace
 
 TEST(PlanCli, OmplAppProblemLogIsReadByOmplBenchmarkStatistics)
@@ -103,12 +112,8 @@ TEST(PlanCli, CollidingSolutionIsReportedLoudly)
     // resolution against a 2 cm wall) the planner steps through it. The exact re-check at 10x the
     // resolution must catch every such path.
     const std::string folder = makeTempDir("plan_cli_wall");
-    writeFile(folder + "/robot.obj", objBox("robot", -0.05, -0.05, -0.05, 0.05, 0.05, 0.05, 0));
-    writeFile(folder + "/world.obj", objBox("wall", -0.01, -3, -3, 0.01, 3, 3, 0));
-    writeFile(folder + "/wall.cfg", cfg("rrtconnect=\n"));
-    const CliRun run =
-        runCli("plan " + folder + "/wall.cfg --runs 1 --time-limit 5 --segment-fraction 0.1 --seed 5 --log " + folder +
-               "/wall.log");
+    const CliRun run = runCli("plan " + wallProblem(folder) +
+                              " --runs 1 --time-limit 5 --segment-fraction 0.1 --seed 5 --log " + folder + "/wall.log");
     EXPECT_EQ(run.status, 3) << run.output;
     EXPECT_TRUE(contains(run.output, "rastercheck: ERROR: solution path of RRTConnect run 0 COLLIDES")) << run.output;
     EXPECT_TRUE(contains(run.output, "the planner's resolution stepped over it")) << run.output;
@@ -122,12 +127,8 @@ TEST(PlanCli, CertifiedEdgesDoNotStepThroughAThinWall)
 {
     // The wall of the test above with the same coarse resolution: certified edges cannot cross it,
     // so there is no solution, and no colliding one.
-    const std::string folder = makeTempDir("plan_cli_wall_certified");
-    writeFile(folder + "/robot.obj", objBox("robot", -0.05, -0.05, -0.05, 0.05, 0.05, 0.05, 0));
-    writeFile(folder + "/world.obj", objBox("wall", -0.01, -3, -3, 0.01, 3, 3, 0));
-    writeFile(folder + "/wall.cfg", cfg("rrtconnect=\n"));
-    const CliRun run = runCli("plan " + folder +
-                              "/wall.cfg --runs 1 --time-limit 1 --segment-fraction 0.1 --seed 5 --edges certified");
+    const CliRun run = runCli("plan " + wallProblem(makeTempDir("plan_cli_wall_certified")) +
+                              " --runs 1 --time-limit 1 --segment-fraction 0.1 --seed 5 --edges certified");
     EXPECT_EQ(run.status, 0) << run.output;
     EXPECT_TRUE(contains(run.output, "certified edges")) << run.output;
     EXPECT_TRUE(contains(run.output, "rrtconnect         0/1         0")) << run.output;
@@ -139,18 +140,19 @@ TEST(PlanCli, MotionBenchMakerProblem)
     RASTERCHECK_REQUIRE_DATA(root);
     const std::string panda = root + "/mbm/panda";
     const std::string problems = panda + "/problems/table_pick_panda";
-    const CliRun run = runCli("plan --robot " + panda + "/panda.urdf --srdf " + panda + "/panda.srdf --scene " +
-                              problems + "/scene0001.yaml --request " + problems +
-                              "/request0001.yaml --planner rrtconnect --runs 2 --time-limit 60 --seed 1 --mode exact");
     // (--time-limit is a limit, not a budget: a run stops when it connects; sanitizer builds are slow.)
+    auto plan = [&](const std::string &options)
+    {
+        return runCli("plan --robot " + panda + "/panda.urdf --srdf " + panda + "/panda.srdf --scene " + problems +
+                      "/scene0001.yaml --request " + problems +
+                      "/request0001.yaml --planner rrtconnect --runs 2 --time-limit 60 --seed 1 " + options);
+    };
+    const CliRun run = plan("--mode exact");
     ASSERT_EQ(run.status, 0) << run.output;
     EXPECT_TRUE(contains(run.output, "experiment scene0001_request0001")) << run.output;
     EXPECT_TRUE(contains(run.output, "rrtconnect         2/2         0")) << run.output;
 
-    const CliRun certified = runCli("plan --robot " + panda + "/panda.urdf --srdf " + panda + "/panda.srdf --scene " +
-                                    problems + "/scene0001.yaml --request " + problems +
-                                    "/request0001.yaml --planner rrtconnect --runs 2 --time-limit 60 --seed 1 "
-                                    "--edges certified");
+    const CliRun certified = plan("--edges certified");
     ASSERT_EQ(certified.status, 0) << certified.output;
     EXPECT_TRUE(contains(certified.output, "rrtconnect         2/2         0")) << certified.output;
 }
