@@ -105,7 +105,10 @@ void addCheckCommand(CLI::App &app)
                         "CSV with a header row: the robot's coordinate names (x,y,z,qx,qy,qz,qw for rigid bodies)")
         ->required();
     command->add_option("--out", options->outPath, "verdicts CSV: valid,component,object,triangle,x,y,z");
-    command->add_option("--mode", options->mode, "safe (default, no false negatives), raster, exact, or conservative (proofs only: no false negatives, some false alarms)")
+    command
+        ->add_option("--mode", options->mode,
+                     "safe (default, no false negatives), raster, exact, or conservative (proofs only: no false "
+                     "negatives, some false alarms)")
         ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
     command->add_option("--backend", options->backend, "auto, cpu or cuda")->check(CLI::IsMember({"auto", "cpu", "cuda"}));
     command->add_option("--threads", options->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);

@@ -268,7 +268,8 @@ int runPlan(const PlanOptions &options)
 
     ot::Benchmark::Request request(timeLimit, memoryLimit, static_cast<unsigned int>(runs), 0.05, false, false,
                                    !options.noSimplify);
-    std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.mode << ", " << options.edges << " edges, "
+    std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.mode << ", "
+              << options.edges << " edges, "
               << runs << " run(s) of " << timeLimit << " s per planner\n";
     benchmark.benchmark(request);
     if (!options.logPath.empty() && !benchmark.saveResultsToFile(options.logPath.c_str()))
@@ -340,7 +341,9 @@ void addPlanCommand(CLI::App &app)
         ->check(CLI::PositiveNumber);
     command->add_option("--backend", options->backend, "auto, cpu or cuda")
         ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
-    command->add_option("--mode", options->mode, "collision mode while planning: safe (default), raster, exact or conservative")
+    command
+        ->add_option("--mode", options->mode,
+                     "collision mode while planning: safe (default), raster, exact or conservative")
         ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
     command->add_option("--threads", options->threads, "worker threads of batch checks (0 = all cores)")
         ->check(CLI::NonNegativeNumber);
@@ -352,12 +355,12 @@ void addPlanCommand(CLI::App &app)
     command
         ->add_option("--edges", options->edges,
                      "edge checking: batched (default; DiscreteMotionValidator's states, in batches), discrete "
-                     "(OMPL's own) or certified (collision-free at every point of an edge; safe or exact mode)")
+                     "(OMPL's own) or certified (collision-free at every point of an edge; not in raster mode)")
         ->check(CLI::IsMember({"batched", "discrete", "certified"}));
     command
         ->add_option("--margin", options->margin,
-                     "certified edges: clearance margin of the coarsest samples, scene units (default 2 % of the "
-                     "robot's size)")
+                     "certified edges: clearance margin of the coarsest samples, scene units (default a tenth "
+                     "of the robot's size)")
         ->check(CLI::NonNegativeNumber);
     command
         ->add_option("--recheck-factor", options->recheckFactor,

@@ -71,6 +71,10 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
 {
     // Bottom-up over the tree (joints are in topological order): how far the geometry of each
     // link's subtree can lie from that link's origin, and whether there is any.
+    std::vector<double> radius(robot.components.size(), 0.0);  // of each component, from its link's origin
+    for (std::size_t c = 0; c < robot.components.size(); ++c)
+        for (const Eigen::Vector3d &v : robot.components[c].mesh.vertices)
+            radius[c] = std::max(radius[c], v.norm());
     std::vector<double> subtreeReach(robot.links.size(), 0.0);
     std::vector<bool> carries(robot.links.size(), false);
     for (std::size_t l = 0; l < robot.links.size(); ++l)
@@ -78,8 +82,7 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         const int c = robot.links[l].component;
         if (c < 0)
             continue;
-        for (const Eigen::Vector3d &v : robot.components[static_cast<std::size_t>(c)].mesh.vertices)
-            subtreeReach[l] = std::max(subtreeReach[l], v.norm());
+        subtreeReach[l] = radius[static_cast<std::size_t>(c)];
         carries[l] = !robot.components[static_cast<std::size_t>(c)].mesh.triangles.empty();
     }
     for (std::size_t j = robot.joints.size(); j-- > 0;)
@@ -114,11 +117,10 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
     // Per component, up its chain: how far its points can lie from each joint's centre (its own
     // radius, then each joint's offset and shift on the way up). A joint near the base turns a
     // link near the base through a small radius, whatever the hand below does.
-    for (const Component &component : robot.components)
+    for (std::size_t c = 0; c < robot.components.size(); ++c)
     {
-        double distance = 0.0;
-        for (const Eigen::Vector3d &v : component.mesh.vertices)
-            distance = std::max(distance, v.norm());
+        const Component &component = robot.components[c];
+        double distance = radius[c];
         std::vector<Carrier> above;
         for (int link = component.link; link >= 0;)
         {

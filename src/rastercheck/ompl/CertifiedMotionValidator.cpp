@@ -82,7 +82,7 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
     if (request_.mode == CollisionMode::Raster)
         throw ConfigurationError(
             "CertifiedMotionValidator: raster mode can miss thin overlaps, so it cannot certify "
-            "an edge; use safe or exact mode");
+            "an edge; use safe, exact or conservative mode");
     if (!(std::isfinite(options.margin) && options.margin >= 0.0))
         throw ConfigurationError("CertifiedMotionValidator: the margin must be finite and >= 0 (0 = automatic)");
     if (levels_ > 40)
