@@ -289,6 +289,10 @@ public:
         model_.convex.planes = uploadOnce(model_memory_, host.convex.planes, host.numConvexPlaneDoubles);
         model_.convex.edges = uploadOnce(model_memory_, host.convex.edges, host.numConvexEdgeIndices);
         model_.convex.hullGroups = uploadOnce(model_memory_, host.convex.hullGroups, host.numConvexHullGroups);
+        model_.convex.patchNodes = uploadOnce(model_memory_, host.convex.patchNodes, host.numPatchNodes);
+        model_.convex.solidPatchNodes = uploadOnce(model_memory_, host.convex.solidPatchNodes, m + o + 1);
+        model_.convex.patchPieces = uploadOnce(model_memory_, host.convex.patchPieces, host.numPatches);
+        model_.convex.patchTriangles = uploadOnce(model_memory_, host.convex.patchTriangles, host.numPatchTriangleIndices);
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
         // non-blocking stream that does not wait for the legacy one: wait here.

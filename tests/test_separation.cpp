@@ -57,8 +57,8 @@ public:
         return relation(a, poseA, b, poseB, padding, false) == rc::device::HullRelation::Apart;
     }
 
-    bool provenOverlapping(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b,
-                           const Eigen::Isometry3d &poseB, double padding) const
+    bool provenOverlapping(std::size_t a, const Eigen::Isometry3d &poseA, std::size_t b, const Eigen::Isometry3d &poseB,
+                           double padding) const
     {
         return relation(a, poseA, b, poseB, padding) == rc::device::HullRelation::Overlapping;
     }
@@ -322,11 +322,13 @@ TEST(Separation, OnlyClosedShellsNearlyConvexProveOverlaps)
     EXPECT_TRUE(solids.oracleOverlaps(openBox, here, small, at(0.3, 0.15, 0), 0.0));
     EXPECT_EQ(solids.relation(openBox, here, small, at(0.3, 0.15, 0), 0.0), rc::device::HullRelation::Unknown);
 
-    // The box in the U's notch: the hulls overlap deeply, the solids are 0.2 apart.
+    // The box in the U's notch: the hulls overlap deeply, the solids are 0.2 apart. The U's
+    // patches (flat pieces of its surface) prove it, up to a padding under the gap.
     const Eigen::Isometry3d notch = at(1.5, 0, 1.5);
     const std::size_t cube = solids.add(rc::makeBox(Vec(0.6, 0.6, 0.6)));
     EXPECT_FALSE(solids.oracleOverlaps(u, here, cube, notch, 0.0));
-    EXPECT_EQ(solids.relation(u, here, cube, notch, 0.0), rc::device::HullRelation::Unknown);
+    EXPECT_EQ(solids.relation(u, here, cube, notch, 0.0), rc::device::HullRelation::Apart);
+    EXPECT_EQ(solids.relation(u, here, cube, notch, 0.19), rc::device::HullRelation::Apart);
     EXPECT_EQ(solids.relation(u, here, cube, notch, 0.3), rc::device::HullRelation::Unknown);
     // Sunk 0.5 into the U's base: the U keeps no planes, but its surface (a vertex or an edge)
     // reaches inside the closed cube, which proves the overlap.
@@ -544,7 +546,7 @@ TEST(Separation, TheClusteredSupportSearchFindsWhatReadingEveryHullPointFinds)
     rc::ConvexSolids convex;
     convex.add(rc::makeBox(Vec(0.4, 0.1, 0.25)), true);  // 8 hull points: searched one by one
     convex.add(rc::makeSphere(1.0, 1e-4), true);         // 128 hull points in clusters
-    rc::Mesh rod = rc::makeCylinder(0.05, 2.0, 1e-4);  // long and thin, far from its frame's origin
+    rc::Mesh rod = rc::makeCylinder(0.05, 2.0, 1e-4);    // long and thin, far from its frame's origin
     rod.transform(Eigen::Isometry3d(Eigen::Translation3d(30.0, -20.0, 50.0)));
     convex.add(rod, true);
     std::vector<std::string> names = {"box", "sphere", "cylinder"};

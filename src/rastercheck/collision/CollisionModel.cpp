@@ -15,10 +15,9 @@ namespace
 CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, const Eigen::Vector3d &origin,
                                      std::vector<float> &vertices, std::vector<std::uint32_t> &triangles)
 {
-    CollisionModel::MeshSlice slice{static_cast<std::uint32_t>(vertices.size() / 3),
-                                    static_cast<std::uint32_t>(mesh.numVertices()),
-                                    static_cast<std::uint32_t>(triangles.size() / 3),
-                                    static_cast<std::uint32_t>(mesh.numTriangles()), closed};
+    CollisionModel::MeshSlice slice{
+        static_cast<std::uint32_t>(vertices.size() / 3), static_cast<std::uint32_t>(mesh.numVertices()),
+        static_cast<std::uint32_t>(triangles.size() / 3), static_cast<std::uint32_t>(mesh.numTriangles()), closed};
     for (const Eigen::Vector3d &v : mesh.vertices)
         for (int k = 0; k < 3; ++k)
             vertices.push_back(static_cast<float>(v[k] - origin[k]));
@@ -78,8 +77,8 @@ std::vector<double> facePlanes(const Mesh &mesh)
 std::vector<std::vector<std::uint32_t>> hullClusters(const std::vector<Eigen::Vector3d> &points)
 {
     const std::size_t n = points.size();
-    const std::size_t k = std::min<std::size_t>(device::kMaxHullGroups,
-                                                static_cast<std::size_t>(std::ceil(std::sqrt(2.0 * static_cast<double>(n)))));
+    const std::size_t k = std::min<std::size_t>(
+        device::kMaxHullGroups, static_cast<std::size_t>(std::ceil(std::sqrt(2.0 * static_cast<double>(n)))));
     if (n < 32)
         return {};
     std::vector<Eigen::Vector3d> centres{points[0]};
@@ -121,6 +120,32 @@ std::vector<std::vector<std::uint32_t>> hullClusters(const std::vector<Eigen::Ve
     return clusters;
 }
 
+/** \brief True when the triangles order[begin, end) of \a mesh lie in a slab, normal to their mean
+    normal, no thicker than \a thickness: a patch whose hull hugs its surface (a piece of a wall, of
+    a gently curved shell), not one that wraps a corner. */
+bool patchIsFlat(const Mesh &mesh, const std::vector<std::uint32_t> &order, std::size_t begin, std::size_t end,
+                 double thickness)
+{
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    for (std::size_t i = begin; i < end; ++i)
+    {
+        const Mesh::Triangle &t = mesh.triangles[order[i]];
+        normal += (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+    }
+    const double length = normal.norm();
+    if (!(length > 0.0))
+        return false;
+    normal /= length;
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    for (std::size_t i = begin; i < end; ++i)
+        for (std::uint32_t v : mesh.triangles[order[i]])
+        {
+            low = std::min(low, normal.dot(mesh.vertices[v]));
+            high = std::max(high, normal.dot(mesh.vertices[v]));
+        }
+    return high - low <= thickness;
+}
+
 device::OrientedBox toDeviceBox(const Obb &box)
 {
     device::OrientedBox b;
@@ -135,7 +160,7 @@ device::OrientedBox toDeviceBox(const Obb &box)
 }
 }  // namespace
 
-void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
+device::ConvexPiece ConvexSolids::makePiece(const Mesh &mesh, bool closedShell)
 {
     device::ConvexPiece piece{static_cast<std::uint32_t>(vertices_.size() / 3),
                               static_cast<std::uint32_t>(mesh.numVertices()),
@@ -150,6 +175,9 @@ void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
                               static_cast<std::uint32_t>(edges_.size() / 2),
                               0,
                               static_cast<std::uint32_t>(hullGroups_.size()),
+                              0,
+                              0,
+                              0,
                               0};
     std::vector<std::uint8_t> used(mesh.numVertices(), 0);
     for (const Mesh::Triangle &t : mesh.triangles)
@@ -229,22 +257,123 @@ void ConvexSolids::addPiece(const Mesh &mesh, bool closedShell)
             if (!isHullPoint[i])
             {
                 const Eigen::Vector3d &v = mesh.vertices[i];
-                piece.hullSlack = std::max(piece.hullSlack, device::hullDistanceBound({v.x(), v.y(), v.z()}, hull,
-                                                                                      piece.numHullPoints,
-                                                                                      piece.hullSlack));
+                piece.hullSlack = std::max(
+                    piece.hullSlack,
+                    device::hullDistanceBound({v.x(), v.y(), v.z()}, hull, piece.numHullPoints, piece.hullSlack));
             }
         piece.hullSlack += 1e-6 * piece.radius;
     }
-    pieces_.push_back(piece);
+    return piece;
 }
 
-void ConvexSolids::add(const Mesh &mesh, bool closed)
+void ConvexSolids::addPatches(const Mesh &mesh, double patchThickness)
+{
+    const std::size_t n = mesh.numTriangles();
+    std::vector<Eigen::Vector3d> centroids(n);
+    for (std::size_t t = 0; t < n; ++t)
+        centroids[t] = (mesh.vertices[mesh.triangles[t][0]] + mesh.vertices[mesh.triangles[t][1]] +
+                        mesh.vertices[mesh.triangles[t][2]]) /
+                       3.0;
+    std::vector<std::uint32_t> order(n);
+    for (std::size_t t = 0; t < n; ++t)
+        order[t] = static_cast<std::uint32_t>(t);
+    const std::size_t root = patchNodes_.size();
+    std::vector<std::uint32_t> renumbered(mesh.numVertices(), ~0u);
+    // Depth-first with an explicit list of (node, begin, end, depth), children stored in pairs.
+    struct Pending
+    {
+        std::size_t node, begin, end;
+        int depth;
+    };
+    std::vector<Pending> pending{{root, 0, n, 0}};
+    patchNodes_.emplace_back();
+    while (!pending.empty())
+    {
+        const Pending job = pending.back();
+        pending.pop_back();
+        Aabb box, centroidBox;
+        for (std::size_t i = job.begin; i < job.end; ++i)
+        {
+            for (std::uint32_t v : mesh.triangles[order[i]])
+                box.extend(mesh.vertices[v]);
+            centroidBox.extend(centroids[order[i]]);
+        }
+        device::PatchNode &node = patchNodes_[job.node];
+        for (int k = 0; k < 3; ++k)
+        {
+            node.min[k] = box.min[k];
+            node.max[k] = box.max[k];
+        }
+        node.reserved = 0;
+        if (job.end - job.begin == 1 || job.depth >= device::kMaxPatchDepth ||
+            (job.end - job.begin <= kPatchTriangles && patchIsFlat(mesh, order, job.begin, job.end, patchThickness)))
+        {
+            // A patch: its triangles as a mesh of their own (vertices renumbered).
+            Mesh patch;
+            std::vector<std::uint32_t> used;
+            for (std::size_t i = job.begin; i < job.end; ++i)
+            {
+                Mesh::Triangle triangle{};
+                for (int k = 0; k < 3; ++k)
+                {
+                    const std::uint32_t v = mesh.triangles[order[i]][k];
+                    if (renumbered[v] == ~0u)
+                    {
+                        renumbered[v] = static_cast<std::uint32_t>(patch.vertices.size());
+                        patch.vertices.push_back(mesh.vertices[v]);
+                        used.push_back(v);
+                    }
+                    triangle[k] = renumbered[v];
+                }
+                patch.triangles.push_back(triangle);
+            }
+            for (std::uint32_t v : used)
+                renumbered[v] = ~0u;
+            device::ConvexPiece piece = makePiece(patch, false);
+            piece.firstTriangle = static_cast<std::uint32_t>(patchTriangles_.size() / 3);
+            piece.numTriangles = static_cast<std::uint32_t>(patch.numTriangles());
+            for (const Mesh::Triangle &t : patch.triangles)
+                patchTriangles_.insert(patchTriangles_.end(), t.begin(), t.end());
+            patchNodes_[job.node].first = -1 - static_cast<std::int32_t>(patchPieces_.size());
+            patchPieces_.push_back(piece);
+            continue;
+        }
+        int axis = 0;
+        centroidBox.halfExtents().maxCoeff(&axis);
+        const std::size_t middle = job.begin + (job.end - job.begin) / 2;
+        std::nth_element(
+            order.begin() + static_cast<std::ptrdiff_t>(job.begin), order.begin() + static_cast<std::ptrdiff_t>(middle),
+            order.begin() + static_cast<std::ptrdiff_t>(job.end),
+            [&centroids, axis](std::uint32_t i, std::uint32_t j) { return centroids[i][axis] < centroids[j][axis]; });
+        const std::size_t child = patchNodes_.size();
+        patchNodes_[job.node].first = static_cast<std::int32_t>(child - root);
+        patchNodes_.emplace_back();
+        patchNodes_.emplace_back();
+        pending.push_back({child + 1, middle, job.end, job.depth + 1});
+        pending.push_back({child, job.begin, middle, job.depth + 1});
+    }
+}
+
+std::size_t ConvexSolids::bytes() const
+{
+    return vertices_.size() * sizeof(double) + hullPoints_.size() * sizeof(double) +
+           pieces_.size() * sizeof(device::ConvexPiece) + solidPieces_.size() * sizeof(std::uint32_t) +
+           planes_.size() * sizeof(double) + edges_.size() * sizeof(std::uint32_t) +
+           hullGroups_.size() * sizeof(device::HullGroup) + patchNodes_.size() * sizeof(device::PatchNode) +
+           solidPatchNodes_.size() * sizeof(std::uint32_t) + patchPieces_.size() * sizeof(device::ConvexPiece) +
+           solidPatches_.size() * sizeof(std::uint32_t) + patchTriangles_.size() * sizeof(std::uint32_t);
+}
+
+void ConvexSolids::add(const Mesh &mesh, bool closed, double patchThickness)
 {
     std::size_t shells = 0;
     const std::vector<std::uint32_t> shellOf = triangleShells(mesh, shells);
     // The whole mesh proves overlaps only as a single shell: the region behind every face of
     // several shells is rarely more than their overlap.
-    addPiece(mesh, closed && shells == 1);
+    const std::size_t wholePiece = pieces_.size();
+    pieces_.push_back(makePiece(mesh, closed && shells == 1));
+    pieces_[wholePiece].closed = closed ? 1u : 0u;
+    bool nearConvex = pieces_[wholePiece].numPlanes > 0;
     if (shells >= 2 && shells <= kMaxConvexShells)
     {
         // Each shell as a mesh of its own. Shells are linked through shared vertices, so every
@@ -267,14 +396,23 @@ void ConvexSolids::add(const Mesh &mesh, bool closed)
             }
             part.triangles.push_back(triangle);
         }
+        nearConvex = true;
         for (const Mesh &part : parts)
-            addPiece(part, closed);
+        {
+            pieces_.push_back(makePiece(part, closed));
+            nearConvex = nearConvex && pieces_.back().numPlanes > 0;
+        }
     }
     solidPieces_.push_back(static_cast<std::uint32_t>(pieces_.size()));
+    if (!nearConvex && mesh.numTriangles() > kMinPatchedTriangles)
+        addPatches(mesh, patchThickness >= 0.0 ? patchThickness
+                                               : kPatchFlatness * (mesh.bounds().max - mesh.bounds().min).norm());
+    solidPatchNodes_.push_back(static_cast<std::uint32_t>(patchNodes_.size()));
+    solidPatches_.push_back(static_cast<std::uint32_t>(patchPieces_.size()));
 }
 
 CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr sceneModel)
-  : robot(std::move(robotModel)), scene(std::move(sceneModel))
+    : robot(std::move(robotModel)), scene(std::move(sceneModel))
 {
     if (!robot)
         throw ConfigurationError("CollisionModel needs a robot model");
@@ -302,9 +440,14 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         componentLocalBoxes.push_back(toDeviceBox(box));
         componentLink.push_back(component.link);
         componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh));
-        convex.add(component.mesh, component.topology.closed);
         diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
+        convex.add(component.mesh, component.topology.closed, kPatchFlatness * diagonals.back());
     }
+    // Objects' patches are held to the robot's scale: a patch as thick as a link hides gaps
+    // the size of one.
+    std::vector<double> sorted = diagonals;
+    std::sort(sorted.begin(), sorted.end());
+    const double robotScale = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
     componentSubtreeEnd = robot->componentSubtreeEnd;
 
     for (const SceneObject &object : scene->objects)
@@ -329,7 +472,8 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         fitted.halfExtents.array() += 1e-5 * fitted.halfExtents.norm() + 1e-6 * distance + 1e-9;
         objectOrientedBoxes.push_back(toDeviceBox(fitted));
         objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh));
-        convex.add(object.mesh, object.topology.closed);
+        convex.add(object.mesh, object.topology.closed,
+                   kPatchFlatness * (robotScale > 0.0 ? robotScale : (object.bounds.max - object.bounds.min).norm()));
     }
 
     for (std::size_t a = 0; a < components.size(); ++a)

@@ -7,7 +7,7 @@
 
 #include "rastercheck/collision/CollisionRequest.h"
 #include "rastercheck/device/Boxes.h"
-#include "rastercheck/device/Separation.h"
+#include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/model/RobotModel.h"
@@ -25,6 +25,23 @@ constexpr std::size_t kConvexHullDirections = 128;
     product, and a solid of more shells (a scene mesh of loose parts) is tried whole only. */
 constexpr std::size_t kMaxConvexShells = 8;
 
+/** \brief Most triangles in a patch (device::PatchNode): small enough that a patch of a wall or a
+    curved surface is close to flat (its hull hugs it), large enough that the tree stays shallow
+    and each patch's hull test amortises the box tests above it. */
+constexpr std::size_t kPatchTriangles = 32;
+
+/** \brief A patch of more than one triangle is split further while its triangles are thicker,
+    along their mean normal, than this fraction of the robot's scale (the median diagonal of the
+    components' boxes; a component's own diagonal for its patches): a patch that wraps a corner of
+    a non-convex solid has a hull that fills the corner, and hides gaps about as wide as it is
+    thick from the proofs. */
+constexpr double kPatchFlatness = 0.02;
+
+/** \brief A solid gets patches when it has more triangles than this and neither its whole mesh nor
+    every one of its shells is close to convex (ConvexPiece::numPlanes): where its hull stands
+    for it poorly. */
+constexpr std::size_t kMinPatchedTriangles = 4;
+
 /** \brief The hull test's arrays (device::ConvexArrays), in double, each solid in its own frame:
     its whole mesh as one piece, then each of its shells when it has 2 to kMaxConvexShells of them.
     A closed shell close to convex keeps its face planes, so that overlaps can be proven too; a
@@ -34,15 +51,20 @@ class ConvexSolids
 public:
     /** \brief Appends \a mesh as the next solid; \a closed: its topology is closed (MeshTopology,
         outward-oriented), without which its pieces keep no face planes (an open mesh has no
-        inside; its vertices can still prove an overlap with a closed solid). */
-    void add(const Mesh &mesh, bool closed);
+        inside; its vertices can still prove an overlap with a closed solid). A solid that is
+        not close to convex gets patches no thicker than \a patchThickness (kPatchFlatness). */
+    void add(const Mesh &mesh, bool closed, double patchThickness = kOwnScale);
+    /** \brief add()'s default patch thickness: kPatchFlatness of the mesh's own box diagonal. */
+    static constexpr double kOwnScale = -1.0;
     std::size_t numSolids() const { return solidPieces_.size() - 1; }
     /** \brief Pieces of solid \a s: its whole mesh, then its shells (none when it has one). */
     std::size_t numPieces(std::size_t s) const { return solidPieces_[s + 1] - solidPieces_[s]; }
     device::ConvexArrays arrays() const
     {
-        return device::ConvexArrays{vertices_.data(), hullPoints_.data(), pieces_.data(), solidPieces_.data(),
-                                    planes_.data(), edges_.data(), hullGroups_.data()};
+        return device::ConvexArrays{vertices_.data(),    hullPoints_.data(),    pieces_.data(),
+                                    solidPieces_.data(), planes_.data(),        edges_.data(),
+                                    hullGroups_.data(),  patchNodes_.data(),    solidPatchNodes_.data(),
+                                    patchPieces_.data(), patchTriangles_.data()};
     }
     std::size_t numVertexDoubles() const { return vertices_.size(); }
     std::size_t numHullPointDoubles() const { return hullPoints_.size(); }
@@ -50,18 +72,33 @@ public:
     std::size_t numPlaneDoubles() const { return planes_.size(); }
     std::size_t numEdgeIndices() const { return edges_.size(); }
     std::size_t numHullGroups() const { return hullGroups_.size(); }
+    std::size_t numPatchNodes() const { return patchNodes_.size(); }
+    std::size_t numPatches() const { return patchPieces_.size(); }
+    std::size_t numPatchTriangleIndices() const { return patchTriangles_.size(); }
+    /** \brief Patches of solid \a s (0 when it has none: small, or close to convex). */
+    std::size_t numPatchesOf(std::size_t s) const { return solidPatches_[s + 1] - solidPatches_[s]; }
+    /** \brief Bytes of every array, for the memory report. */
+    std::size_t bytes() const;
 
 private:
     /** \brief \a closedShell: the piece is one closed, outward-oriented shell (it may keep planes). */
-    void addPiece(const Mesh &mesh, bool closedShell);
+    device::ConvexPiece makePiece(const Mesh &mesh, bool closedShell);
+    /** \brief The patch tree of \a mesh (device::PatchNode): median splits of the triangles'
+        centroids down to leaves of at most kPatchTriangles no thicker than \a patchThickness. */
+    void addPatches(const Mesh &mesh, double patchThickness);
 
     std::vector<double> vertices_;    // n_piece_vertices x 3
     std::vector<double> hullPoints_;  // n_hull_points x 3
     std::vector<device::ConvexPiece> pieces_;
-    std::vector<std::uint32_t> solidPieces_{0};  // n_solids + 1
-    std::vector<double> planes_;                 // n_planes x 4
-    std::vector<std::uint32_t> edges_;           // n_edges x 2
-    std::vector<device::HullGroup> hullGroups_;  // n_groups
+    std::vector<std::uint32_t> solidPieces_{0};      // n_solids + 1
+    std::vector<double> planes_;                     // n_planes x 4
+    std::vector<std::uint32_t> edges_;               // n_edges x 2
+    std::vector<device::HullGroup> hullGroups_;      // n_groups
+    std::vector<device::PatchNode> patchNodes_;      // per solid, root first
+    std::vector<std::uint32_t> solidPatchNodes_{0};  // n_solids + 1
+    std::vector<device::ConvexPiece> patchPieces_;   // n_patches
+    std::vector<std::uint32_t> solidPatches_{0};     // n_solids + 1
+    std::vector<std::uint32_t> patchTriangles_;      // n_patch_triangles x 3, vertex numbers within the patch
 };
 
 /** \brief Flat, immutable arrays of one robot and one scene, laid out for the pipeline stages (and
@@ -90,17 +127,17 @@ public:
         configuration (self-collision only). */
     Eigen::Vector3d origin = Eigen::Vector3d::Zero();
 
-    std::vector<float> componentVertices;           // n_component_vertices x 3, link frame
-    std::vector<std::uint32_t> componentTriangles;  // n_component_triangles x 3
-    std::vector<MeshSlice> components;              // n_components
+    std::vector<float> componentVertices;                  // n_component_vertices x 3, link frame
+    std::vector<std::uint32_t> componentTriangles;         // n_component_triangles x 3
+    std::vector<MeshSlice> components;                     // n_components
     std::vector<device::OrientedBox> componentLocalBoxes;  // n_components, link frame
-    std::vector<int> componentLink;                 // n_components
-    std::vector<int> componentSubtreeEnd;           // n_components: layer k spans [k, end)
+    std::vector<int> componentLink;                        // n_components
+    std::vector<int> componentSubtreeEnd;                  // n_components: layer k spans [k, end)
 
-    std::vector<float> objectVertices;           // n_object_vertices x 3, world frame - origin
-    std::vector<std::uint32_t> objectTriangles;  // n_object_triangles x 3
-    std::vector<MeshSlice> objects;              // n_objects
-    std::vector<device::Box> objectBoxes;        // n_objects, world frame - origin
+    std::vector<float> objectVertices;                     // n_object_vertices x 3, world frame - origin
+    std::vector<std::uint32_t> objectTriangles;            // n_object_triangles x 3
+    std::vector<MeshSlice> objects;                        // n_objects
+    std::vector<device::Box> objectBoxes;                  // n_objects, world frame - origin
     std::vector<device::OrientedBox> objectOrientedBoxes;  // n_objects, world frame - origin
 
     /** \brief Component pairs (a < b) checked for self-collision: those the ACM does not allow. */

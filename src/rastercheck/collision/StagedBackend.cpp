@@ -44,7 +44,10 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.convex.numAllPieces(),
                                model.convex.numPlaneDoubles(),
                                model.convex.numEdgeIndices(),
-                               model.convex.numHullGroups()};
+                               model.convex.numHullGroups(),
+                               model.convex.numPatchNodes(),
+                               model.convex.numPatches(),
+                               model.convex.numPatchTriangleIndices()};
 }
 
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)

@@ -25,7 +25,7 @@
 #include "rastercheck/device/HostDevice.h"
 #include "rastercheck/device/Kinematics.h"
 #include "rastercheck/device/Raster.h"
-#include "rastercheck/device/Separation.h"
+#include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
 
 #if defined(__CUDACC__)
@@ -71,6 +71,9 @@ struct ModelArrays
     std::size_t numConvexPlaneDoubles;
     std::size_t numConvexEdgeIndices;
     std::size_t numConvexHullGroups;
+    std::size_t numPatchNodes;
+    std::size_t numPatches;
+    std::size_t numPatchTriangleIndices;
 
     RC_HD std::uint32_t numPairs() const
     {

@@ -59,6 +59,26 @@ struct ConvexPiece
         are stored; none (0) for a few hull points, which are searched one by one. */
     std::uint32_t firstHullGroup;
     std::uint32_t numHullGroups;
+    /** \brief A patch's triangles (ConvexArrays::patchTriangles, vertex numbers within the piece),
+        for the ray parity test of containment (SolidRelation.h); none (0) for other pieces. */
+    std::uint32_t firstTriangle;
+    std::uint32_t numTriangles;
+    /** \brief 1 when the piece is a whole solid with an inside (a closed mesh). */
+    std::uint32_t closed;
+};
+
+/** \brief A node of a solid's patch tree (ConvexArrays::patchNodes): the top levels of a bounding-
+    volume hierarchy over the solid's triangles, whose leaves are patches, pieces of a few dozen
+    triangles with hulls of their own (ConvexArrays::patchPieces). The box bounds every vertex
+    below the node, in the solid's own frame. */
+struct PatchNode
+{
+    double min[3];
+    double max[3];
+    /** \brief Inner node: index of the first child (the second follows it) within the solid's
+        nodes, >= 1. Leaf: -(1 + the patch's index in ConvexArrays::patchPieces). */
+    std::int32_t first;
+    std::uint32_t reserved;
 };
 
 /** \brief The separation cull's view of every solid (CollisionModel::convex): solid s owns pieces
@@ -70,9 +90,15 @@ struct ConvexArrays
     const double *hullPoints;
     const ConvexPiece *pieces;
     const std::uint32_t *solidPieces;
-    const double *planes;  ///< n_planes x 4: unit outward normal and offset (n . x = d on the face)
+    const double *planes;        ///< n_planes x 4: unit outward normal and offset (n . x = d on the face)
     const std::uint32_t *edges;  ///< n_edges x 2: vertex numbers within the piece
     const HullGroup *hullGroups;
+    /** \brief Solid s's patch tree is patchNodes[solidPatchNodes[s] .. solidPatchNodes[s + 1]),
+        root first; an empty range: the solid has none (it is small, or close to convex). */
+    const PatchNode *patchNodes;
+    const std::uint32_t *solidPatchNodes;  ///< n_solids + 1
+    const ConvexPiece *patchPieces;        ///< n_patches; offsets into the arrays above
+    const std::uint32_t *patchTriangles;   ///< n_patch_triangles x 3: vertex numbers within the patch
 };
 
 /** \brief One piece as the separation test reads it: pointers into the flat arrays. */
@@ -94,15 +120,27 @@ struct ConvexProxy
     std::uint32_t numHullGroups;
 };
 
+RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, const ConvexPiece &p)
+{
+    return ConvexProxy{arrays.vertices + 3 * static_cast<std::size_t>(p.firstVertex),
+                       p.numVertices,
+                       arrays.hullPoints + 3 * static_cast<std::size_t>(p.firstHullPoint),
+                       p.numHullPoints,
+                       p.radius,
+                       p.hullSlack,
+                       arrays.planes + 4 * static_cast<std::size_t>(p.firstPlane),
+                       p.numPlanes,
+                       Vec3<double>{p.centre[0], p.centre[1], p.centre[2]},
+                       p.surfaceVertices != 0,
+                       arrays.edges + 2 * static_cast<std::size_t>(p.firstEdge),
+                       p.numEdges,
+                       arrays.hullGroups + p.firstHullGroup,
+                       p.numHullGroups};
+}
+
 RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, std::uint32_t piece)
 {
-    const ConvexPiece &p = arrays.pieces[piece];
-    return ConvexProxy{arrays.vertices + 3 * static_cast<std::size_t>(p.firstVertex), p.numVertices,
-                       arrays.hullPoints + 3 * static_cast<std::size_t>(p.firstHullPoint), p.numHullPoints, p.radius,
-                       p.hullSlack, arrays.planes + 4 * static_cast<std::size_t>(p.firstPlane), p.numPlanes,
-                       Vec3<double>{p.centre[0], p.centre[1], p.centre[2]}, p.surfaceVertices != 0,
-                       arrays.edges + 2 * static_cast<std::size_t>(p.firstEdge), p.numEdges,
-                       arrays.hullGroups + p.firstHullGroup, p.numHullGroups};
+    return convexProxy(arrays, arrays.pieces[piece]);
 }
 
 /** \brief Relative rounding slack of the separation proof: a gap must exceed the padding by this
@@ -117,8 +155,8 @@ constexpr double kPlaneSlack = 1e-9;
 
 /** \brief Most vertex x face-plane tests the overlap proof spends scanning every vertex of one piece
     against the other's planes (surfaceVertexInside), and edge x face-plane tests clipping every
-    edge (surfaceEdgeInside), when the hulls meet and the cheaper candidates failed. Most vertices fail at the first planes, so a scan costs far less than its bound; it
-    replaces an exact narrow phase that walks both BVHs. */
+    edge (surfaceEdgeInside), when the hulls meet and the cheaper candidates failed. Most vertices fail at the first
+   planes, so a scan costs far less than its bound; it replaces an exact narrow phase that walks both BVHs. */
 constexpr double kVertexScanBudget = 65536.0;
 
 /** \brief What the hull test settled about a pair of solids. */
@@ -315,7 +353,8 @@ RC_HD std::uint32_t hullSupportIndex(const ConvexProxy &solid, const Vec3<double
     }
     std::uint32_t local = 0;
     const HullGroup &first = solid.hullGroups[top];
-    double best = supportValue(solid.hullPoints + 3 * static_cast<std::size_t>(first.firstPoint), first.numPoints, d, &local);
+    double best =
+        supportValue(solid.hullPoints + 3 * static_cast<std::size_t>(first.firstPoint), first.numPoints, d, &local);
     index = first.firstPoint + local;
     for (std::uint32_t g = 0; g < solid.numHullGroups; ++g)
     {
@@ -369,8 +408,7 @@ RC_HD bool behindAllPlanes(const ConvexProxy &piece, const Pose<double> &pose, c
 RC_HD bool surfaceVertexInside(const ConvexProxy &p, const Pose<double> &poseP, const ConvexProxy &q,
                                const Pose<double> &poseQ, double margin)
 {
-    if (!p.surfaceVertices || q.numPlanes == 0 ||
-        static_cast<double>(p.numVertices) * q.numPlanes > kVertexScanBudget)
+    if (!p.surfaceVertices || q.numPlanes == 0 || static_cast<double>(p.numVertices) * q.numPlanes > kVertexScanBudget)
         return false;
     const Pose<double> pInQ = relativePose(poseQ, poseP);
     for (std::uint32_t i = 0; i < p.numVertices; ++i)
@@ -490,7 +528,7 @@ RC_HD double hullDistanceBound(const Vec3<double> &x, const double *points, std:
     settled 76 % of them there, and with the scans 98 %. */
 RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, const ConvexProxy &b,
                                const Pose<double> &poseB, double padding, bool proveOverlap,
-                               Vec3<double> *direction = nullptr)
+                               Vec3<double> *direction = nullptr, bool scanSurfaces = true)
 {
     if (a.numHullPoints == 0 || b.numHullPoints == 0)
         return HullRelation::Unknown;
@@ -550,11 +588,14 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
             if (b.surfaceVertices && detail::behindAllPlanes(a, poseA, onA[i] - simplex[i], planeMargin))
                 return true;
         }
-        return detail::surfaceVertexInside(a, poseA, b, poseB, planeMargin) ||
-               detail::surfaceVertexInside(b, poseB, a, poseA, planeMargin) ||
-               detail::surfaceEdgeInside(a, poseA, b, poseB, planeMargin) ||
-               detail::surfaceEdgeInside(b, poseB, a, poseA, planeMargin);
+        return scanSurfaces && (detail::surfaceVertexInside(a, poseA, b, poseB, planeMargin) ||
+                                detail::surfaceVertexInside(b, poseB, a, poseA, planeMargin) ||
+                                detail::surfaceEdgeInside(a, poseA, b, poseB, planeMargin) ||
+                                detail::surfaceEdgeInside(b, poseB, a, poseA, planeMargin));
     };
+    // Reading every vertex is worth it for pieces of a few thousand; a solid finer than that has
+    // patches (SolidRelation.h), whose own proofs read only the vertices near the other solid.
+    const bool readEveryVertex = static_cast<double>(a.numVertices) + b.numVertices <= kVertexScanBudget;
     // A proof's direction, kept for the caller's next call on the same pair (a nearby state).
     const auto apart = [&](const Vec3<double> &proof)
     {
@@ -578,7 +619,7 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         const double length = std::sqrt(vv);
         if (vw > (margin + a.hullSlack + b.hullSlack) * length)
             return apart(v);
-        if (!proofTried && vw > margin * length)
+        if (!proofTried && readEveryVertex && vw > margin * length)
         {
             proofTried = true;
             if (gapAlong(v, a, poseA, b, poseB) > margin * length)
@@ -598,45 +639,8 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
             break;  // no progress left
         v = next;
     }
-    return gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(dot(v, v)) ? apart(v) : HullRelation::Unknown;
+    return readEveryVertex && gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(dot(v, v)) ? apart(v)
+                                                                                              : HullRelation::Unknown;
 }
 
-/** \brief Are solids \a a and \a b (ConvexArrays numbering, placed by their poses) provably more
-    than \a padding apart, or (with \a proveOverlap) provably overlapping? First their whole hulls;
-    when those come too close and either solid is made of several shells, every shell of one
-    against every shell of the other (a solid with one shell stands for itself): the solid is the
-    union of its shells, each inside its own hull, so all those pairs apart means the solids are,
-    and any pair of shells proven to share a point means they overlap. Nested parts of a crane
-    (the boom foot between the superstructure's plates) are settled so; a single non-convex shell
-    is not. */
-RC_HD HullRelation relateSolids(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
-                                std::uint32_t b, const Pose<double> &poseB, double padding, bool proveOverlap,
-                                Vec3<double> *direction = nullptr)
-{
-    const std::uint32_t a0 = arrays.solidPieces[a], a1 = arrays.solidPieces[a + 1];
-    const std::uint32_t b0 = arrays.solidPieces[b], b1 = arrays.solidPieces[b + 1];
-    if (a0 == a1 || b0 == b1)
-        return HullRelation::Unknown;
-    const HullRelation whole =
-        relateHulls(convexProxy(arrays, a0), poseA, convexProxy(arrays, b0), poseB, padding, proveOverlap, direction);
-    if (whole != HullRelation::Unknown || (a1 - a0 == 1 && b1 - b0 == 1))
-        return whole;
-    const std::uint32_t aShells = a1 - a0 > 1 ? a0 + 1 : a0, bShells = b1 - b0 > 1 ? b0 + 1 : b0;
-    bool allApart = true;
-    for (std::uint32_t i = aShells; i < a1; ++i)
-        for (std::uint32_t j = bShells; j < b1; ++j)
-        {
-            const HullRelation shells =
-                relateHulls(convexProxy(arrays, i), poseA, convexProxy(arrays, j), poseB, padding, proveOverlap);
-            if (shells == HullRelation::Overlapping)
-                return shells;
-            if (shells == HullRelation::Unknown)
-            {
-                if (!proveOverlap)
-                    return shells;
-                allApart = false;  // keep looking for a pair of shells that proves an overlap
-            }
-        }
-    return allApart ? HullRelation::Apart : HullRelation::Unknown;
-}
 }  // namespace rastercheck::device

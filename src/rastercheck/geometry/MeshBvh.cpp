@@ -8,6 +8,7 @@
 #include <string>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/geometry/TriangleTests.h"
 
 namespace rastercheck
@@ -70,20 +71,6 @@ bool rayHitsBox(const Vec &origin, const Vec &inverseDirection, const Aabb &box,
     }
     return near <= far;
 }
-
-// Directions with "irrational" components (from sqrt 2, sqrt 3, sqrt 5 and the golden ratio), all
-// non-zero, so that no ray runs parallel to the axis-aligned walls and edges real meshes are full
-// of, and no two are related by a simple symmetry of a box.
-const Vec kRayDirections[] = {
-    {0.4142135623730951, 0.6180339887498949, 0.7320508075688772},
-    {-0.6180339887498949, 0.7320508075688772, 0.4142135623730951},
-    {0.7320508075688772, -0.4142135623730951, 0.6180339887498949},
-    {-0.2360679774997897, -0.8660254037844386, 0.4472135954999579},
-    {0.8660254037844386, 0.4472135954999579, -0.2360679774997897},
-    {-0.4472135954999579, 0.2360679774997897, -0.8660254037844386},
-    {0.5411961001461970, -0.3090169943749474, -0.7818314824680298},
-    {-0.3826834323650898, -0.5411961001461970, -0.7487781956271592},
-};
 
 // Generalised winding number (sum of signed solid angles, Van Oosterom and Strackee), the
 // fallback when every ray grazes. About 1 inside an outward-oriented closed mesh, 0 outside.
@@ -270,8 +257,10 @@ bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
         return false;
 
     const std::vector<MeshBvh::Node> &nodes = bvh.nodes();
-    for (const Vec &direction : kRayDirections)
+    for (int k = 0; k < device::kRayDirections; ++k)
     {
+        const device::Vec3<double> d = device::rayDirection(k);
+        const Vec direction(d.x, d.y, d.z);
         const Vec inverse = direction.cwiseInverse();
         // Signed crossings (+1 leaving through an outward face, -1 entering) rather than parity: a
         // mesh of several overlapping closed shells (a link of a cylinder and two spheres) contains

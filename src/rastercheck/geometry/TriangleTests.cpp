@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/geometry/Predicates.h"
 
 namespace rastercheck
@@ -476,38 +477,7 @@ bool trianglesWithin(const Vec &p0, const Vec &p1, const Vec &p2, const Vec &q0,
 int rayTriangle(const Vec &origin, const Vec &direction, const Vec &a, const Vec &b, const Vec &c, double tolerance,
                 double &t)
 {
-    const Vec n = (b - a).cross(c - a);
-    const double area2 = n.norm();
-    const double length = direction.norm();
-    if (!(area2 > 0.0) || !(length > 0.0))
-        return 0;
-    const double height = n.dot(a - origin) / area2;              // signed distance from the origin to the plane
-    const double approach = n.dot(direction) / (area2 * length);  // cosine of the ray to the normal
-    // Near-parallel rays hit the plane far away or not at all; within 1e-12 they are treated as in
-    // the plane when the origin is on it (ambiguous) and as missing otherwise.
-    if (std::abs(approach) <= 1e-12)
-        return std::abs(height) <= tolerance ? -1 : 0;
-    const double distanceAlong = height / approach;  // metres along the ray to the plane
-    if (distanceAlong < -tolerance)
-        return 0;
-    const Vec hit = origin + (distanceAlong / length) * direction;
-    // Signed distances from the hit point to the three edge lines, positive inside.
-    const Vec unitNormal = n / area2;
-    const Vec *const corners[3] = {&a, &b, &c};
-    bool nearEdge = false;
-    for (int i = 0; i < 3; ++i)
-    {
-        const Vec &from = *corners[i];
-        const Vec edge = *corners[(i + 1) % 3] - from;
-        const double inside = unitNormal.dot(edge.cross(hit - from)) / edge.norm();
-        if (inside < -tolerance)
-            return 0;
-        if (inside < tolerance)
-            nearEdge = true;
-    }
-    if (nearEdge || distanceAlong < tolerance)
-        return -1;
-    t = distanceAlong / length;
-    return 1;
+    const auto v = [](const Vec &x) { return device::Vec3<double>{x.x(), x.y(), x.z()}; };
+    return device::rayCrossesTriangle(v(origin), v(direction), v(a), v(b), v(c), tolerance, t);
 }
 }  // namespace rastercheck

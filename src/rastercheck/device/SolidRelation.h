@@ -1,0 +1,356 @@
+#pragma once
+
+// What the proofs can settle about a pair of solids (relateSolids): their whole hulls first, then
+// their shells, then, for a large non-convex mesh, its patches. A non-convex solid's hull holds
+// most of what comes near it (a robot in a room is inside the room's hull), so the whole-hull test
+// settles little there; the patch tree (the top of a BVH over the solid's triangles, whose leaves
+// are patches of a few dozen triangles with hulls of their own) lets the same plane and point
+// proofs work on the few patches near the other solid, culled by boxes, with the cost growing
+// with what is near rather than with the mesh. Runs on the host (CpuBackend) and on the device
+// (BatchPipeline) alike.
+
+#include <cstdint>
+
+#include "rastercheck/device/Separation.h"
+
+namespace rastercheck::device
+{
+/** \brief Deepest patch tree the fixed traversal stacks allow; ConvexSolids builds balanced trees
+    (median splits), far shallower for any mesh that fits in memory. */
+constexpr int kMaxPatchDepth = 40;
+
+/** \brief One of a fixed set of ray directions (k in [0, kRayDirections)) with "irrational"
+    components (from sqrt 2, sqrt 3, sqrt 5 and the golden ratio), all non-zero, so that no ray runs
+    parallel to the axis-aligned walls and edges real meshes are full of, and no two are related by
+    a simple symmetry of a box. The containment tests retry along the next one when a ray grazes. */
+constexpr int kRayDirections = 8;
+
+RC_HD Vec3<double> rayDirection(int k)
+{
+    const double directions[kRayDirections][3] = {
+        {0.4142135623730951, 0.6180339887498949, 0.7320508075688772},
+        {-0.6180339887498949, 0.7320508075688772, 0.4142135623730951},
+        {0.7320508075688772, -0.4142135623730951, 0.6180339887498949},
+        {-0.2360679774997897, -0.8660254037844386, 0.4472135954999579},
+        {0.8660254037844386, 0.4472135954999579, -0.2360679774997897},
+        {-0.4472135954999579, 0.2360679774997897, -0.8660254037844386},
+        {0.5411961001461970, -0.3090169943749474, -0.7818314824680298},
+        {-0.3826834323650898, -0.5411961001461970, -0.7487781956271592},
+    };
+    return {directions[k][0], directions[k][1], directions[k][2]};
+}
+
+/** \brief Ray origin + t direction, t >= 0, against triangle abc, for parity counting: 1 for a
+    crossing of the interior that stays at least \a tolerance from every edge line, 0 for a clear
+    miss (the hit point on the plane more than \a tolerance outside an edge line, the plane behind
+    the origin, or the ray parallel to and off the plane), -1 when ambiguous: the hit point within
+    \a tolerance of the boundary, the ray in the triangle's plane, or the origin within \a tolerance
+    of the triangle. Retry along another direction on -1. A zero-area triangle is a miss (its
+    neighbours in a closed mesh catch the ray). On 1, \a t receives the ray parameter of the hit. */
+RC_HD int rayCrossesTriangle(const Vec3<double> &origin, const Vec3<double> &direction, const Vec3<double> &a,
+                             const Vec3<double> &b, const Vec3<double> &c, double tolerance, double &t)
+{
+    const Vec3<double> n = cross(b - a, c - a);
+    const double area2 = std::sqrt(dot(n, n));
+    const double length = std::sqrt(dot(direction, direction));
+    if (!(area2 > 0.0) || !(length > 0.0))
+        return 0;
+    const double height = dot(n, a - origin) / area2;              // signed distance from the origin to the plane
+    const double approach = dot(n, direction) / (area2 * length);  // cosine of the ray to the normal
+    // Near-parallel rays hit the plane far away or not at all; within 1e-12 they are treated as in
+    // the plane when the origin is on it (ambiguous) and as missing otherwise.
+    if ((approach < 0.0 ? -approach : approach) <= 1e-12)
+        return (height < 0.0 ? -height : height) <= tolerance ? -1 : 0;
+    const double distanceAlong = height / approach;  // along the ray to the plane
+    if (distanceAlong < -tolerance)
+        return 0;
+    const Vec3<double> hit = origin + (distanceAlong / length) * direction;
+    // Signed distances from the hit point to the three edge lines, positive inside.
+    const Vec3<double> unitNormal = (1.0 / area2) * n;
+    const Vec3<double> corners[3] = {a, b, c};
+    bool nearEdge = false;
+    for (int i = 0; i < 3; ++i)
+    {
+        const Vec3<double> edge = corners[(i + 1) % 3] - corners[i];
+        const double inside = dot(unitNormal, cross(edge, hit - corners[i])) / std::sqrt(dot(edge, edge));
+        if (inside < -tolerance)
+            return 0;
+        if (inside < tolerance)
+            nearEdge = true;
+    }
+    if (nearEdge || distanceAlong < tolerance)
+        return -1;
+    t = distanceAlong / length;
+    return 1;
+}
+
+/** \brief Is \a point (the solid's own frame) inside closed solid \a solid, by its patch tree? Signed
+    crossings of a ray with the patches' triangles (+1 leaving through an outward face, -1
+    entering), so that overlapping closed shells count as their union. A ray that grazes an edge,
+    a vertex or a face's plane within \a tolerance is retried along the next rayDirection();
+    \a inside is written and true returned when some ray decides, false when every one grazed. */
+RC_HD bool pointInsidePatches(const ConvexArrays &arrays, std::uint32_t solid, const Vec3<double> &point,
+                              double tolerance, bool &inside)
+{
+    const PatchNode *nodes = arrays.patchNodes + arrays.solidPatchNodes[solid];
+    for (int k = 0; k < kRayDirections; ++k)
+    {
+        const Vec3<double> direction = rayDirection(k);
+        const double inverse[3] = {1.0 / direction.x, 1.0 / direction.y, 1.0 / direction.z};
+        const double origin[3] = {point.x, point.y, point.z};
+        int winding = 0;
+        bool grazed = false;
+        std::int32_t stack[kMaxPatchDepth + 2];
+        int top = 0;
+        stack[top++] = 0;
+        while (top > 0 && !grazed)
+        {
+            const PatchNode &node = nodes[stack[--top]];
+            double near = 0.0, far = 1e300;
+            for (int i = 0; i < 3; ++i)
+            {
+                const double t1 = (node.min[i] - tolerance - origin[i]) * inverse[i];
+                const double t2 = (node.max[i] + tolerance - origin[i]) * inverse[i];
+                near = near > (t1 < t2 ? t1 : t2) ? near : (t1 < t2 ? t1 : t2);
+                far = far < (t1 > t2 ? t1 : t2) ? far : (t1 > t2 ? t1 : t2);
+            }
+            if (near > far)
+                continue;
+            if (node.first > 0)
+            {
+                stack[top++] = node.first + 1;
+                stack[top++] = node.first;
+                continue;
+            }
+            const ConvexPiece &patch = arrays.patchPieces[-(node.first + 1)];
+            const double *vertices = arrays.vertices + 3 * static_cast<std::size_t>(patch.firstVertex);
+            const std::uint32_t *triangles = arrays.patchTriangles + 3 * static_cast<std::size_t>(patch.firstTriangle);
+            const auto corner = [&](std::uint32_t v) {
+                return Vec3<double>{vertices[3 * v], vertices[3 * v + 1], vertices[3 * v + 2]};
+            };
+            for (std::uint32_t t = 0; t < patch.numTriangles && !grazed; ++t)
+            {
+                const Vec3<double> a = corner(triangles[3 * t]), b = corner(triangles[3 * t + 1]),
+                                   c = corner(triangles[3 * t + 2]);
+                double at = 0.0;
+                const int crossing = rayCrossesTriangle(point, direction, a, b, c, tolerance, at);
+                if (crossing < 0)
+                    grazed = true;
+                else if (crossing == 1)
+                    winding += dot(direction, cross(b - a, c - a)) > 0.0 ? 1 : -1;
+            }
+        }
+        if (!grazed)
+        {
+            inside = winding > 0;
+            return true;
+        }
+    }
+    return false;
+}
+
+/** \brief The box of \a piece (placed by \a pose) in the frame of \a frame, from the hull points'
+    support along the frame's axes, grown by the piece's hull slack (so every vertex is inside)
+    plus \a grow. */
+RC_HD void boundsInFrame(const ConvexProxy &piece, const Pose<double> &pose, const Pose<double> &frame, double grow,
+                         double lower[3], double upper[3])
+{
+    const Vec3<double> origin = translationOf(frame);
+    for (int k = 0; k < 3; ++k)
+    {
+        const Vec3<double> axis{frame.m[k], frame.m[4 + k], frame.m[8 + k]};  // the frame's k-th axis, world
+        const double offset = dot(axis, origin);
+        const Vec3<double> back{-axis.x, -axis.y, -axis.z};
+        upper[k] = dot(axis, detail::worldSupport(piece, pose, axis)) - offset + piece.hullSlack + grow;
+        lower[k] = dot(axis, detail::worldSupport(piece, pose, back)) - offset - piece.hullSlack - grow;
+    }
+}
+
+/** \brief True when every patch of \a solid's tree whose box comes within the padding of \a piece
+    (placed by \a pose; the box read by boundsInFrame) is proven apart from it by relateHulls, or
+    one is proven to overlap it (\a overlapping set). \a onUnknown(patchProxy) gets each patch
+    neither settles and returns whether it settled it apart (and may set \a overlapping); the first
+    patch it cannot settle ends the walk with false. */
+template <class OnUnknown>
+RC_HD bool patchesApart(const ConvexArrays &arrays, std::uint32_t solid, const Pose<double> &solidPose,
+                        const ConvexProxy &piece, const Pose<double> &pose, double padding, double rounding,
+                        bool proveOverlap, bool &overlapping, OnUnknown &&onUnknown)
+{
+    double lower[3], upper[3];
+    boundsInFrame(piece, pose, solidPose, padding + rounding, lower, upper);
+    const PatchNode *nodes = arrays.patchNodes + arrays.solidPatchNodes[solid];
+    std::int32_t stack[kMaxPatchDepth + 2];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0)
+    {
+        const PatchNode &node = nodes[stack[--top]];
+        if (node.min[0] > upper[0] || node.min[1] > upper[1] || node.min[2] > upper[2] || node.max[0] < lower[0] ||
+            node.max[1] < lower[1] || node.max[2] < lower[2])
+            continue;
+        if (node.first > 0)
+        {
+            stack[top++] = node.first + 1;
+            stack[top++] = node.first;
+            continue;
+        }
+        const ConvexProxy patch = convexProxy(arrays, arrays.patchPieces[-(node.first + 1)]);
+        const HullRelation relation = relateHulls(piece, pose, patch, solidPose, padding, proveOverlap);
+        if (relation == HullRelation::Overlapping)
+        {
+            overlapping = true;
+            return false;
+        }
+        if (relation == HullRelation::Unknown && !onUnknown(patch))
+            return false;
+    }
+    return true;
+}
+
+RC_HD bool hasPatches(const ConvexArrays &arrays, std::uint32_t solid)
+{
+    return arrays.solidPatchNodes[solid + 1] > arrays.solidPatchNodes[solid];
+}
+
+/** \brief A point of \a piece's surface (its first vertex), world frame. */
+RC_HD Vec3<double> surfacePoint(const ConvexProxy &piece, const Pose<double> &pose)
+{
+    return transformPoint(pose, Vec3<double>{piece.vertices[0], piece.vertices[1], piece.vertices[2]});
+}
+
+/** \brief Settles a pair by patches once the whole hulls and the shells could not: solid \a b's
+    patches near \a a's hull (or, when both have patches, each of those that \a a's hull cannot
+    settle against \a a's patches near it). Apart needs every such pair apart and then, for each
+    closed solid the other might lie buried in, a ray from a point of the other that says outside
+    (the surfaces being apart, one point tells for the whole of it). Overlapping when any pair is
+    proven to share a point (\a proveOverlap; a ray that finds one buried in the other too).
+    \a b must have patches. */
+RC_HD HullRelation relatePatches(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
+                                 std::uint32_t b, const Pose<double> &poseB, double padding, bool proveOverlap)
+{
+    const ConvexProxy wholeA = convexProxy(arrays, arrays.solidPieces[a]);
+    const ConvexProxy wholeB = convexProxy(arrays, arrays.solidPieces[b]);
+    const bool closedA = arrays.pieces[arrays.solidPieces[a]].closed != 0;
+    const bool closedB = arrays.pieces[arrays.solidPieces[b]].closed != 0;
+    const Vec3<double> ta = translationOf(poseA), tb = translationOf(poseB);
+    const double rounding =
+        kSeparationSlack * (wholeA.radius + wholeB.radius + std::sqrt(dot(ta, ta)) + std::sqrt(dot(tb, tb)));
+    const bool patchesA = hasPatches(arrays, a);
+    bool overlapping = false;
+    const std::uint32_t a0 = arrays.solidPieces[a], a1 = arrays.solidPieces[a + 1];
+    const auto splitA = [&](const ConvexProxy &patchB)
+    {
+        // B's patch against A's patches near it, or else against each of A's shells.
+        if (patchesA)
+            return patchesApart(arrays, a, poseA, patchB, poseB, padding, rounding, proveOverlap, overlapping,
+                                [](const ConvexProxy &) { return false; });
+        for (std::uint32_t i = a0 + 1; i < a1; ++i)
+        {
+            const HullRelation relation =
+                relateHulls(convexProxy(arrays, i), poseA, patchB, poseB, padding, proveOverlap);
+            overlapping = relation == HullRelation::Overlapping;
+            if (relation != HullRelation::Apart)
+                return false;
+        }
+        return a1 - a0 > 1;
+    };
+    const bool apart =
+        patchesApart(arrays, b, poseB, wholeA, poseA, padding, rounding, proveOverlap, overlapping, splitA);
+    if (overlapping)
+        return HullRelation::Overlapping;
+    if (!apart)
+        return HullRelation::Unknown;
+    // The surfaces are apart (A's hull, or A's surface, from B's surface), so each solid lies wholly
+    // inside or wholly outside the other; one point of its surface tells. B cannot lie inside A's
+    // hull unless A was split into patches.
+    const double tolerance = 1e-9 * (wholeA.radius + wholeB.radius + std::sqrt(dot(ta, ta)) + std::sqrt(dot(tb, tb)));
+    const auto buried =
+        [&](const ConvexProxy &inner, const Pose<double> &innerPose, std::uint32_t outer, const Pose<double> &outerPose)
+    {
+        // Unknown when no vertex is known to be on the surface, or every ray grazed.
+        bool inside = true;
+        if (inner.surfaceVertices)
+        {
+            const Vec3<double> x = surfacePoint(inner, innerPose);
+            if (pointInsidePatches(arrays, outer, inverseRotate(outerPose, x - translationOf(outerPose)), tolerance,
+                                   inside) &&
+                !inside)
+                return HullRelation::Apart;
+        }
+        return inside && proveOverlap ? HullRelation::Overlapping : HullRelation::Unknown;
+    };
+    if (closedB)
+    {
+        const HullRelation relation = buried(wholeA, poseA, b, poseB);
+        if (relation != HullRelation::Apart)
+            return relation;
+    }
+    if (!closedA)
+        return HullRelation::Apart;
+    if (patchesA)
+        return buried(wholeB, poseB, a, poseA);
+    // A was split into shells: B could lie inside one of their hulls only; a point of B's surface
+    // beyond a shell's hull along the direction from its centre shows it does not.
+    if (a1 - a0 > 1 && !wholeB.surfaceVertices)
+        return HullRelation::Unknown;
+    const Vec3<double> pointB = surfacePoint(wholeB, poseB);
+    for (std::uint32_t i = a0 + 1; i < a1; ++i)
+    {
+        const ConvexProxy shell = convexProxy(arrays, i);
+        const Vec3<double> d = pointB - transformPoint(poseA, shell.centre);
+        const double beyond = dot(d, pointB) - dot(d, detail::worldSupport(shell, poseA, d));
+        if (!(beyond > (shell.hullSlack + rounding) * std::sqrt(dot(d, d))))
+            return HullRelation::Unknown;
+    }
+    return HullRelation::Apart;
+}
+
+/** \brief Are solids \a a and \a b (ConvexArrays numbering, placed by their poses) provably more
+    than \a padding apart, or (with \a proveOverlap) provably overlapping? First their whole hulls;
+    when those come too close and either solid is made of several shells, every shell of one
+    against every shell of the other (a solid with one shell stands for itself): the solid is the
+    union of its shells, each inside its own hull, so all those pairs apart means the solids are,
+    and any pair of shells proven to share a point means they overlap. Nested parts of a crane
+    (the boom foot between the superstructure's plates) are settled so. A large non-convex solid
+    is settled by its patches (relatePatches); its whole hull is tried first, without the scans of
+    every vertex and edge, which its patches do for what is near. */
+RC_HD HullRelation relateSolids(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA, std::uint32_t b,
+                                const Pose<double> &poseB, double padding, bool proveOverlap,
+                                Vec3<double> *direction = nullptr)
+{
+    const std::uint32_t a0 = arrays.solidPieces[a], a1 = arrays.solidPieces[a + 1];
+    const std::uint32_t b0 = arrays.solidPieces[b], b1 = arrays.solidPieces[b + 1];
+    if (a0 == a1 || b0 == b1)
+        return HullRelation::Unknown;
+    const bool patchesA = hasPatches(arrays, a), patchesB = hasPatches(arrays, b);
+    const HullRelation whole = relateHulls(convexProxy(arrays, a0), poseA, convexProxy(arrays, b0), poseB, padding,
+                                           proveOverlap, direction, !patchesA && !patchesB);
+    if (whole != HullRelation::Unknown)
+        return whole;
+    // Shells only when either solid has several; a pair of shells that cannot be settled ends the
+    // search unless an overlap proof may still be found in another pair.
+    bool allApart = a1 - a0 > 1 || b1 - b0 > 1;
+    bool looking = allApart;
+    const std::uint32_t aShells = a1 - a0 > 1 ? a0 + 1 : a0, bShells = b1 - b0 > 1 ? b0 + 1 : b0;
+    for (std::uint32_t i = aShells; i < a1 && looking; ++i)
+        for (std::uint32_t j = bShells; j < b1 && looking; ++j)
+        {
+            const HullRelation shells =
+                relateHulls(convexProxy(arrays, i), poseA, convexProxy(arrays, j), poseB, padding, proveOverlap);
+            if (shells == HullRelation::Overlapping)
+                return shells;
+            if (shells == HullRelation::Unknown)
+            {
+                allApart = false;
+                looking = proveOverlap;
+            }
+        }
+    if (allApart)
+        return HullRelation::Apart;
+    if (patchesB)
+        return relatePatches(arrays, a, poseA, b, poseB, padding, proveOverlap);
+    if (patchesA)
+        return relatePatches(arrays, b, poseB, a, poseA, padding, proveOverlap);
+    return HullRelation::Unknown;
+}
+}  // namespace rastercheck::device
