@@ -88,6 +88,17 @@ TEST(MeshLoader, ColladaNodeTransformUnitAndUpAxis)
     const rc::Aabb turned = converted.bounds();
     EXPECT_TRUE(turned.min.isApprox(Eigen::Vector3d(0.10, 0.0, -0.01), 1e-6));
     EXPECT_TRUE(turned.max.isApprox(Eigen::Vector3d(0.11, 0.0, 0.0), 1e-6));
+
+    // OMPL.app's vertices: turned Y up, placed by the node, the line's included (its centre and
+    // bounds count them), the triangle's three corners once each (one face normal).
+    const rc::OmplAppVertices omplApp = rc::loadOmplAppVertices(dae);
+    ASSERT_EQ(omplApp.vertices.size(), 5u);
+    rc::Aabb all;
+    for (const Eigen::Vector3d &vertex : omplApp.vertices)
+        all.extend(vertex);
+    EXPECT_TRUE(all.min.isApprox(Eigen::Vector3d(0.10, 0.0, -0.05), 1e-6));
+    EXPECT_TRUE(all.max.isApprox(Eigen::Vector3d(0.15, 0.05, 0.0), 1e-6));
+    EXPECT_TRUE(omplApp.center.isApprox(Eigen::Vector3d(0.56, 0.05, -0.06) / 5, 1e-6));
 }
 
 TEST(MeshLoader, StlObjAndMemoryGiveTheSameTetrahedron)
