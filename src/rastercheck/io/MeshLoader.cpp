@@ -134,11 +134,8 @@ void collect(const aiScene *scene, const aiNode *node, const Eigen::Matrix4d &pa
                 const Eigen::Vector3d local(p.x, p.y, p.z);
                 if (!local.allFinite())
                     throw InputError(name, "node '" + result.name + "'", "vertex coordinate is not a finite number");
-                const Eigen::Vector3d placed = (transform * local.homogeneous()).head<3>();
-                result.mesh.vertices.push_back(placed);
-                result.vertexSum += placed;
+                result.mesh.vertices.push_back((transform * local.homogeneous()).head<3>());
             }
-            result.vertexCount += mesh->mNumVertices;
             for (unsigned int f = 0; f < mesh->mNumFaces; ++f)
             {
                 const aiFace &face = mesh->mFaces[f];

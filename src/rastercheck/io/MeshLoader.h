@@ -14,11 +14,6 @@ struct MeshNode
 {
     std::string name;
     Mesh mesh;
-    /** \brief Sum and number of every vertex assimp returns for this node's meshes (after
-        JoinIdenticalVertices, in the root frame), including vertices only lines or points use.
-        OMPL.app centres its robot on the mean of exactly these vertices. */
-    Eigen::Vector3d vertexSum = Eigen::Vector3d::Zero();
-    std::size_t vertexCount = 0;
 };
 
 /** \brief How the COLLADA `<up_axis>` is treated (other formats have none). */

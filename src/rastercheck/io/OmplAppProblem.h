@@ -24,7 +24,9 @@ struct OmplAppProblem
 
     /** \brief The robot as a one-link model on a floating (3D) or planar (2D) joint whose
         coordinates are named x y z qx qy qz qw (x y yaw), bounded by `volume.*`; its mesh is
-        shifted so the mean of its vertices is the origin, as OMPL.app does (z shift 0 in 2D). */
+        shifted so the mean of its vertices is the origin, as OMPL.app does (z shift 0 in 2D): the
+        mean of the vertices of OMPL.app's import (loadOmplAppVertices), which has a corner once per
+        face normal around it where the file has no normals. */
     RobotModelPtr robot;
     /** \brief The world mesh, one object per assimp node. */
     ScenePtr scene;
