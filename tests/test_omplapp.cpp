@@ -312,3 +312,15 @@ TEST(OmplApp, FclRobotIsCentredOnOmplAppsVertices)
     EXPECT_EQ(body.mesh.numVertices(), 141u);
     EXPECT_EQ(body.mesh.numTriangles(), 216u);
 }
+
+// Without volume.*, OMPL.app bounds the positions by the box of every world vertex, a line's too.
+TEST(OmplApp, WithoutVolumeTheBoundsIncludeEveryWorldVertex)
+{
+    const std::string folder = problemFolder();
+    writeFile(folder + "/lined.obj", std::string(kWorldObj) + "v -4 7 9\nl 1 17\n");
+    const rc::OmplAppProblem problem =
+        rc::loadOmplAppProblem(writeFile(folder + "/lined.cfg", robotCfg("robot.obj", "world = lined.obj\n")));
+    EXPECT_EQ(problem.scene->numTriangles(), 24u);
+    EXPECT_EQ(problem.robot->lowerBounds, (std::vector<double>{-4, 0, 0, -1, -1, -1, -1}));
+    EXPECT_EQ(problem.robot->upperBounds, (std::vector<double>{11, 7, 9, 1, 1, 1, 1}));
+}

@@ -144,7 +144,7 @@ std::vector<MeshNode> loadProblemMesh(const ConfigFile &config, const std::strin
     return forKey(config, key, [&] { return loadMeshNodes(path, ColladaUpAxis::ConvertToYUp); });
 }
 
-// The vertices OMPL.app places the robot by (its centre). Its extra assimp steps
+// The vertices OMPL.app places by: the robot's centre, the world's bounds. Its extra assimp steps
 // (face normals, graph optimisation) change the vertices but not the triangles, so the geometry comes
 // from loadProblemMesh (one object per node, corners joined) and only these come from OMPL.app's import.
 OmplAppVertices loadProblemVertices(const ConfigFile &config, const std::string &key, const std::string &path)
@@ -199,14 +199,18 @@ OmplAppProblem loadOmplAppProblemString(const std::string &text, const std::stri
         }
     }
 
-    // Position bounds: volume.*; without them OMPL.app infers the bounds from the world.
+    // Position bounds: volume.*; without them OMPL.app infers the bounds from the world: the box of
+    // all its vertices (inferEnvironmentBounds, factor 1 and no margin), lines' and points' included.
     const int dims = problem.planar ? 2 : 3;
     const char *axes[] = {"x", "y", "z"};
     std::vector<double> lower(dims), upper(dims);
     const bool hasVolume = config.has("problem.volume.min.x");
-    const Aabb worldBounds = problem.scene->bounds();
-    if (!hasVolume && worldBounds.empty())
+    if (!hasVolume && problem.worldMeshPath.empty())
         throw InputError(cfgPath, "[problem] volume.min.x", "missing, and there is no world to infer bounds from");
+    Aabb worldBounds;
+    if (!hasVolume)
+        for (const Eigen::Vector3d &vertex : loadProblemVertices(config, "world", problem.worldMeshPath).vertices)
+            worldBounds.extend(vertex);
     for (int d = 0; d < dims; ++d)
     {
         const std::string min = std::string("problem.volume.min.") + axes[d],

@@ -43,7 +43,8 @@ struct OmplAppProblem
 /** \brief Loads a .cfg and the meshes it names, as OMPL.app does: meshes are read with assimp's
     default COLLADA handling (a Z_UP file is turned Y up, ColladaUpAxis::ConvertToYUp), the 3D start
     and goal axis is normalised (a zero axis is allowed only with theta 0), `world` is optional (no
-    world: an empty scene) and without `volume.*` the position bounds are the world's bounds.
+    world: an empty scene) and without `volume.*` the position bounds are the box of the world's
+    vertices as OMPL.app reads them (loadOmplAppVertices).
     Throws InputError naming the file and key on a missing key, a number that does not parse or is
     not finite, a missing or empty mesh, or min > max in `volume`. */
 OmplAppProblem loadOmplAppProblem(const std::string &cfgPath);
