@@ -14,6 +14,8 @@
 
 #include "FuzzTargets.h"
 #include "TestSupport.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/io/MeshLoader.h"
 
 namespace fs = std::filesystem;
 namespace fz = rastercheck::fuzz;
@@ -75,7 +77,8 @@ const std::map<std::string, Expected> &expectations()
          {false, "PLY header: no end_header line",
           "the first header check saw an end_header assimp skips (after \\r\\r): assimp hung (and crashes here)"}},
         {"mesh/ply-cr-line-ends.bin",
-         {false, "mesh has no triangles", "not a failure: assimp reads \\r-only line ends, so the check must pass them"}},
+         {false, "mesh has no triangles",
+          "not a failure: assimp reads \\r-only line ends, so the check must pass them"}},
         {"mesh/ply-signed-list-count-fuzzer.bin",
          {false, "PLY header line 2: expected 'format",
           "assimp read a list length of -1 (signed char) as 4294967295 and allocated 34 GB"}},
@@ -143,6 +146,38 @@ TEST(FuzzRegressions, EveryInputGivesItsDocumentedOutcome)
     }
     for (const auto &[key, expected] : expectations())
         EXPECT_TRUE(seen.count(key)) << key << " is listed but its file is missing (" << expected.bug << ")";
+}
+
+// OMPL.app's import (loadOmplAppVertices: .cfg robot centres and world bounds) runs more assimp
+// steps (GenNormals, OptimizeGraph) after the same checks: the mesh inputs, written as files with the
+// extension their first byte selects, get their documented outcome through it too.
+TEST(FuzzRegressions, MeshInputsGiveTheSameOutcomeThroughOmplAppsImport)
+{
+    fz::silenceLog();
+    static const char *const hints[] = {"obj", "stl", "dae", "ply"};
+    const std::string scratch = rastercheck::test::makeTempDir("fuzz-omplapp");
+    for (const auto &[key, expected] : expectations())
+    {
+        if (key.rfind("mesh/", 0) != 0)
+            continue;
+        SCOPED_TRACE(key);
+        const std::string bytes = readBytes(fs::path(folder()) / key);
+        ASSERT_FALSE(bytes.empty());
+        const std::string file = rastercheck::test::writeFile(
+            scratch + "/" + fs::path(key).stem().string() + "." + hints[bytes[0] & 3], bytes.substr(1));
+        try
+        {
+            rastercheck::loadOmplAppVertices(file);
+            EXPECT_TRUE(expected.accepted);
+        }
+        catch (const rastercheck::InputError &e)
+        {
+            EXPECT_FALSE(expected.accepted) << e.what();
+            EXPECT_EQ(e.file(), file);
+            EXPECT_NE(std::string(e.what()).find(expected.message), std::string::npos)
+                << "message: " << e.what() << "\nexpected to contain: " << expected.message;
+        }
+    }
 }
 
 TEST(FuzzRegressions, EveryHarnessHasAnEntryPoint)

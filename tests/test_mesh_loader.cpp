@@ -79,15 +79,23 @@ TEST(MeshLoader, ColladaNodeTransformUnitAndUpAxis)
     // Centimetres to metres, node offset 10 cm, Z_UP kept (ROS convention).
     EXPECT_TRUE(box.min.isApprox(Eigen::Vector3d(0.10, 0.0, 0.0), 1e-6));
     EXPECT_TRUE(box.max.isApprox(Eigen::Vector3d(0.11, 0.01, 0.0), 1e-6));
-    // Every vertex assimp returns counts for OMPL.app's centre, the line's included.
-    EXPECT_EQ(kept[0].vertexCount, 5u);
-    EXPECT_TRUE(kept[0].vertexSum.isApprox(Eigen::Vector3d(0.56, 0.06, 0.05), 1e-6));
 
     // assimp's default turns Z up into Y up: (x, y, z) -> (x, z, -y).
     const rc::Mesh converted = rc::loadMesh(dae, rc::ColladaUpAxis::ConvertToYUp);
     const rc::Aabb turned = converted.bounds();
     EXPECT_TRUE(turned.min.isApprox(Eigen::Vector3d(0.10, 0.0, -0.01), 1e-6));
     EXPECT_TRUE(turned.max.isApprox(Eigen::Vector3d(0.11, 0.0, 0.0), 1e-6));
+
+    // OMPL.app's vertices: turned Y up, placed by the node, the line's included (its centre and
+    // bounds count them), the triangle's three corners once each (one face normal).
+    const rc::OmplAppVertices omplApp = rc::loadOmplAppVertices(dae);
+    ASSERT_EQ(omplApp.vertices.size(), 5u);
+    rc::Aabb all;
+    for (const Eigen::Vector3d &vertex : omplApp.vertices)
+        all.extend(vertex);
+    EXPECT_TRUE(all.min.isApprox(Eigen::Vector3d(0.10, 0.0, -0.05), 1e-6));
+    EXPECT_TRUE(all.max.isApprox(Eigen::Vector3d(0.15, 0.05, 0.0), 1e-6));
+    EXPECT_TRUE(omplApp.center.isApprox(Eigen::Vector3d(0.56, 0.05, -0.06) / 5, 1e-6));
 }
 
 TEST(MeshLoader, StlObjAndMemoryGiveTheSameTetrahedron)
@@ -158,5 +166,5 @@ TEST(MeshLoader, ObjMaterialLibraryIsNotOpened)
     const std::vector<rc::MeshNode> nodes = rc::loadMeshNodes(obj);
     ASSERT_EQ(nodes.size(), 1u);
     EXPECT_EQ(nodes[0].mesh.numTriangles(), 2u);
-    EXPECT_EQ(nodes[0].vertexCount, 6u);  // one mesh per usemtl name, as with the library
+    EXPECT_EQ(nodes[0].mesh.numVertices(), 6u);  // one mesh per usemtl name, as with the library
 }

@@ -1,11 +1,16 @@
 // OMPL.app .cfg problems written here (OMPL.app's own files are not redistributable): robot
 // re-centring on the vertex mean, axis-angle starts, 2D problems and planners (bad input:
 // test_bad_input.cpp).
+#include <array>
 #include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
 
 #include <gtest/gtest.h>
 
 #include "TestSupport.h"
+#include "rastercheck/io/MeshLoader.h"
 #include "rastercheck/io/OmplAppProblem.h"
 
 namespace rc = rastercheck;
@@ -68,6 +73,81 @@ prm=
 rrt=
 rrt.goal_bias=0.1
 )";
+
+// A block with an L-shaped cross-section in the xz plane, extruded along y from 0 to 1: corners
+// p0 (0,0) p1 (1,0) p2 (3,0) p3 (3,1) p4 (1,1) p5 (1,3) p6 (0,3), p1 splitting the bottom edge.
+// Vertices 1-7 are p0..p6 at y = 0, 8-14 at y = 1. Faces outward; closed. No normals.
+const char *kBlockObj =
+    "v 0 0 0\nv 1 0 0\nv 3 0 0\nv 3 0 1\nv 1 0 1\nv 1 0 3\nv 0 0 3\n"
+    "v 0 1 0\nv 1 1 0\nv 3 1 0\nv 3 1 1\nv 1 1 1\nv 1 1 3\nv 0 1 3\n"
+    "f 1 2 5\nf 1 5 6\nf 1 6 7\nf 2 3 4\nf 2 4 5\n"           // y = 0
+    "f 8 12 9\nf 8 13 12\nf 8 14 13\nf 9 11 10\nf 9 12 11\n"  // y = 1
+    "f 1 8 2\nf 2 8 9\nf 2 9 3\nf 3 9 10\n"                   // bottom, two rectangles
+    "f 3 10 4\nf 4 10 11\nf 4 11 5\nf 5 11 12\nf 5 12 6\nf 6 12 13\n"
+    "f 6 13 7\nf 7 13 14\nf 7 14 1\nf 1 14 8\n";
+
+// OMPL.app's vertices of an OBJ without normals, from its faces: assimp's GenNormals gives each
+// corner of a face the face's normal, and JoinIdenticalVertices then keeps one vertex per (position,
+// normal); flat faces only, normals rounded so that coplanar faces share theirs.
+std::vector<Eigen::Vector3d> cornersPerFaceNormal(const std::string &objText)
+{
+    std::vector<Eigen::Vector3d> positions;
+    std::set<std::array<double, 6>> corners;
+    std::istringstream in(objText);
+    std::string line;
+    while (std::getline(in, line))
+    {
+        std::istringstream fields(line);
+        std::string kind;
+        fields >> kind;
+        if (kind == "v")
+        {
+            Eigen::Vector3d p;
+            fields >> p.x() >> p.y() >> p.z();
+            positions.push_back(p);
+        }
+        else if (kind == "f")
+        {
+            std::array<Eigen::Vector3d, 3> p;
+            for (Eigen::Vector3d &corner : p)
+            {
+                std::string index;
+                fields >> index;
+                corner = positions.at(std::stoul(index.substr(0, index.find('/'))) - 1);
+            }
+            const Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+            auto rounded = [](double x) { return std::round(x * 1e4) / 1e4 + 0.0; };
+            for (const Eigen::Vector3d &c : p)
+                corners.insert({c.x(), c.y(), c.z(), rounded(n.x()), rounded(n.y()), rounded(n.z())});
+        }
+    }
+    std::vector<Eigen::Vector3d> vertices;
+    for (const auto &c : corners)
+        vertices.emplace_back(c[0], c[1], c[2]);
+    return vertices;
+}
+
+Eigen::Vector3d mean(const std::vector<Eigen::Vector3d> &points)
+{
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d &p : points)
+        sum += p;
+    return sum / static_cast<double>(points.size());
+}
+
+const char *kWideVolume =
+    "volume.min.x = -1000\nvolume.min.y = -1000\nvolume.min.z = -1000\n"
+    "volume.max.x = 1000\nvolume.max.y = 1000\nvolume.max.z = 1000\n";
+
+// A 3D .cfg for \a robot, start and goal at the origin, then the [problem] lines \a more.
+std::string robotCfg(const std::string &robot, const std::string &more = kWideVolume)
+{
+    return "[problem]\nrobot = " + robot +
+           "\nstart.x = 0\nstart.y = 0\nstart.z = 0\nstart.theta = 0\nstart.axis.x = 1\nstart.axis.y = 0\n"
+           "start.axis.z = 0\ngoal.x = 0\ngoal.y = 0\ngoal.z = 0\ngoal.theta = 0\ngoal.axis.x = 1\n"
+           "goal.axis.y = 0\ngoal.axis.z = 0\n" +
+           more;
+}
 
 std::string problemFolder()
 {
@@ -171,4 +251,76 @@ TEST(OmplApp, WithoutVolumeTheWorldBoundsAreUsed)
     const rc::OmplAppProblem problem = rc::loadOmplAppProblem(writeFile(folder + "/novolume.cfg", text));
     EXPECT_EQ(problem.robot->lowerBounds, (std::vector<double>{0, 0, 0, -1, -1, -1, -1}));
     EXPECT_EQ(problem.robot->upperBounds, (std::vector<double>{11, 1, 2, 1, 1, 1, 1}));
+}
+
+// OMPL.app reads meshes with GenNormals, so a mesh without normals keeps a corner once per face
+// normal around it, and its centre is the mean of those vertices, not of the distinct corners
+// (issue 19: FCL's rob.obj sat 75 units away from where OMPL.app puts it).
+TEST(OmplApp, RobotWithoutNormalsIsCentredAsOmplAppCentresIt)
+{
+    const std::string folder = makeTempDir("omplapp");
+    writeFile(folder + "/block.obj", kBlockObj);
+    const rc::OmplAppProblem problem = rc::loadOmplAppProblem(writeFile(folder + "/block.cfg", robotCfg("block.obj")));
+
+    // By hand: each of the 14 positions has the normal of its end face (-y or +y) and those of the
+    // side faces at its corner: two for every corner but p1, where both bottom rectangles face -z.
+    // So 2 x (6 x 3 + 2) = 40 vertices with mean x = (3 x (0+3+3+1+1+0) + 2 x 1) / 20 = 1.3, y = 0.5,
+    // z = (3 x (0+0+1+1+3+3) + 2 x 0) / 20 = 1.2; the 14 distinct corners' mean is (9/7, 0.5, 8/7).
+    const std::vector<Eigen::Vector3d> expected = cornersPerFaceNormal(kBlockObj);
+    ASSERT_EQ(expected.size(), 40u);
+    EXPECT_TRUE(mean(expected).isApprox(Eigen::Vector3d(1.3, 0.5, 1.2), 1e-12));
+    const rc::OmplAppVertices omplApp = rc::loadOmplAppVertices(folder + "/block.obj");
+    EXPECT_EQ(omplApp.vertices.size(), 40u);
+    EXPECT_TRUE(omplApp.center.isApprox(Eigen::Vector3d(1.3, 0.5, 1.2), 1e-6)) << omplApp.center.transpose();
+
+    const rc::Component &body = problem.robot->components.at(0);
+    const rc::Aabb box = body.localAabb;
+    EXPECT_TRUE(box.min.isApprox(Eigen::Vector3d(-1.3, -0.5, -1.2), 1e-6)) << box.min.transpose();
+    EXPECT_TRUE(box.max.isApprox(Eigen::Vector3d(1.7, 0.5, 1.8), 1e-6)) << box.max.transpose();
+    // The geometry keeps its corners joined: 14 vertices, one closed shell.
+    EXPECT_EQ(body.mesh.numVertices(), 14u);
+    EXPECT_EQ(body.mesh.numTriangles(), 24u);
+    EXPECT_TRUE(body.topology.closed) << body.topology.summary();
+    EXPECT_EQ(body.topology.shells, 1u);
+}
+
+// FCL's rob.obj (shared data): 141 distinct corners, 361 vertices for OMPL.app.
+TEST(OmplApp, FclRobotIsCentredOnOmplAppsVertices)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const std::string robot = root + "/meshes/fcl/rob.obj";
+    std::ifstream in(robot);
+    if (!in)
+        GTEST_SKIP() << "shared data has no " << robot;
+    std::ostringstream text;
+    text << in.rdbuf();
+
+    const std::vector<Eigen::Vector3d> expected = cornersPerFaceNormal(text.str());
+    ASSERT_EQ(expected.size(), 361u);
+    const rc::OmplAppVertices omplApp = rc::loadOmplAppVertices(robot);
+    EXPECT_EQ(omplApp.vertices.size(), 361u);
+    // assimp sums in float as OMPL.app does: within 1e-3 of the double mean (-102.611, -98.850, 30.928).
+    EXPECT_LT((omplApp.center - mean(expected)).norm(), 1e-3) << omplApp.center.transpose();
+    EXPECT_LT((omplApp.center - Eigen::Vector3d(-102.611, -98.850, 30.928)).norm(), 1e-3);
+
+    const rc::OmplAppProblem problem =
+        rc::loadOmplAppProblem(writeFile(makeTempDir("omplapp") + "/rob.cfg", robotCfg(robot)));
+    const rc::Component &body = problem.robot->components.at(0);
+    const rc::Aabb file = rc::loadMesh(robot).bounds();
+    EXPECT_TRUE(body.localAabb.min.isApprox(file.min - omplApp.center, 1e-9));
+    EXPECT_TRUE(body.localAabb.max.isApprox(file.max - omplApp.center, 1e-9));
+    EXPECT_EQ(body.mesh.numVertices(), 141u);
+    EXPECT_EQ(body.mesh.numTriangles(), 216u);
+}
+
+// Without volume.*, OMPL.app bounds the positions by the box of every world vertex, a line's too.
+TEST(OmplApp, WithoutVolumeTheBoundsIncludeEveryWorldVertex)
+{
+    const std::string folder = problemFolder();
+    writeFile(folder + "/lined.obj", std::string(kWorldObj) + "v -4 7 9\nl 1 17\n");
+    const rc::OmplAppProblem problem =
+        rc::loadOmplAppProblem(writeFile(folder + "/lined.cfg", robotCfg("robot.obj", "world = lined.obj\n")));
+    EXPECT_EQ(problem.scene->numTriangles(), 24u);
+    EXPECT_EQ(problem.robot->lowerBounds, (std::vector<double>{-4, 0, 0, -1, -1, -1, -1}));
+    EXPECT_EQ(problem.robot->upperBounds, (std::vector<double>{11, 7, 9, 1, 1, 1, 1}));
 }

@@ -23,14 +23,20 @@ namespace rastercheck
 {
 namespace
 {
-// Files are read without post-processing, checked (checkAndPostProcess), then post-processed as
-// OMPL.app does. assimp's importers can return face indices past the vertices or faces without
+// Files are read without post-processing, checked (checkAndPostProcess), then post-processed.
+// assimp's importers can return face indices past the vertices or faces without
 // vertices on malformed input (a PLY, found by fuzz_mesh), which crashed the later steps and would be
 // copied into our meshes. assimp's own ValidateDataStructure would catch them too, but it also
 // rejects what the post-processing repairs (a truncated OBJ's last face read as a line, a file of
 // points only) with messages that do not say what is wrong for us.
 constexpr unsigned int kReadFlags = 0;
-constexpr unsigned int kPostProcessFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+// Our meshes: one vertex per distinct corner of a file without normals, and assimp's node structure
+// kept (one scene object per node).
+constexpr unsigned int kPostProcessFlags =
+    aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType;
+// OMPL.app's RigidBodyGeometry::addRobotMesh and addEnvironmentMesh.
+constexpr unsigned int kOmplAppFlags = aiProcess_GenNormals | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                       aiProcess_SortByPType | aiProcess_OptimizeGraph;
 
 void configure(Assimp::Importer &importer, ColladaUpAxis upAxis)
 {
@@ -128,11 +134,8 @@ void collect(const aiScene *scene, const aiNode *node, const Eigen::Matrix4d &pa
                 const Eigen::Vector3d local(p.x, p.y, p.z);
                 if (!local.allFinite())
                     throw InputError(name, "node '" + result.name + "'", "vertex coordinate is not a finite number");
-                const Eigen::Vector3d placed = (transform * local.homogeneous()).head<3>();
-                result.mesh.vertices.push_back(placed);
-                result.vertexSum += placed;
+                result.mesh.vertices.push_back((transform * local.homogeneous()).head<3>());
             }
-            result.vertexCount += mesh->mNumVertices;
             for (unsigned int f = 0; f < mesh->mNumFaces; ++f)
             {
                 const aiFace &face = mesh->mFaces[f];
@@ -151,7 +154,8 @@ void collect(const aiScene *scene, const aiNode *node, const Eigen::Matrix4d &pa
 // A face without indices passes assimp's validation but makes its Triangulate step abort on an
 // assertion (Debian builds assimp with them; found by fuzz_mesh with a PLY face list of count 0).
 // Valid files have none, so such a scene is rejected before post-processing.
-const aiScene *checkAndPostProcess(Assimp::Importer &importer, const aiScene *scene, const std::string &name)
+const aiScene *checkAndPostProcess(Assimp::Importer &importer, const aiScene *scene, const std::string &name,
+                                   unsigned int postProcessFlags)
 {
     if (!scene)
         return nullptr;  // extract reports assimp's error
@@ -171,13 +175,18 @@ const aiScene *checkAndPostProcess(Assimp::Importer &importer, const aiScene *sc
                                          " of " + std::to_string(mesh->mNumVertices));
         }
     }
-    return importer.ApplyPostProcessing(kPostProcessFlags);
+    return importer.ApplyPostProcessing(postProcessFlags);
+}
+
+void requireScene(const aiScene *scene, const Assimp::Importer &importer, const std::string &name)
+{
+    if (!scene || !scene->mRootNode)
+        throw InputError(name, "", std::string("cannot read mesh: ") + importer.GetErrorString());
 }
 
 std::vector<MeshNode> extract(const aiScene *scene, const Assimp::Importer &importer, const std::string &name)
 {
-    if (!scene || !scene->mRootNode)
-        throw InputError(name, "", std::string("cannot read mesh: ") + importer.GetErrorString());
+    requireScene(scene, importer, name);
     std::vector<MeshNode> nodes;
     collect(scene, scene->mRootNode, Eigen::Matrix4d::Identity(), name, nodes);
     std::size_t triangles = 0;
@@ -187,14 +196,38 @@ std::vector<MeshNode> extract(const aiScene *scene, const Assimp::Importer &impo
         throw InputError(name, "", "mesh has no triangles");
     return nodes;
 }
-}  // namespace
 
-std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxis)
+// OMPL.app's scene::extractVerticesAux, in its types: assimp's float matrices and vectors. Counts the
+// triangles it passes too.
+void collectOmplApp(const aiScene *scene, const aiNode *node, aiMatrix4x4 transform, const std::string &name,
+                    std::vector<aiVector3D> &out, std::size_t &triangles)
+{
+    transform *= node->mTransformation;
+    for (unsigned int m = 0; m < node->mNumMeshes; ++m)
+    {
+        const aiMesh *mesh = scene->mMeshes[node->mMeshes[m]];
+        for (unsigned int v = 0; v < mesh->mNumVertices; ++v)
+        {
+            const aiVector3D placed = transform * mesh->mVertices[v];
+            if (!std::isfinite(placed.x) || !std::isfinite(placed.y) || !std::isfinite(placed.z))
+                throw InputError(name, "node '" + std::string(node->mName.C_Str()) + "'",
+                                 "vertex coordinate is not a finite number");
+            out.push_back(placed);
+        }
+        for (unsigned int f = 0; f < mesh->mNumFaces; ++f)
+            triangles += mesh->mFaces[f].mNumIndices == 3 ? 1 : 0;
+    }
+    for (unsigned int c = 0; c < node->mNumChildren; ++c)
+        collectOmplApp(scene, node->mChildren[c], transform, name, out, triangles);
+}
+
+// A mesh file read, checked and post-processed with \a postProcessFlags (scene owned by \a importer).
+const aiScene *readFile(Assimp::Importer &importer, const std::string &path, ColladaUpAxis upAxis,
+                        unsigned int postProcessFlags)
 {
     struct stat info;
     if (stat(path.c_str(), &info) != 0 || !S_ISREG(info.st_mode))
         throw InputError(path, "", "file not found");
-    Assimp::Importer importer;
     configure(importer, upAxis);
     importer.SetIOHandler(new GeometryFiles);  // the importer owns it
     if (plyImporterMayRun(importer, extensionOf(path)))
@@ -211,8 +244,39 @@ std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxi
             detail::checkPly(bytes.data(), bytes.size(), path);
         }
     }
-    const aiScene *scene = checkAndPostProcess(importer, importer.ReadFile(path, kReadFlags), path);
+    return checkAndPostProcess(importer, importer.ReadFile(path, kReadFlags), path, postProcessFlags);
+}
+}  // namespace
+
+std::vector<MeshNode> loadMeshNodes(const std::string &path, ColladaUpAxis upAxis)
+{
+    Assimp::Importer importer;
+    const aiScene *scene = readFile(importer, path, upAxis, kPostProcessFlags);
     return extract(scene, importer, path);
+}
+
+OmplAppVertices loadOmplAppVertices(const std::string &path)
+{
+    Assimp::Importer importer;
+    const aiScene *scene = readFile(importer, path, ColladaUpAxis::ConvertToYUp, kOmplAppFlags);
+    requireScene(scene, importer, path);
+    std::vector<aiVector3D> vertices;
+    std::size_t triangles = 0;
+    collectOmplApp(scene, scene->mRootNode, aiMatrix4x4(), path, vertices, triangles);
+    if (triangles == 0)
+        throw InputError(path, "", "mesh has no triangles");
+
+    // scene::sceneCenter: a float sum in node order, divided by the count as a float.
+    aiVector3D center(0, 0, 0);
+    for (const aiVector3D &vertex : vertices)
+        center += vertex;
+    center /= static_cast<float>(vertices.size());
+    OmplAppVertices result;
+    result.vertices.reserve(vertices.size());
+    for (const aiVector3D &vertex : vertices)
+        result.vertices.emplace_back(vertex.x, vertex.y, vertex.z);
+    result.center = Eigen::Vector3d(center.x, center.y, center.z);
+    return result;
 }
 
 Mesh loadMesh(const std::string &path, ColladaUpAxis upAxis)
@@ -236,7 +300,7 @@ std::vector<MeshNode> loadMeshNodesFromMemory(const void *data, std::size_t size
     // The hint is the file's extension, by which assimp picks the importer.
     const std::string file = formatHint.empty() ? "memory" : "memory." + formatHint;
     importer.SetIOHandler(new MemoryFile(file, data, size));  // the importer owns it
-    const aiScene *scene = checkAndPostProcess(importer, importer.ReadFile(file, kReadFlags), name);
+    const aiScene *scene = checkAndPostProcess(importer, importer.ReadFile(file, kReadFlags), name, kPostProcessFlags);
     return extract(scene, importer, name);
 }
 }  // namespace rastercheck

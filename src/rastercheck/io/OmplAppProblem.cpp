@@ -123,18 +123,33 @@ std::vector<double> readPose(const ConfigFile &config, const std::string &prefix
     return {config.number(p + "x"), config.number(p + "y"), config.number(p + "z"), q.x(), q.y(), q.z(), q.w()};
 }
 
-std::vector<MeshNode> loadProblemMesh(const ConfigFile &config, const std::string &key, const std::string &path)
+// A mesh loader's InputError, reported against the .cfg key (robot, world) that names the mesh.
+template <typename Load>
+auto forKey(const ConfigFile &config, const std::string &key, Load load)
 {
     try
     {
-        // OMPL.app reads with assimp's defaults, which turn a Z_UP COLLADA file to Y up; the .cfg
-        // coordinates refer to the meshes as OMPL.app sees them.
-        return loadMeshNodes(path, ColladaUpAxis::ConvertToYUp);
+        return load();
     }
     catch (const InputError &e)
     {
         throw InputError(config.path, "[problem] " + key + " '" + config.text("problem." + key) + "'", e.what());
     }
+}
+
+std::vector<MeshNode> loadProblemMesh(const ConfigFile &config, const std::string &key, const std::string &path)
+{
+    // OMPL.app reads with assimp's defaults, which turn a Z_UP COLLADA file to Y up; the .cfg
+    // coordinates refer to the meshes as OMPL.app sees them.
+    return forKey(config, key, [&] { return loadMeshNodes(path, ColladaUpAxis::ConvertToYUp); });
+}
+
+// The vertices OMPL.app places by: the robot's centre, the world's bounds. Its extra assimp steps
+// (face normals, graph optimisation) change the vertices but not the triangles, so the geometry comes
+// from loadProblemMesh (one object per node, corners joined) and only these come from OMPL.app's import.
+OmplAppVertices loadProblemVertices(const ConfigFile &config, const std::string &key, const std::string &path)
+{
+    return forKey(config, key, [&] { return loadOmplAppVertices(path); });
 }
 }  // namespace
 
@@ -184,14 +199,18 @@ OmplAppProblem loadOmplAppProblemString(const std::string &text, const std::stri
         }
     }
 
-    // Position bounds: volume.*; without them OMPL.app infers the bounds from the world.
+    // Position bounds: volume.*; without them OMPL.app infers the bounds from the world: the box of
+    // all its vertices (inferEnvironmentBounds, factor 1 and no margin), lines' and points' included.
     const int dims = problem.planar ? 2 : 3;
     const char *axes[] = {"x", "y", "z"};
     std::vector<double> lower(dims), upper(dims);
     const bool hasVolume = config.has("problem.volume.min.x");
-    const Aabb worldBounds = problem.scene->bounds();
-    if (!hasVolume && worldBounds.empty())
+    if (!hasVolume && problem.worldMeshPath.empty())
         throw InputError(cfgPath, "[problem] volume.min.x", "missing, and there is no world to infer bounds from");
+    Aabb worldBounds;
+    if (!hasVolume)
+        for (const Eigen::Vector3d &vertex : loadProblemVertices(config, "world", problem.worldMeshPath).vertices)
+            worldBounds.extend(vertex);
     for (int d = 0; d < dims; ++d)
     {
         const std::string min = std::string("problem.volume.min.") + axes[d],
@@ -203,17 +222,12 @@ OmplAppProblem loadOmplAppProblemString(const std::string &text, const std::stri
                              "min " + std::to_string(lower[d]) + " is above max " + std::to_string(upper[d]));
     }
 
-    // The robot: all nodes merged, shifted so the mean of assimp's vertices is the origin.
+    // The robot: all nodes merged, shifted so that OMPL.app's centre (the mean of the vertices of its
+    // import, not of ours) is the origin.
     Mesh robotMesh;
-    Eigen::Vector3d vertexSum = Eigen::Vector3d::Zero();
-    std::size_t vertexCount = 0;
     for (const MeshNode &node : loadProblemMesh(config, "robot", problem.robotMeshPath))
-    {
         robotMesh.append(node.mesh);
-        vertexSum += node.vertexSum;
-        vertexCount += node.vertexCount;
-    }
-    Eigen::Vector3d center = vertexSum / static_cast<double>(vertexCount);
+    Eigen::Vector3d center = loadProblemVertices(config, "robot", problem.robotMeshPath).center;
     if (problem.planar)
         center.z() = 0.0;
     robotMesh.transform(Eigen::Isometry3d(Eigen::Translation3d(-center)));
@@ -224,8 +238,8 @@ OmplAppProblem loadOmplAppProblemString(const std::string &text, const std::stri
     RobotModelPtr robot;
     try
     {
-        robot = makeRigidBodyModel(problem.name.empty() ? "robot" : problem.name, std::move(robotMesh),
-                                   positionBounds, problem.planar);
+        robot = makeRigidBodyModel(problem.name.empty() ? "robot" : problem.name, std::move(robotMesh), positionBounds,
+                                   problem.planar);
     }
     catch (const ConfigurationError &e)
     {

@@ -24,7 +24,9 @@ struct OmplAppProblem
 
     /** \brief The robot as a one-link model on a floating (3D) or planar (2D) joint whose
         coordinates are named x y z qx qy qz qw (x y yaw), bounded by `volume.*`; its mesh is
-        shifted so the mean of its vertices is the origin, as OMPL.app does (z shift 0 in 2D). */
+        shifted so the mean of its vertices is the origin, as OMPL.app does (z shift 0 in 2D): the
+        mean of the vertices of OMPL.app's import (loadOmplAppVertices), which has a corner once per
+        face normal around it where the file has no normals. */
     RobotModelPtr robot;
     /** \brief The world mesh, one object per assimp node. */
     ScenePtr scene;
@@ -41,7 +43,8 @@ struct OmplAppProblem
 /** \brief Loads a .cfg and the meshes it names, as OMPL.app does: meshes are read with assimp's
     default COLLADA handling (a Z_UP file is turned Y up, ColladaUpAxis::ConvertToYUp), the 3D start
     and goal axis is normalised (a zero axis is allowed only with theta 0), `world` is optional (no
-    world: an empty scene) and without `volume.*` the position bounds are the world's bounds.
+    world: an empty scene) and without `volume.*` the position bounds are the box of the world's
+    vertices as OMPL.app reads them (loadOmplAppVertices).
     Throws InputError naming the file and key on a missing key, a number that does not parse or is
     not finite, a missing or empty mesh, or min > max in `volume`. */
 OmplAppProblem loadOmplAppProblem(const std::string &cfgPath);
