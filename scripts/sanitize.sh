@@ -8,7 +8,8 @@
 #         libgomp is not instrumented and TSan would report races in every parallel region.
 # Both: -O1 -g, assertions on (ours, Eigen's, and libstdc++'s bounds checks), no benchmarks,
 # examples or CUDA (sanitizers check host code). Both run tests/test_concurrency.cpp at a tenth of
-# its size (RASTERCHECK_CONCURRENCY_STATES): the sanitizers slow the checker 10 to 50 times.
+# its size (RASTERCHECK_CONCURRENCY_STATES), and asan tests/test_nonconvex.cpp at a quarter
+# (RASTERCHECK_NONCONVEX_SCALE): the sanitizers slow the checker 10 to 50 times.
 # Usage: scripts/sanitize.sh [asan] [tsan]   (default: both). Needs scripts/install-deps.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -33,6 +34,7 @@ asan() {
     export LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp:print_suppressions=0"
     export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
     export RASTERCHECK_CONCURRENCY_STATES=${RASTERCHECK_CONCURRENCY_STATES:-10000}
+    export RASTERCHECK_NONCONVEX_SCALE=${RASTERCHECK_NONCONVEX_SCALE:-0.25}
     configure build-asan -DCMAKE_CXX_COMPILER=g++ -DRASTERCHECK_SANITIZE=ON
     cmake --build build-asan -j2
     ctest --test-dir build-asan --output-on-failure -j2 --no-tests=error
