@@ -12,6 +12,7 @@
 
 #include "Commands.h"
 #include "rastercheck/core/Error.h"
+#include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/OmplAppProblem.h"
 #include "rastercheck/io/SrdfLoader.h"
@@ -164,6 +165,19 @@ bool looksLikeRequest(const std::string &path)
     return std::regex_search(text.str(), requestKey);
 }
 
+/** \brief What the proofs keep beside the meshes: the patch trees of the non-convex solids and
+    the bytes of every proof array, per triangle. */
+void printProofArrays(const CollisionModel &model, std::ostream &out)
+{
+    const std::size_t triangles = (model.componentTriangles.size() + model.objectTriangles.size()) / 3;
+    std::size_t patched = 0;
+    for (std::size_t s = 0; s < model.convex.numSolids(); ++s)
+        patched += model.convex.numPatchesOf(s) > 0 ? 1 : 0;
+    out << "proofs: " << model.convex.numPatches() << " patches in " << patched << " non-convex solids of "
+        << model.convex.numSolids() << ", " << model.convex.bytes() << " bytes ("
+        << (triangles > 0 ? model.convex.bytes() / triangles : 0) << " per triangle)\n";
+}
+
 void runInfo(const InfoOptions &options)
 {
     const std::string extension = extensionOf(options.path);
@@ -195,6 +209,7 @@ void runInfo(const InfoOptions &options)
         out << '\n';
         printRobot(*problem.robot, out);
         printScene(*problem.scene, out);
+        printProofArrays(CollisionModel(problem.robot, problem.scene), out);
         return;
     }
     if (extension == "yaml" || extension == "yml")
