@@ -385,9 +385,10 @@ bool surfacesCross(const rc::CollisionModel &model, const double *q)
     return false;
 }
 
-/** \brief Expects \a valid from the oracle and from safe, exact and raster mode (raster never
-    raises false alarms far from contact), or invalid from the oracle, safe, exact and conservative
-    mode; prints what conservative (valid) or raster (invalid) mode says, which they may get wrong. */
+/** \brief Expects \a valid from the oracle and from every mode (raster never raises false alarms
+    far from contact; conservative's patches prove these free states apart, where the whole hulls
+    of the room, the U and the maze hold the robot), or invalid from the oracle, safe, exact and
+    conservative mode; prints what raster mode says of an invalid state, which it may get wrong. */
 void expectKnown(const rc::Checker &checker, const std::vector<double> &q, bool valid, const std::string &what)
 {
     EXPECT_EQ(!rc::test::bruteForceCollides(checker.collisionModel(), q.data(), 0.0), valid) << what << ": oracle";
@@ -396,8 +397,8 @@ void expectKnown(const rc::Checker &checker, const std::vector<double> &q, bool 
         rc::CollisionRequest request;
         request.mode = mode;
         const bool verdict = checker.isValid(q, request);
-        const bool free = mode == rc::CollisionMode::Conservative, blind = mode == rc::CollisionMode::Raster;
-        if (valid ? !free : !blind)
+        const bool blind = mode == rc::CollisionMode::Raster;
+        if (valid || !blind)
         {
             EXPECT_EQ(verdict, valid) << what << ": " << rc::toString(mode);
         }
@@ -436,8 +437,11 @@ Tally tally(const std::vector<std::uint8_t> &valid, const std::vector<std::uint8
     are high; tighten these as the proofs learn to see into the hulls. */
 double conservativeFalseAlarmBound(const std::string &scenario)
 {
-    const std::map<std::string, double> bounds{{"room", 0.70},   {"u_shape", 0.35},     {"maze", 0.97},
-                                               {"sphere", 0.45}, {"fcl_env_rob", 0.98}, {"panda_shelf", 0.50}};
+    // Before patches (whole hulls and shells only): 58 %, 24 %, 92 %, 31 %, 94 % and 35 %. With
+    // them 0 % on the generated scenes; rob.obj is open and in four shells, the Panda's links are
+    // proven by their hulls, and near contact some of those hulls still reach the obstacles.
+    const std::map<std::string, double> bounds{{"room", 0.01},   {"u_shape", 0.01},     {"maze", 0.01},
+                                               {"sphere", 0.01}, {"fcl_env_rob", 0.15}, {"panda_shelf", 0.10}};
     return bounds.at(scenario);
 }
 
