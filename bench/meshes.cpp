@@ -1,0 +1,278 @@
+// Collision checking among real, non-convex triangle meshes, FCL in the same run, one thread:
+// OMPL.app's rigid-body problems (read from the folder the user gives: their licence forbids
+// redistribution), FCL's env.obj / rob.obj, and a generated terrain of 1e4, 1e5 and 1e6 triangles
+// (cost growth). Two state sets per scene: uniform states within the problem's bounds, and states
+// near contact (each pair of a uniform free and colliding state bisected 12 times by the exact
+// oracle along the segment between them, both ends kept). Verdicts are compared with exact mode.
+//
+// usage: rastercheck_bench_meshes [states=20000] [omplapp_3d_folder (default $RASTERCHECK_OMPLAPP)]
+//        [scene names to run, default all]
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "BenchSupport.h"
+#include "Reference.h"
+#include "rastercheck/collision/Checker.h"
+#include "rastercheck/io/OmplAppProblem.h"
+
+using namespace rastercheck;
+
+namespace
+{
+/** \brief A smooth height field over 40 000 x 40 000 units tessellated into about \a triangles
+    triangles, written as an OBJ; returns its path. */
+std::string writeTerrain(std::size_t triangles)
+{
+    const int n = static_cast<int>(std::sqrt(static_cast<double>(triangles) / 2.0));
+    const std::string path = "/tmp/rastercheck_terrain_" + std::to_string(triangles) + ".obj";
+    std::ofstream out(path);
+    const double size = 40000.0, step = size / n;
+    for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n; ++j)
+        {
+            const double x = i * step - size / 2, y = j * step - size / 2;
+            const double z = 600.0 * std::sin(x / 2300.0) * std::cos(y / 3100.0) + 250.0 * std::sin((x + y) / 900.0);
+            out << "v " << x << ' ' << y << ' ' << z << '\n';
+        }
+    const auto at = [n](int i, int j) { return i * (n + 1) + j + 1; };
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+        {
+            out << "f " << at(i, j) << ' ' << at(i + 1, j) << ' ' << at(i + 1, j + 1) << '\n';
+            out << "f " << at(i, j) << ' ' << at(i + 1, j + 1) << ' ' << at(i, j + 1) << '\n';
+        }
+    return path;
+}
+
+/** \brief A .cfg for \a robot in \a world (no start or goal needed for checking: both at the
+    centre of \a volume, given as min x y z max x y z; empty: from the world's vertices). */
+std::string writeCfg(const std::string &name, const std::string &robot, const std::string &world,
+                     const std::vector<double> &volume)
+{
+    const std::string path = "/tmp/rastercheck_" + name + ".cfg";
+    std::ofstream out(path);
+    out << "[problem]\nname = " << name << "\nrobot = " << robot << "\nworld = " << world << '\n';
+    for (const char *which : {"start", "goal"})
+        out << which << ".x = 0\n"
+            << which << ".y = 0\n"
+            << which << ".z = 0\n"
+            << which << ".theta = 0\n"
+            << which << ".axis.x = 1\n"
+            << which << ".axis.y = 0\n"
+            << which << ".axis.z = 0\n";
+    const char *axes[3] = {"x", "y", "z"};
+    for (std::size_t k = 0; k < volume.size(); ++k)
+        out << "volume." << (k < 3 ? "min." : "max.") << axes[k % 3] << " = " << volume[k] << '\n';
+    return path;
+}
+
+/** \brief \a n uniform states (x y z qx qy qz qw) within the robot's position bounds. */
+std::vector<double> uniformPoses(const RobotModel &robot, std::size_t n, unsigned seed)
+{
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> normal;
+    std::vector<double> q(7 * n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        double *s = &q[7 * i];
+        for (int k = 0; k < 3; ++k)
+            s[k] = std::uniform_real_distribution<double>(robot.lowerBounds[k], robot.upperBounds[k])(rng);
+        double norm = 0;
+        for (int k = 3; k < 7; ++k)
+        {
+            s[k] = normal(rng);
+            norm += s[k] * s[k];
+        }
+        for (int k = 3; k < 7; ++k)
+            s[k] /= std::sqrt(norm);
+    }
+    return q;
+}
+
+/** \brief States near contact: pairs of a free and a colliding uniform state, bisected 12 times by
+    \a exact (positions linearly, quaternions normalised linearly), both final ends. */
+std::vector<double> nearContact(const Checker &checker, const std::vector<double> &uniform,
+                                const std::vector<std::uint8_t> &valid, std::size_t n)
+{
+    std::vector<std::size_t> free, colliding;
+    for (std::size_t i = 0; i < valid.size(); ++i)
+        (valid[i] ? free : colliding).push_back(i);
+    std::vector<double> out;
+    if (free.empty() || colliding.empty())
+        return out;
+    CollisionRequest exact;
+    exact.mode = CollisionMode::Exact;
+    std::vector<double> a(7), b(7), mid(7);
+    for (std::size_t p = 0; 2 * p < n; ++p)
+    {
+        std::copy_n(&uniform[7 * free[p % free.size()]], 7, a.begin());
+        std::copy_n(&uniform[7 * colliding[(p * 7919) % colliding.size()]], 7, b.begin());
+        if (a[3] * b[3] + a[4] * b[4] + a[5] * b[5] + a[6] * b[6] < 0)
+            for (int k = 3; k < 7; ++k)
+                b[k] = -b[k];
+        for (int step = 0; step < 12; ++step)
+        {
+            double norm = 0;
+            for (int k = 0; k < 7; ++k)
+            {
+                mid[k] = 0.5 * (a[k] + b[k]);
+                norm += k >= 3 ? mid[k] * mid[k] : 0.0;
+            }
+            for (int k = 3; k < 7; ++k)
+                mid[k] /= std::sqrt(norm);
+            (checker.isValid(mid, exact) ? a : b) = mid;
+        }
+        out.insert(out.end(), a.begin(), a.end());
+        out.insert(out.end(), b.begin(), b.end());
+    }
+    return out;
+}
+
+struct Row
+{
+    std::string scene;
+    std::size_t environmentTriangles, robotTriangles;
+    double fcl, safe, conservative, exact;  // states/s
+    std::size_t free, conservativeFalseAlarms, falseNegatives, fclDisagreements;
+};
+
+Row measure(const std::string &scene, const Checker &checker, const std::vector<double> &q)
+{
+    const std::size_t n = q.size() / 7;
+    Row row{scene,
+            checker.collisionModel().objectTriangles.size() / 3,
+            checker.collisionModel().componentTriangles.size() / 3,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0,
+            0};
+    test::FclReference fcl(checker.collisionModel());
+    std::vector<std::uint8_t> fclValid(n), exactValid(n), valid(n);
+    row.fcl = n / bench::seconds(
+                      [&]
+                      {
+                          for (std::size_t i = 0; i < n; ++i)
+                              fclValid[i] = fcl.collides(&q[7 * i]) ? 0 : 1;
+                      });
+    for (CollisionMode mode : {CollisionMode::Exact, CollisionMode::Safe, CollisionMode::Conservative})
+    {
+        CollisionRequest request;
+        request.mode = mode;
+        std::vector<std::uint8_t> &out = mode == CollisionMode::Exact ? exactValid : valid;
+        const double rate = n / bench::seconds([&] { checker.check(q.data(), n, out.data(), request); });
+        (mode == CollisionMode::Exact ? row.exact : mode == CollisionMode::Safe ? row.safe : row.conservative) = rate;
+        for (std::size_t i = 0; mode != CollisionMode::Exact && i < n; ++i)
+        {
+            row.falseNegatives += valid[i] && !exactValid[i];
+            if (mode == CollisionMode::Conservative)
+                row.conservativeFalseAlarms += !valid[i] && exactValid[i];
+        }
+    }
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        row.free += exactValid[i];
+        row.fclDisagreements += fclValid[i] != exactValid[i];
+    }
+    return row;
+}
+
+void printTable(const char *title, const std::vector<Row> &rows)
+{
+    std::printf(
+        "\n%s\n\n| scene | env tris | robot tris | FCL states/s | safe / FCL | conservative / FCL | "
+        "exact / FCL | conservative false alarms (of free) | FN, every mode | FCL differs |\n"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        title);
+    double worst = 1e300;
+    std::string worstScene;
+    for (const Row &r : rows)
+    {
+        std::printf("| %s | %zu | %zu | %.0f | %.2f | %.2f | %.2f | %zu (%.2f %% of %zu) | %zu | %zu |\n",
+                    r.scene.c_str(), r.environmentTriangles, r.robotTriangles, r.fcl, r.safe / r.fcl,
+                    r.conservative / r.fcl, r.exact / r.fcl, r.conservativeFalseAlarms,
+                    r.free ? 100.0 * r.conservativeFalseAlarms / r.free : 0.0, r.free, r.falseNegatives,
+                    r.fclDisagreements);
+        if (r.safe / r.fcl < worst)
+        {
+            worst = r.safe / r.fcl;
+            worstScene = r.scene;
+        }
+    }
+    if (!rows.empty())
+        std::printf("\nworst safe / FCL: %.2f (%s)\n", worst, worstScene.c_str());
+}
+}  // namespace
+
+int main(int argc, char **argv)
+{
+    const std::size_t states = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 20000;
+    std::string omplapp =
+        argc > 2 ? argv[2] : (std::getenv("RASTERCHECK_OMPLAPP") ? std::getenv("RASTERCHECK_OMPLAPP") : "");
+    std::vector<std::string> only(argv + std::min(argc, 3), argv + argc);
+    const auto wanted = [&](const std::string &name)
+    { return only.empty() || std::find(only.begin(), only.end(), name) != only.end(); };
+    const std::string root = bench::sharedDataOrExit();
+
+    std::vector<std::pair<std::string, std::string>> scenes;  // name, .cfg
+    if (omplapp.empty())
+        std::printf(
+            "OMPL.app problems skipped: give their resources/3D folder as the second argument or in "
+            "RASTERCHECK_OMPLAPP\n");
+    else
+        for (const char *name :
+             {"Easy", "bugtrap", "Twistycool", "cubicles", "Abstract", "Home", "Apartment", "alpha-1.5"})
+            if (std::ifstream(omplapp + "/" + name + ".cfg"))
+                scenes.emplace_back(name, omplapp + "/" + name + ".cfg");
+    const std::string fcl = root + "/meshes/fcl/";
+    scenes.emplace_back("fcl env/rob", writeCfg("fcl_env_rob", fcl + "rob.obj", fcl + "env.obj", {}));
+    for (std::size_t size : {10000, 100000, 1000000})
+    {
+        const std::string name = "terrain " + std::to_string(size);
+        if (wanted(name))
+            scenes.emplace_back(name, writeCfg("terrain_" + std::to_string(size), fcl + "rob.obj", writeTerrain(size),
+                                               {-20000, -20000, -900, 20000, 20000, 1000}));
+    }
+
+    std::vector<Row> uniformRows, nearRows;
+    for (const auto &[name, cfg] : scenes)
+    {
+        if (!wanted(name))
+            continue;
+        double loadSeconds = 0;
+        OmplAppProblem problem;
+        loadSeconds = bench::seconds([&] { problem = loadOmplAppProblem(cfg); });
+        std::unique_ptr<Checker> checker;
+        loadSeconds += bench::seconds(
+            [&] {
+                checker =
+                    std::make_unique<Checker>(problem.robot, problem.scene, CheckerOptions{BackendChoice::Cpu, 1});
+            });
+        const std::vector<double> uniform = uniformPoses(*problem.robot, states, 17);
+        uniformRows.push_back(measure(name, *checker, uniform));
+        std::vector<std::uint8_t> valid(states);
+        CollisionRequest exact;
+        exact.mode = CollisionMode::Exact;
+        checker->check(uniform.data(), states, valid.data(), exact);
+        const std::vector<double> near = nearContact(*checker, uniform, valid, std::min<std::size_t>(states, 4000));
+        if (!near.empty())
+            nearRows.push_back(measure(name, *checker, near));
+        std::fprintf(stderr, "%s: loaded and built in %.2f s; proof arrays %zu bytes\n", name.c_str(), loadSeconds,
+                     checker->collisionModel().convex.bytes());
+    }
+    std::printf(
+        "\nOne thread, CPU backend; FCL 0.7 BVHModel<OBBRSS> (OMPL.app's semantics: surfaces only, so it "
+        "misses a robot buried in a closed obstacle; 'FCL differs' counts its verdicts against exact mode)\n");
+    printTable("Uniform states", uniformRows);
+    printTable("Near-contact states (free and colliding ends of 12-step bisections)", nearRows);
+    return 0;
+}
