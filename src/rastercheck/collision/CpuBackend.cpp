@@ -21,15 +21,15 @@ using device::Vec3;
 struct Solid
 {
     const CollisionModel::MeshSlice *slice;
-    const float *vertices;           // slice's vertices, local frame, x y z
-    const std::uint32_t *triangles;  // slice's triangles
+    const float *vertices;            // slice's vertices, local frame, x y z
+    const std::uint32_t *triangles;   // slice's triangles
     const device::Pose<float> *pose;  // null: vertices are already in the world frame
     int component;                    // index for the per-state vertex cache; -1 for objects
-    device::Box bounds;              // world
+    device::Box bounds;               // world
     const MeshBvh *bvh;
-    device::ConvexArrays convex;          // the separation cull's arrays
-    std::uint32_t convexSolid;            // this solid's number there
-    const device::Pose<double> *pose64;   // the double pose of the hull test and the exact phase
+    device::ConvexArrays convex;         // the separation cull's arrays
+    std::uint32_t convexSolid;           // this solid's number there
+    const device::Pose<double> *pose64;  // the double pose of the hull test and the exact phase
 };
 
 const device::Pose<double> &identityDevicePose()
@@ -70,13 +70,14 @@ void cullToImage(const Solid &solid, const Vec3<float> *world, const device::Ras
 
 // Stages: pre-rasterization count, scan, rasterization, per-pixel sort, Sort_Search_Pair. With an
 // image, every pixel is walked and recorded (pictures); without, the first hit ends the pair.
-bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std::uint32_t> &candidatesA,
-               const Solid &b, const Vec3<float> *worldB, const std::vector<std::uint32_t> &candidatesB,
-               const device::RasterGrid &grid, CpuWorkspace &ws, Contact &contact, RasterImage *image = nullptr)
+bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std::uint32_t> &candidatesA, const Solid &b,
+               const Vec3<float> *worldB, const std::vector<std::uint32_t> &candidatesB, const device::RasterGrid &grid,
+               CpuWorkspace &ws, Contact &contact, RasterImage *image = nullptr)
 {
     const int pixels = grid.width * grid.height;
     ws.pixelCount.assign(static_cast<std::size_t>(pixels), 0);
-    auto forEachTriangle = [&](auto &&emitFor) {
+    auto forEachTriangle = [&](auto &&emitFor)
+    {
         for (std::uint32_t t : candidatesA)
         {
             const std::uint32_t *tri = a.triangles + 3 * t;
@@ -85,7 +86,8 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
         for (std::uint32_t t : candidatesB)
         {
             const std::uint32_t *tri = b.triangles + 3 * t;
-            device::rasterizeTriangle(grid, worldB[tri[0]], worldB[tri[1]], worldB[tri[2]], emitFor(t | device::kPartyB));
+            device::rasterizeTriangle(grid, worldB[tri[0]], worldB[tri[1]], worldB[tri[2]],
+                                      emitFor(t | device::kPartyB));
         }
     };
     forEachTriangle([&](std::uint32_t) { return [&](int pixel, float, bool) { ++ws.pixelCount[pixel]; }; });
@@ -96,11 +98,13 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
         ws.pixelStart[p + 1] = ws.pixelStart[p] + ws.pixelCount[p];
     ws.fragments.resize(static_cast<std::size_t>(ws.pixelStart[pixels]));
     std::copy(ws.pixelStart.begin(), ws.pixelStart.end() - 1, ws.pixelCount.begin());  // write cursors
-    forEachTriangle([&](std::uint32_t code) {
-        return [&, code](int pixel, float depth, bool entering) {
-            ws.fragments[ws.pixelCount[pixel]++] = {depth, entering ? code | device::kEntering : code};
-        };
-    });
+    forEachTriangle(
+        [&](std::uint32_t code)
+        {
+            return [&, code](int pixel, float depth, bool entering) {
+                ws.fragments[ws.pixelCount[pixel]++] = {depth, entering ? code | device::kEntering : code};
+            };
+        });
 
     if (image)
     {
@@ -143,10 +147,10 @@ bool rasterHit(const Solid &a, const Vec3<float> *worldA, const std::vector<std:
     BVHs (measured on the Panda MBM scenes: 164 node pairs and 367 triangle pairs per pair that
     turned out apart); most of the rest collide, and the overlap proof settles most of those. */
 device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding, bool proveOverlap,
-                                  device::Vec3<double> *warmStart)
+                                  device::Vec3<double> *warmStart, bool patchAgainstPatch)
 {
-    return device::relateSolids(a.convex, a.convexSolid, *a.pose64, b.convexSolid, *b.pose64,
-                                std::max(0.0, padding), proveOverlap, warmStart);
+    return device::relateSolids(a.convex, a.convexSolid, *a.pose64, b.convexSolid, *b.pose64, std::max(0.0, padding),
+                                proveOverlap, warmStart, patchAgainstPatch);
 }
 
 /** \brief The exact narrow phase (the oracle): triangle pairs and containment. */
@@ -154,8 +158,7 @@ bool exactOverlap(const Solid &a, const Solid &b, double padding, Contact &conta
 {
     MeshContact meshContact;
     if (!solidsOverlap(*a.bvh, fromDevicePose(*a.pose64), a.slice->closed, *b.bvh, fromDevicePose(*b.pose64),
-                       b.slice->closed, padding,
-                       &meshContact))
+                       b.slice->closed, padding, &meshContact))
         return false;
     contact.triangle = meshContact.triangleB;
     contact.position = meshContact.position;
@@ -220,7 +223,8 @@ bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, cons
     // the workspace decided before (the warm start): it starts cold, as the stages' proof does.
     const device::HullRelation relation =
         hullRelation(a, b, padding, !wantContact && request.mode != CollisionMode::Raster,
-                     request.mode == CollisionMode::Conservative ? nullptr : &ws.proofDirection[pairNumber]);
+                     request.mode == CollisionMode::Conservative ? nullptr : &ws.proofDirection[pairNumber],
+                     request.mode == CollisionMode::Conservative);
     if (relation != device::HullRelation::Unknown)
         return relation == device::HullRelation::Overlapping;
     if (request.mode == CollisionMode::Conservative)
@@ -298,7 +302,10 @@ CpuBackend::CpuBackend(CollisionModelConstPtr model) : model_(std::move(model)) 
 
 CpuBackend::~CpuBackend() = default;
 
-std::unique_ptr<CpuWorkspace> CpuBackend::makeWorkspace() const { return std::make_unique<CpuWorkspace>(*model_); }
+std::unique_ptr<CpuWorkspace> CpuBackend::makeWorkspace() const
+{
+    return std::make_unique<CpuWorkspace>(*model_);
+}
 
 std::unique_ptr<CpuWorkspace> CpuBackend::borrow() const
 {
@@ -320,7 +327,10 @@ void CpuBackend::giveBack(std::unique_ptr<CpuWorkspace> workspace) const
     pool_.push_back(std::move(workspace));
 }
 
-void CpuBackend::refitState(const double *q, CpuWorkspace &ws) const { refit(*model_, q, ws); }
+void CpuBackend::refitState(const double *q, CpuWorkspace &ws) const
+{
+    refit(*model_, q, ws);
+}
 
 bool CpuBackend::decideOpenPair(std::uint32_t pair, const CollisionRequest &request, CpuWorkspace &ws,
                                 Contact &contact) const
@@ -341,7 +351,8 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
 {
     const CollisionModel &model = *model_;
     Contact contact;
-    auto invalid = [&](Contact::Kind kind) {
+    auto invalid = [&](Contact::Kind kind)
+    {
         contact.kind = kind;
         if (contactOut)
             *contactOut = contact;
@@ -413,10 +424,10 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
             if (!device::solidsMayMeet(ws.componentBounds[a], ws.componentBox[a], ws.componentBounds[b],
                                        ws.componentBox[b], device::floatPadding(padding)))
                 continue;
-            if (pairCollides(componentSolid(model, ws, a), componentSolid(model, ws, b),
-                             device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()),
-                                              static_cast<int>(m)),
-                             request, padding, pixel, model.origin, wantContact, ws, contact))
+            if (pairCollides(
+                    componentSolid(model, ws, a), componentSolid(model, ws, b),
+                    device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()), static_cast<int>(m)),
+                    request, padding, pixel, model.origin, wantContact, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;
@@ -474,9 +485,8 @@ void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Cont
         std::unique_ptr<CpuWorkspace> ws = borrow();
 #pragma omp for schedule(dynamic, 16)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
-            valid[i] = isValid(q + static_cast<std::size_t>(i) * dof, request, *ws, contacts ? contacts + i : nullptr)
-                           ? 1
-                           : 0;
+            valid[i] =
+                isValid(q + static_cast<std::size_t>(i) * dof, request, *ws, contacts ? contacts + i : nullptr) ? 1 : 0;
         giveBack(std::move(ws));
     }
 }
