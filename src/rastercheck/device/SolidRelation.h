@@ -228,16 +228,17 @@ RC_HD Vec3<double> surfacePoint(const ConvexProxy &piece, const Pose<double> &po
 RC_HD HullRelation relatePatches(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
                                  std::uint32_t b, const Pose<double> &poseB, double padding, bool proveOverlap)
 {
-    const ConvexProxy wholeA = convexProxy(arrays, arrays.solidPieces[a]);
-    const ConvexProxy wholeB = convexProxy(arrays, arrays.solidPieces[b]);
-    const bool closedA = arrays.pieces[arrays.solidPieces[a]].closed != 0;
-    const bool closedB = arrays.pieces[arrays.solidPieces[b]].closed != 0;
+    const std::uint32_t a0 = arrays.solidPieces[a], a1 = arrays.solidPieces[a + 1], b0 = arrays.solidPieces[b];
+    const ConvexProxy wholeA = convexProxy(arrays, a0);
+    const ConvexProxy wholeB = convexProxy(arrays, b0);
+    const bool closedA = arrays.pieces[a0].closed != 0;
+    const bool closedB = arrays.pieces[b0].closed != 0;
     const Vec3<double> ta = translationOf(poseA), tb = translationOf(poseB);
-    const double rounding =
-        kSeparationSlack * (wholeA.radius + wholeB.radius + std::sqrt(dot(ta, ta)) + std::sqrt(dot(tb, tb)));
+    // The magnitudes involved: the proofs' rounding slack and the rays' tolerance are fractions of it.
+    const double scale = wholeA.radius + wholeB.radius + std::sqrt(dot(ta, ta)) + std::sqrt(dot(tb, tb));
+    const double rounding = kSeparationSlack * scale;
     const bool patchesA = hasPatches(arrays, a);
     bool overlapping = false;
-    const std::uint32_t a0 = arrays.solidPieces[a], a1 = arrays.solidPieces[a + 1];
     const auto splitA = [&](const ConvexProxy &patchB)
     {
         // B's patch against A's patches near it, or else against each of A's shells.
@@ -263,7 +264,7 @@ RC_HD HullRelation relatePatches(const ConvexArrays &arrays, std::uint32_t a, co
     // The surfaces are apart (A's hull, or A's surface, from B's surface), so each solid lies wholly
     // inside or wholly outside the other; one point of its surface tells. B cannot lie inside A's
     // hull unless A was split into patches.
-    const double tolerance = 1e-9 * (wholeA.radius + wholeB.radius + std::sqrt(dot(ta, ta)) + std::sqrt(dot(tb, tb)));
+    const double tolerance = 1e-9 * scale;
     const auto buried =
         [&](const ConvexProxy &inner, const Pose<double> &innerPose, std::uint32_t outer, const Pose<double> &outerPose)
     {
