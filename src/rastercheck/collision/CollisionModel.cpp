@@ -120,6 +120,25 @@ std::vector<std::vector<std::uint32_t>> hullClusters(const std::vector<Eigen::Ve
     return clusters;
 }
 
+/** \brief Appends triangle \a t of \a mesh to \a part, its corners renumbered through \a renumbered
+    (one entry per vertex of \a mesh; ~0u: not yet in \a part, set when added). Cuts a mesh into
+    parts: its shells, or its patches. */
+void appendTriangle(const Mesh &mesh, std::size_t t, Mesh &part, std::vector<std::uint32_t> &renumbered)
+{
+    Mesh::Triangle triangle{};
+    for (int k = 0; k < 3; ++k)
+    {
+        const std::uint32_t v = mesh.triangles[t][k];
+        if (renumbered[v] == ~0u)
+        {
+            renumbered[v] = static_cast<std::uint32_t>(part.vertices.size());
+            part.vertices.push_back(mesh.vertices[v]);
+        }
+        triangle[k] = renumbered[v];
+    }
+    part.triangles.push_back(triangle);
+}
+
 /** \brief True when the triangles order[begin, end) of \a mesh lie in a slab, normal to their mean
     normal, no thicker than \a thickness: a patch whose hull hugs its surface (a piece of a wall, of
     a gently curved shell), not one that wraps a corner. */
@@ -310,25 +329,11 @@ void ConvexSolids::addPatches(const Mesh &mesh, double patchThickness)
         {
             // A patch: its triangles as a mesh of their own (vertices renumbered).
             Mesh patch;
-            std::vector<std::uint32_t> used;
             for (std::size_t i = job.begin; i < job.end; ++i)
-            {
-                Mesh::Triangle triangle{};
-                for (int k = 0; k < 3; ++k)
-                {
-                    const std::uint32_t v = mesh.triangles[order[i]][k];
-                    if (renumbered[v] == ~0u)
-                    {
-                        renumbered[v] = static_cast<std::uint32_t>(patch.vertices.size());
-                        patch.vertices.push_back(mesh.vertices[v]);
-                        used.push_back(v);
-                    }
-                    triangle[k] = renumbered[v];
-                }
-                patch.triangles.push_back(triangle);
-            }
-            for (std::uint32_t v : used)
-                renumbered[v] = ~0u;
+                appendTriangle(mesh, order[i], patch, renumbered);
+            for (std::size_t i = job.begin; i < job.end; ++i)
+                for (std::uint32_t v : mesh.triangles[order[i]])
+                    renumbered[v] = ~0u;
             device::ConvexPiece piece = makePiece(patch, false);
             piece.firstTriangle = static_cast<std::uint32_t>(patchTriangles_.size() / 3);
             piece.numTriangles = static_cast<std::uint32_t>(patch.numTriangles());
@@ -382,19 +387,7 @@ void ConvexSolids::add(const Mesh &mesh, bool closed, double patchThickness)
         std::vector<std::uint32_t> renumbered(mesh.numVertices(), ~0u);
         for (std::size_t t = 0; t < mesh.numTriangles(); ++t)
         {
-            Mesh &part = parts[shellOf[t]];
-            Mesh::Triangle triangle{};
-            for (int k = 0; k < 3; ++k)
-            {
-                const std::uint32_t v = mesh.triangles[t][k];
-                if (renumbered[v] == ~0u)
-                {
-                    renumbered[v] = static_cast<std::uint32_t>(part.vertices.size());
-                    part.vertices.push_back(mesh.vertices[v]);
-                }
-                triangle[k] = renumbered[v];
-            }
-            part.triangles.push_back(triangle);
+            appendTriangle(mesh, t, parts[shellOf[t]], renumbered);
         }
         nearConvex = true;
         for (const Mesh &part : parts)
