@@ -7,6 +7,8 @@
 #include <numeric>
 #include <string>
 
+#include <Eigen/Eigenvalues>
+
 #include "rastercheck/core/Error.h"
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/geometry/TriangleTests.h"
@@ -27,15 +29,14 @@ struct NodePair
     std::int32_t a, b;
 };
 
-// Separating-axis test of box A (axis-aligned in frame A: centre ca, half extents ea) against box
-// B (centre cb and half extents eb in frame B, whose axes are the columns of R in frame A):
-// the 3 + 3 face axes and 9 edge-pair axes (Gottschalk's OBB test). True when some axis shows a
-// gap wider than reach. The cross-product axes are not normalised; their length is at most 1,
-// so comparing their projected gap against the full reach only keeps more pairs, never fewer.
-bool boxesSeparated(const Vec &ca, const Vec &ea, const Vec &cb, const Vec &eb, const Eigen::Matrix3d &R,
-                    const Eigen::Matrix3d &absR, double reach)
+// Separating-axis test of box A (centre 0, axes the frame's, half extents ea) against box B (centre
+// d and half extents eb, its axes the columns of R, all in A's frame): the 3 + 3 face axes and the 9
+// edge-pair axes (Gottschalk's OBB test). True when some axis shows a gap wider than reach. The
+// cross-product axes are not normalised; their length is at most 1, so comparing their projected
+// gap against the full reach only keeps more pairs, never fewer.
+bool boxesSeparated(const Vec &ea, const Vec &eb, const Eigen::Matrix3d &R, const Vec &d, double reach)
 {
-    const Vec d = cb - ca;
+    const Eigen::Matrix3d absR = R.cwiseAbs();
     for (int i = 0; i < 3; ++i)
         if (std::abs(d[i]) > ea[i] + absR.row(i).dot(eb) + reach)
             return true;
@@ -58,18 +59,41 @@ bool boxesSeparated(const Vec &ca, const Vec &ea, const Vec &cb, const Vec &eb, 
     return false;
 }
 
-// Slab test of the ray origin + t * direction, t >= 0, against box (inverse direction given).
-bool rayHitsBox(const Vec &origin, const Vec &inverseDirection, const Aabb &box, double margin)
+// Slab test of the ray origin + t * direction, t >= 0, against a node's box grown by margin, in
+// the box's own frame.
+bool rayHitsNode(const Vec &origin, const Vec &direction, const MeshBvh::Node &node, double margin)
 {
+    const Eigen::Matrix3d axes = node.rotation();
+    const Vec o = axes.transpose() * (origin - node.centreVector()), d = axes.transpose() * direction;
     double near = 0.0, far = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k)
     {
-        const double t1 = (box.min[k] - margin - origin[k]) * inverseDirection[k];
-        const double t2 = (box.max[k] + margin - origin[k]) * inverseDirection[k];
+        const double extent = node.halfExtents[k] + margin;
+        if (d[k] == 0.0)
+        {
+            if (std::abs(o[k]) > extent)
+                return false;
+            continue;
+        }
+        const double t1 = (-extent - o[k]) / d[k], t2 = (extent - o[k]) / d[k];
         near = std::max(near, std::min(t1, t2));
         far = std::min(far, std::max(t1, t2));
     }
     return near <= far;
+}
+
+// What the float storage of the nodes may be off by, as a fraction of the coordinates'
+// magnitude: their axes depart from orthonormal by a few float ulps (about 1e-7), so a corner may
+// sit that fraction of the node's size outside its stored box. Ten times that is the slack every
+// node test adds; it only keeps more pairs.
+constexpr double kNodeRounding = 1e-6;
+
+float roundedUp(double x)
+{
+    float f = static_cast<float>(x);
+    if (static_cast<double>(f) < x)
+        f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
 }
 
 // Generalised winding number (sum of signed solid angles, Van Oosterom and Strackee), the
@@ -89,11 +113,32 @@ double windingNumber(const MeshBvh &bvh, const Vec &point)
     return total / (4.0 * M_PI);
 }
 
-double boxRadius(const Aabb &box)
+// A magnitude of a tree's coordinates: its root's radius plus its distance from the origin.
+double treeScale(const MeshBvh &bvh)
 {
-    return box.halfExtents().norm();
+    const MeshBvh::Node &root = bvh.nodes()[0];
+    return root.radius + root.centreVector().norm();
 }
 }  // namespace
+
+Eigen::Matrix3d MeshBvh::Node::rotation() const
+{
+    Eigen::Matrix3d m;
+    m << axes[0], axes[1], axes[2], axes[3], axes[4], axes[5], axes[6], axes[7], axes[8];
+    return m;
+}
+
+bool MeshBvh::Node::contains(const Eigen::Vector3d &p, double margin) const
+{
+    const Vec local = rotation().transpose() * (p - centreVector());
+    return (local.array().abs() <= extents().array() + margin).all();
+}
+
+std::size_t MeshBvh::bytes() const
+{
+    return nodes_.size() * sizeof(Node) + triangleOrder_.size() * sizeof(std::uint32_t) +
+           corners_.size() * sizeof(corners_[0]);
+}
 
 MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles) : mesh_(&mesh)
 {
@@ -138,31 +183,68 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles) : mesh_(&mesh)
     }
 }
 
-int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Vec> &centroids,
+int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Eigen::Vector3d> &centroids,
                    unsigned maxLeafTriangles)
 {
-    Aabb box, centroidBox;
-    for (std::uint32_t slot = begin; slot < end; ++slot)
+    // The box: principal axes of the corners' covariance, rounded to float first, then the
+    // centre and extents about those axes (rounded outwards), so the stored box holds every corner.
+    const auto forEachCorner = [&](auto &&visit)
     {
-        const std::uint32_t triangle = triangleOrder_[slot];
-        for (std::uint32_t v : mesh_->triangles[triangle])
-            box.extend(mesh_->vertices[v]);
-        centroidBox.extend(centroids[triangle]);
-    }
-    nodes_[node].box = box;
+        for (std::uint32_t slot = begin; slot < end; ++slot)
+            for (std::uint32_t v : mesh_->triangles[triangleOrder_[slot]])
+                visit(mesh_->vertices[v]);
+    };
+    Vec mean = Vec::Zero();
+    double corners = 0;
+    forEachCorner([&](const Vec &p) { mean += p, corners += 1; });
+    mean /= corners;
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    forEachCorner([&](const Vec &p) { covariance += (p - mean) * (p - mean).transpose(); });
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+    Node &box = nodes_[node];
+    Eigen::Matrix3d axes = solver.info() == Eigen::Success ? solver.eigenvectors() : Eigen::Matrix3d::Identity();
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            box.axes[3 * r + c] = static_cast<float>(axes(r, c));
+    axes = box.rotation();
+    Vec lower = Vec::Constant(std::numeric_limits<double>::infinity()), upper = -lower;
+    forEachCorner(
+        [&](const Vec &p)
+        {
+            const Vec local = axes.transpose() * p;
+            lower = lower.cwiseMin(local);
+            upper = upper.cwiseMax(local);
+        });
+    const Vec centre = axes * (0.5 * (lower + upper));
+    for (int k = 0; k < 3; ++k)
+        box.centre[k] = static_cast<float>(centre[k]);
+    Vec extents = Vec::Zero();
+    double radius = 0.0;
+    forEachCorner(
+        [&](const Vec &p)
+        {
+            const Vec offset = p - box.centreVector();
+            extents = extents.cwiseMax((axes.transpose() * offset).cwiseAbs());
+            radius = std::max(radius, offset.norm());
+        });
+    for (int k = 0; k < 3; ++k)
+        box.halfExtents[k] = roundedUp(extents[k]);
+    box.radius = roundedUp(radius);
+
     const std::uint32_t count = end - begin;
     if (count <= maxLeafTriangles)
     {
-        nodes_[node].first = -static_cast<std::int32_t>(begin) - 1;
-        nodes_[node].count = count;
+        box.first = -static_cast<std::int32_t>(begin) - 1;
+        box.count = count;
         return 0;
     }
-    int axis = 0;
-    centroidBox.halfExtents().maxCoeff(&axis);
+    int longest = 0;
+    extents.maxCoeff(&longest);
+    const Vec axis = axes.col(longest);
     const std::uint32_t middle = begin + count / 2;
     std::nth_element(triangleOrder_.begin() + begin, triangleOrder_.begin() + middle, triangleOrder_.begin() + end,
-                     [&centroids, axis](std::uint32_t i, std::uint32_t j)
-                     { return centroids[i][axis] < centroids[j][axis]; });
+                     [&centroids, &axis](std::uint32_t i, std::uint32_t j)
+                     { return axis.dot(centroids[i]) < axis.dot(centroids[j]); });
     const auto child = static_cast<std::int32_t>(nodes_.size());
     nodes_.emplace_back();
     nodes_.emplace_back();
@@ -178,19 +260,15 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
 {
     if (a.empty() || b.empty())
         return false;
-    // Everything happens in A's frame: B's boxes become oriented boxes there, and B's triangles
-    // are moved by this one transform before the exact tests.
+    // Everything happens in A's frame: B's boxes are moved there, and B's triangles are moved by
+    // this one transform before the exact tests.
     const Eigen::Isometry3d aMb = poseA.inverse(Eigen::Isometry) * poseB;
     const Eigen::Matrix3d R = aMb.linear();
     const Vec T = aMb.translation();
-    const Eigen::Matrix3d absR = R.cwiseAbs();
     padding = std::max(0.0, padding);
-    // The box test must never drop a pair the triangle test would accept; rounding in R, T and the
-    // projections is a few ulps of the magnitudes involved, far below this slack.
-    const Aabb &rootA = a.nodes()[0].box, &rootB = b.nodes()[0].box;
-    const double slack =
-        1e-12 * (T.norm() + rootA.center().norm() + rootB.center().norm() + boxRadius(rootA) + boxRadius(rootB));
-    const double reach = padding + slack;
+    // The node tests must never drop a pair the triangle test would accept: the slack covers the
+    // nodes' float storage (kNodeRounding) and the rounding of R, T and the projections.
+    const double reach = padding + kNodeRounding * (T.norm() + treeScale(a) + treeScale(b));
 
     const std::vector<MeshBvh::Node> &nodesA = a.nodes(), &nodesB = b.nodes();
     NodePair stack[kPairStackSize];
@@ -200,8 +278,14 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
     {
         const NodePair pair = stack[--top];
         const MeshBvh::Node &na = nodesA[pair.a], &nb = nodesB[pair.b];
-        const Vec ea = na.box.halfExtents(), eb = nb.box.halfExtents();
-        if (boxesSeparated(na.box.center(), ea, R * nb.box.center() + T, eb, R, absR, reach))
+        // Bounding spheres first: nine multiply-adds settle most pairs that are far apart.
+        const Vec between = R * nb.centreVector() + T - na.centreVector();
+        const double spheres = static_cast<double>(na.radius) + nb.radius + reach;
+        if (between.squaredNorm() > spheres * spheres)
+            continue;
+        const Eigen::Matrix3d axesA = na.rotation();
+        if (boxesSeparated(na.extents(), nb.extents(), axesA.transpose() * (R * nb.rotation()),
+                           axesA.transpose() * between, reach))
             continue;
         if (na.isLeaf() && nb.isLeaf())
         {
@@ -229,8 +313,8 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
             }
             continue;
         }
-        // Descend into the bigger box, so both trees shrink at a similar pace.
-        const bool splitA = nb.isLeaf() || (!na.isLeaf() && ea.squaredNorm() >= eb.squaredNorm());
+        // Descend into the bigger node, so both trees shrink at a similar pace.
+        const bool splitA = nb.isLeaf() || (!na.isLeaf() && na.radius >= nb.radius);
         if (splitA)
         {
             stack[top++] = {na.first + 1, pair.b};
@@ -249,11 +333,12 @@ bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
 {
     if (bvh.empty())
         return false;
-    const Aabb &root = bvh.nodes()[0].box;
+    const MeshBvh::Node &root = bvh.nodes()[0];
     // Large against the rounding of the ray/triangle arithmetic (1e-16 of these magnitudes), small
     // against any feature a mesh is meant to resolve.
-    const double tolerance = 1e-9 * (2.0 * boxRadius(root) + (point - root.center()).norm());
-    if (!root.inflated(tolerance).contains(point))
+    const double tolerance = 1e-9 * (2.0 * root.radius + (point - root.centreVector()).norm());
+    const double margin = tolerance + kNodeRounding * (treeScale(bvh) + point.norm());
+    if (!root.contains(point, margin))
         return false;
 
     const std::vector<MeshBvh::Node> &nodes = bvh.nodes();
@@ -261,7 +346,6 @@ bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
     {
         const device::Vec3<double> d = device::rayDirection(k);
         const Vec direction(d.x, d.y, d.z);
-        const Vec inverse = direction.cwiseInverse();
         // Signed crossings (+1 leaving through an outward face, -1 entering) rather than parity: a
         // mesh of several overlapping closed shells (a link of a cylinder and two spheres) contains
         // the point when any shell does, which parity gets wrong inside an overlap.
@@ -273,7 +357,7 @@ bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
         while (top > 0 && !grazed)
         {
             const MeshBvh::Node &node = nodes[stack[--top]];
-            if (!rayHitsBox(point, inverse, node.box, tolerance))
+            if (!rayHitsNode(point, direction, node, margin))
                 continue;
             if (!node.isLeaf())
             {
