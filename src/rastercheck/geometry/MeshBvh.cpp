@@ -121,13 +121,6 @@ double treeScale(const MeshBvh &bvh)
 }
 }  // namespace
 
-Eigen::Matrix3d MeshBvh::Node::rotation() const
-{
-    Eigen::Matrix3d m;
-    m << axes[0], axes[1], axes[2], axes[3], axes[4], axes[5], axes[6], axes[7], axes[8];
-    return m;
-}
-
 bool MeshBvh::Node::contains(const Eigen::Vector3d &p, double margin) const
 {
     const Vec local = rotation().transpose() * (p - centreVector());
@@ -255,58 +248,101 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, st
     return 1 + std::max(left, right);
 }
 
-bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
-                    double padding, MeshContact *contact)
+namespace
 {
-    if (a.empty() || b.empty())
-        return false;
-    // Everything happens in A's frame: B's boxes are moved there, and B's triangles are moved by
-    // this one transform before the exact tests.
-    const Eigen::Isometry3d aMb = poseA.inverse(Eigen::Isometry) * poseB;
-    const Eigen::Matrix3d R = aMb.linear();
-    const Vec T = aMb.translation();
-    padding = std::max(0.0, padding);
-    // The node tests must never drop a pair the triangle test would accept: the slack covers the
-    // nodes' float storage (kNodeRounding) and the rounding of R, T and the projections.
-    const double reach = padding + kNodeRounding * (T.norm() + treeScale(a) + treeScale(b));
+// A node of the moving tree placed in the fixed tree's frame: done once per node and query, where a
+// node pair's test would otherwise redo it for every node of the other tree it meets.
+struct PlacedNode
+{
+    Eigen::Matrix3d axes;
+    Vec centre;
+};
 
-    const std::vector<MeshBvh::Node> &nodesA = a.nodes(), &nodesB = b.nodes();
-    NodePair stack[kPairStackSize];
+// Per-thread scratch for the placed nodes, stamped by query so that nothing is cleared between
+// queries. Trees above kMaxPlacedNodes are placed per visit instead (the cache would take 100
+// bytes per node per thread).
+constexpr std::size_t kMaxPlacedNodes = std::size_t(1) << 17;
+struct PlacedCache
+{
+    std::vector<PlacedNode> nodes;
+    std::vector<std::uint32_t> stamps;
+    std::uint32_t query = 0;
+};
+
+// The traversal with `fixed`'s frame as the working frame and `moving` placed there by fMm.
+// Leaf pairs are tested with the triangles in the order (a, b) of the caller: `movingIsA` says
+// which tree is A.
+bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry3d &fMm, bool movingIsA, double padding,
+              double reach, Vec *point, std::uint32_t *slotFixed, std::uint32_t *slotMoving)
+{
+    const Eigen::Matrix3d R = fMm.linear();
+    const Vec T = fMm.translation();
+    const std::vector<MeshBvh::Node> &nodesF = fixed.nodes(), &nodesM = moving.nodes();
+    thread_local PlacedCache cache;
+    const bool cached = nodesM.size() <= kMaxPlacedNodes;
+    if (cached)
+    {
+        if (cache.stamps.size() < nodesM.size())
+        {
+            cache.nodes.resize(nodesM.size());
+            cache.stamps.resize(nodesM.size(), 0);
+        }
+        if (++cache.query == 0)  // the stamps wrapped: forget them all
+        {
+            std::fill(cache.stamps.begin(), cache.stamps.end(), 0);
+            cache.query = 1;
+        }
+    }
+    PlacedNode scratch;
+    const auto placed = [&](std::int32_t index) -> const PlacedNode &
+    {
+        PlacedNode &slot = cached ? cache.nodes[index] : scratch;
+        if (!cached || cache.stamps[index] != cache.query)
+        {
+            slot.axes = R * nodesM[index].rotation();
+            slot.centre = R * nodesM[index].centreVector() + T;
+            if (cached)
+                cache.stamps[index] = cache.query;
+        }
+        return slot;
+    };
+
+    NodePair stack[kPairStackSize];  // {fixed, moving}
     int top = 0;
     stack[top++] = {0, 0};
     while (top > 0)
     {
         const NodePair pair = stack[--top];
-        const MeshBvh::Node &na = nodesA[pair.a], &nb = nodesB[pair.b];
-        // Bounding spheres first: nine multiply-adds settle most pairs that are far apart.
-        const Vec between = R * nb.centreVector() + T - na.centreVector();
-        const double spheres = static_cast<double>(na.radius) + nb.radius + reach;
+        const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
+        const PlacedNode &pm = placed(pair.b);
+        // Bounding spheres first: they settle most pairs that are far apart for one dot product.
+        const Vec between = pm.centre - nf.centreVector();
+        const double spheres = static_cast<double>(nf.radius) + nm.radius + reach;
         if (between.squaredNorm() > spheres * spheres)
             continue;
-        const Eigen::Matrix3d axesA = na.rotation();
-        if (boxesSeparated(na.extents(), nb.extents(), axesA.transpose() * (R * nb.rotation()),
-                           axesA.transpose() * between, reach))
+        const Eigen::Matrix3d axesF = nf.rotation();
+        if (boxesSeparated(nf.extents(), nm.extents(), axesF.transpose() * pm.axes, axesF.transpose() * between, reach))
             continue;
-        if (na.isLeaf() && nb.isLeaf())
+        if (nf.isLeaf() && nm.isLeaf())
         {
-            for (std::uint32_t sb = nb.firstSlot(); sb < nb.firstSlot() + nb.count; ++sb)
+            for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
             {
-                const std::array<Vec, 3> &tb = b.slotTriangle(sb);
-                const Vec q0 = R * tb[0] + T, q1 = R * tb[1] + T, q2 = R * tb[2] + T;
-                for (std::uint32_t sa = na.firstSlot(); sa < na.firstSlot() + na.count; ++sa)
+                const std::array<Vec, 3> &tm = moving.slotTriangle(sm);
+                const Vec q0 = R * tm[0] + T, q1 = R * tm[1] + T, q2 = R * tm[2] + T;
+                for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
                 {
-                    const std::array<Vec, 3> &ta = a.slotTriangle(sa);
-                    Vec point;
-                    const bool hit = padding > 0.0 ? trianglesWithin(ta[0], ta[1], ta[2], q0, q1, q2, padding, &point)
-                                                   : trianglesIntersect(ta[0], ta[1], ta[2], q0, q1, q2, &point);
+                    const std::array<Vec, 3> &tf = fixed.slotTriangle(sf);
+                    bool hit;
+                    if (movingIsA)
+                        hit = padding > 0.0 ? trianglesWithin(q0, q1, q2, tf[0], tf[1], tf[2], padding, point)
+                                            : trianglesIntersect(q0, q1, q2, tf[0], tf[1], tf[2], point);
+                    else
+                        hit = padding > 0.0 ? trianglesWithin(tf[0], tf[1], tf[2], q0, q1, q2, padding, point)
+                                            : trianglesIntersect(tf[0], tf[1], tf[2], q0, q1, q2, point);
                     if (hit)
                     {
-                        if (contact)
-                        {
-                            contact->position = poseA * point;
-                            contact->triangleA = static_cast<std::int32_t>(a.triangleOrder()[sa]);
-                            contact->triangleB = static_cast<std::int32_t>(b.triangleOrder()[sb]);
-                        }
+                        *slotFixed = sf;
+                        *slotMoving = sm;
                         return true;
                     }
                 }
@@ -314,19 +350,60 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
             continue;
         }
         // Descend into the bigger node, so both trees shrink at a similar pace.
-        const bool splitA = nb.isLeaf() || (!na.isLeaf() && na.radius >= nb.radius);
-        if (splitA)
+        const bool splitFixed = nm.isLeaf() || (!nf.isLeaf() && nf.radius >= nm.radius);
+        // The child nearer the other node is popped first: in a colliding state the contact is
+        // more likely there, and the traversal stops at the first one.
+        if (splitFixed)
         {
-            stack[top++] = {na.first + 1, pair.b};
-            stack[top++] = {na.first, pair.b};
+            const std::int32_t c = nf.first;
+            const bool secondNearer = (nodesF[c + 1].centreVector() - pm.centre).squaredNorm() <
+                                      (nodesF[c].centreVector() - pm.centre).squaredNorm();
+            stack[top++] = {secondNearer ? c : c + 1, pair.b};
+            stack[top++] = {secondNearer ? c + 1 : c, pair.b};
         }
         else
         {
-            stack[top++] = {pair.a, nb.first + 1};
-            stack[top++] = {pair.a, nb.first};
+            const std::int32_t c = nm.first;
+            const Vec fixedCentre = nf.centreVector();
+            const bool secondNearer =
+                (placed(c + 1).centre - fixedCentre).squaredNorm() < (placed(c).centre - fixedCentre).squaredNorm();
+            stack[top++] = {pair.a, secondNearer ? c : c + 1};
+            stack[top++] = {pair.a, secondNearer ? c + 1 : c};
         }
     }
     return false;
+}
+}  // namespace
+
+bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
+                    double padding, MeshContact *contact)
+{
+    if (a.empty() || b.empty())
+        return false;
+    padding = std::max(0.0, padding);
+    // The tree with fewer nodes is the one moved (its nodes placed once per query); the other's
+    // frame is the working frame, where the moved tree's triangles are placed by one transform
+    // before the exact tests.
+    const bool movingIsA = a.nodes().size() <= b.nodes().size();
+    const MeshBvh &fixed = movingIsA ? b : a, &moving = movingIsA ? a : b;
+    const Eigen::Isometry3d &fixedPose = movingIsA ? poseB : poseA, &movingPose = movingIsA ? poseA : poseB;
+    const Eigen::Isometry3d fMm = fixedPose.inverse(Eigen::Isometry) * movingPose;
+    // The node tests must never drop a pair the triangle test would accept: the slack covers the
+    // nodes' float storage (kNodeRounding) and the rounding of the transform and the projections.
+    const double reach = padding + kNodeRounding * (fMm.translation().norm() + treeScale(a) + treeScale(b));
+    Vec point;
+    std::uint32_t slotFixed = 0, slotMoving = 0;
+    if (!traverse(fixed, moving, fMm, movingIsA, padding, reach, &point, &slotFixed, &slotMoving))
+        return false;
+    if (contact)
+    {
+        contact->position = fixedPose * point;
+        const std::int32_t triangleFixed = static_cast<std::int32_t>(fixed.triangleOrder()[slotFixed]);
+        const std::int32_t triangleMoving = static_cast<std::int32_t>(moving.triangleOrder()[slotMoving]);
+        contact->triangleA = movingIsA ? triangleMoving : triangleFixed;
+        contact->triangleB = movingIsA ? triangleFixed : triangleMoving;
+    }
+    return true;
 }
 
 bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)

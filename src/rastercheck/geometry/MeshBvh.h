@@ -42,7 +42,12 @@ public:
         std::uint32_t count = 0;  ///< leaf: number of triangles; inner: 0
         bool isLeaf() const { return first < 0; }
         std::uint32_t firstSlot() const { return static_cast<std::uint32_t>(-(first + 1)); }
-        Eigen::Matrix3d rotation() const;
+        Eigen::Matrix3d rotation() const
+        {
+            Eigen::Matrix3d m;
+            m << axes[0], axes[1], axes[2], axes[3], axes[4], axes[5], axes[6], axes[7], axes[8];
+            return m;
+        }
         Eigen::Vector3d centreVector() const { return {centre[0], centre[1], centre[2]}; }
         Eigen::Vector3d extents() const { return {halfExtents[0], halfExtents[1], halfExtents[2]}; }
         /** \brief Is \a p (mesh frame) in the box grown by \a margin? */
@@ -98,10 +103,12 @@ struct MeshContact
     descending the larger node first; node pairs are culled by their bounding spheres, then by a
     15-axis separating-axis test of their oriented boxes, both grown by \a padding plus a rounding
     slack (1e-6 of the coordinates' magnitude), and leaf pairs decided by trianglesIntersect() (padding 0) or
-    trianglesWithin() (padding > 0) on B's triangles expressed in A's frame. So the answer is exact
-    for the coordinates after that one rigid transform. Stops at the first contact found, which
-    \a contact (when not null) receives: for padding > 0 the midpoint of a close-enough pair.
-    No allocation; thread-safe. */
+    trianglesWithin() (padding > 0) with the smaller tree's triangles expressed in the other's
+    frame. So the answer is exact for the coordinates after that one rigid transform. Stops at the
+    first contact found, which \a contact (when not null) receives: for padding > 0 the midpoint of
+    a close-enough pair. The smaller tree's nodes are placed in the other's frame once per query,
+    in a per-thread cache (grown on a thread's first queries, up to 13 MB for a tree of 2^17
+    nodes; larger trees are placed per visit); thread-safe. */
 bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
                     double padding, MeshContact *contact = nullptr);
 
