@@ -39,7 +39,10 @@ enum class CollisionMode
         padding but their meshes do not (a link reaching into a shelf; measured in
         docs/accuracy.md). The cheapest mode, and the one CertifiedMotionValidator uses for its
         margins, where a false alarm only costs a finer sample. A contact it cannot place names the
-        pair, triangle -1, at the centre of the region where their boxes meet. */
+        pair, triangle -1, at the centre of the region where their boxes meet. A non-convex mesh
+        obstacle (a scene object with patches: a room, a terrain, an OMPL.app environment) is
+        decided by the exact phase instead, on both backends: its oriented-box trees make that as
+        cheap as the proofs, and the answer exact. */
     Conservative
 };
 
