@@ -165,8 +165,8 @@ bool looksLikeRequest(const std::string &path)
     return std::regex_search(text.str(), requestKey);
 }
 
-/** \brief What the proofs keep beside the meshes: the patch trees of the non-convex solids and
-    the bytes of every proof array, per triangle. */
+/** \brief What the proofs and the exact phase keep beside the meshes: the patch trees of the
+    non-convex solids, the bytes of every proof array and of the exact phase's trees, per triangle. */
 void printProofArrays(const CollisionModel &model, std::ostream &out)
 {
     const std::size_t triangles = (model.componentTriangles.size() + model.objectTriangles.size()) / 3;
@@ -176,6 +176,12 @@ void printProofArrays(const CollisionModel &model, std::ostream &out)
     out << "proofs: " << model.convex.numPatches() << " patches in " << patched << " non-convex solids of "
         << model.convex.numSolids() << ", " << model.convex.bytes() << " bytes ("
         << (triangles > 0 ? model.convex.bytes() / triangles : 0) << " per triangle)\n";
+    std::size_t treeBytes = 0;
+    for (const auto *trees : {&model.componentBvhs, &model.objectBvhs})
+        for (const std::unique_ptr<MeshBvh> &bvh : *trees)
+            treeBytes += bvh->bytes();
+    out << "exact phase: oriented-box trees " << treeBytes << " bytes (" << (triangles > 0 ? treeBytes / triangles : 0)
+        << " per triangle)\n";
 }
 
 void runInfo(const InfoOptions &options)

@@ -23,7 +23,8 @@ namespace rastercheck
     longest axis, so the tree is balanced: its depth is about log2(triangles / maxLeafTriangles),
     which lets every query traverse it with a small fixed stack instead of allocating.
 
-    Nodes are stored in float (80 bytes each, two per triangle) and read into double: the axes are
+    Nodes are stored in float (72 bytes each, two per triangle; with the triangle order and the
+    corners in double, 220 bytes per triangle) and read into double: the axes are
     rounded first and the extents, centre and radius then computed about the rounded values and
     rounded outwards, so every corner lies in the stored box up to the axes' departure from
     orthonormality (a few 1e-8 of the node's size), which the queries' slack covers. */
