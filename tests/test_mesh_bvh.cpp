@@ -590,3 +590,31 @@ TEST(SurfacesWithin, TimingOfTwoThousandTriangleQueries)
     std::printf("[ info     ] fcl::collide (OBBRSS) on the same poses: %.1f us per pose (%d touching)\n",
                 std::chrono::duration<double, std::micro>(Clock::now() - start).count() / poses.size(), fclHits);
 }
+
+TEST(SurfacesWithin, TreesTooLargeForThePlacedNodeCacheGiveTheSameAnswers)
+{
+    // Two spheres of 81 920 triangles each: both trees exceed the per-thread cache (2^17 nodes), so
+    // the smaller tree's nodes are placed at every visit instead. Known answers from the radii
+    // (1 and 0.8; the tessellation is within 2e-4 of the spheres): nested surfaces do not meet,
+    // crossing ones do, distant ones do not, and the padding reaches across a 0.05 gap.
+    const rc::Mesh a = sphereMesh(1.0, 6), b = sphereMesh(0.8, 6);
+    const rc::MeshBvh bvhA(a), bvhB(b);
+    ASSERT_GT(bvhA.nodes().size(), std::size_t(1) << 17);
+    ASSERT_GT(bvhB.nodes().size(), std::size_t(1) << 17);
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    const auto at = [](double x)
+    {
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.linear() = Eigen::AngleAxisd(0.7, Vec(1, 2, 3).normalized()).toRotationMatrix();
+        pose.translation() = Vec(x, 0, 0);
+        return pose;
+    };
+    EXPECT_FALSE(rc::surfacesWithin(bvhA, identity, bvhB, at(0.1), 0.0));
+    EXPECT_TRUE(rc::solidsOverlap(bvhA, identity, true, bvhB, at(0.1), true, 0.0));
+    rc::MeshContact contact;
+    EXPECT_TRUE(rc::surfacesWithin(bvhA, identity, bvhB, at(1.0), 0.0, &contact));
+    EXPECT_NEAR(contact.position.norm(), 1.0, 1e-3);
+    EXPECT_FALSE(rc::surfacesWithin(bvhA, identity, bvhB, at(1.85), 0.0));
+    EXPECT_TRUE(rc::surfacesWithin(bvhA, identity, bvhB, at(1.85), 0.06));
+    EXPECT_FALSE(rc::surfacesWithin(bvhB, at(1.85), bvhA, identity, 0.04));
+}

@@ -364,9 +364,10 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
         else
         {
             const std::int32_t c = nm.first;
+            // One at a time: placed() may hand back the same scratch node for both.
             const Vec fixedCentre = nf.centreVector();
-            const bool secondNearer =
-                (placed(c + 1).centre - fixedCentre).squaredNorm() < (placed(c).centre - fixedCentre).squaredNorm();
+            const double second = (placed(c + 1).centre - fixedCentre).squaredNorm();
+            const bool secondNearer = second < (placed(c).centre - fixedCentre).squaredNorm();
             stack[top++] = {pair.a, secondNearer ? c : c + 1};
             stack[top++] = {pair.a, secondNearer ? c + 1 : c};
         }
