@@ -176,7 +176,7 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles) : mesh_(&mesh)
     }
 }
 
-int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Eigen::Vector3d> &centroids,
+int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Vec> &centroids,
                    unsigned maxLeafTriangles)
 {
     // The box: principal axes of the corners' covariance, rounded to float first, then the
@@ -328,17 +328,15 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
             for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
             {
                 const std::array<Vec, 3> &tm = moving.slotTriangle(sm);
-                const Vec q0 = R * tm[0] + T, q1 = R * tm[1] + T, q2 = R * tm[2] + T;
+                const std::array<Vec, 3> placedTriangle = {R * tm[0] + T, R * tm[1] + T, R * tm[2] + T};
                 for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
                 {
                     const std::array<Vec, 3> &tf = fixed.slotTriangle(sf);
-                    bool hit;
-                    if (movingIsA)
-                        hit = padding > 0.0 ? trianglesWithin(q0, q1, q2, tf[0], tf[1], tf[2], padding, point)
-                                            : trianglesIntersect(q0, q1, q2, tf[0], tf[1], tf[2], point);
-                    else
-                        hit = padding > 0.0 ? trianglesWithin(tf[0], tf[1], tf[2], q0, q1, q2, padding, point)
-                                            : trianglesIntersect(tf[0], tf[1], tf[2], q0, q1, q2, point);
+                    const std::array<Vec, 3> &ta = movingIsA ? placedTriangle : tf,
+                                             &tb = movingIsA ? tf : placedTriangle;
+                    const bool hit = padding > 0.0
+                                         ? trianglesWithin(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], padding, point)
+                                         : trianglesIntersect(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], point);
                     if (hit)
                     {
                         *slotFixed = sf;

@@ -6,7 +6,6 @@
 
 #include <Eigen/Geometry>
 
-#include "rastercheck/geometry/Aabb.h"
 #include "rastercheck/geometry/Mesh.h"
 
 namespace rastercheck
@@ -17,8 +16,8 @@ namespace rastercheck
     phase's acceleration structure (and the oracle's).
 
     Each node's box is fitted to its triangles' corners along the principal axes of their
-    covariance, as FCL's OBB nodes are: measured on OMPL.app's alpha-1.5 and Apartment (20 000
-    uniform states), boxes along the mesh axes made the traversal visit 5x to 15x more node pairs
+    covariance, as FCL's OBB nodes are: measured on OMPL.app's alpha-1.5 and Apartment (3 000
+    uniform states), boxes along the mesh axes made the traversal visit 3x to 5x more node pairs
     (docs/benchmarks.md). Built top-down by splitting at the median centroid along the box's
     longest axis, so the tree is balanced: its depth is about log2(triangles / maxLeafTriangles),
     which lets every query traverse it with a small fixed stack instead of allocating.
