@@ -240,3 +240,51 @@ TEST(CertifiedMotion, EveryAcceptedCraneEdgeIsCollisionFreeAtEveryPoint)
     std::printf("crane: %d edges certified, %d not (%d of them accepted by the discrete validator)\n", counts[0],
                 counts[1], counts[2]);
 }
+
+TEST(CertifiedMotion, EdgesCheckedTogetherGetTheVerdictsTheyGetAlone)
+{
+    // checkMotions puts the midpoints of many edges (each with its own sweeps, so its own pair
+    // paddings: PairPadding rows) into one batch; verdicts and valid prefixes must be those of
+    // checkMotion on each edge alone, for the certified and the batched discrete validator.
+    RASTERCHECK_REQUIRE_DATA(root);
+    const Context context = makeContext(rc::test::pandaProblem(root, "cage"));
+    const rco::CertifiedMotionValidator certified(context.si, *context.validity);
+    const rco::MotionValidator discrete(context.si, *context.validity);
+    ob::StateSamplerPtr sampler = context.si->allocStateSampler();
+    constexpr int kEdges = 40;
+    std::vector<ob::ScopedState<>> states;
+    std::vector<rco::Edge> edges;
+    for (int e = 0; e < 2 * kEdges; ++e)
+    {
+        states.emplace_back(context.si);
+        sampler->sampleUniform(states.back().get());
+    }
+    for (int e = 0; e < kEdges; ++e)
+    {
+        // Short and long edges mixed: their sweeps, and so their paddings, differ.
+        context.si->getStateSpace()->interpolate(states[2 * e].get(), states[2 * e + 1].get(), e % 2 ? 0.1 : 0.6,
+                                                 states[2 * e + 1].get());
+        edges.push_back({states[2 * e].get(), states[2 * e + 1].get()});
+    }
+    for (const rco::BatchMotionValidator *validator : {static_cast<const rco::BatchMotionValidator *>(&certified),
+                                                       static_cast<const rco::BatchMotionValidator *>(&discrete)})
+    {
+        std::vector<std::uint8_t> together(kEdges), firstTogether(kEdges);
+        std::vector<double> prefixes(kEdges);
+        validator->checkMotions(edges.data(), edges.size(), together.data());
+        validator->checkMotions(edges.data(), edges.size(), firstTogether.data(), prefixes.data());
+        int accepted = 0;
+        for (int e = 0; e < kEdges; ++e)
+        {
+            const bool alone = validator->checkMotion(edges[e].from, edges[e].to);
+            std::pair<ob::State *, double> lastValid(nullptr, 1.0);
+            validator->checkMotion(edges[e].from, edges[e].to, lastValid);
+            EXPECT_EQ(together[e] != 0, alone) << "edge " << e;
+            EXPECT_EQ(firstTogether[e] != 0, alone) << "edge " << e;
+            EXPECT_DOUBLE_EQ(prefixes[e], alone ? 1.0 : lastValid.second) << "edge " << e;
+            accepted += alone ? 1 : 0;
+        }
+        EXPECT_GT(accepted, 3);  // both verdicts occur
+        EXPECT_LT(accepted, kEdges - 3);
+    }
+}

@@ -47,7 +47,10 @@ rc::SceneConstPtr tableScene()
     return scene;
 }
 
-std::vector<double> at(double x, double y, double z) { return {x, y, z, 0, 0, 0, 1}; }
+std::vector<double> at(double x, double y, double z)
+{
+    return {x, y, z, 0, 0, 0, 1};
+}
 
 const rc::CollisionMode kModes[] = {rc::CollisionMode::Safe, rc::CollisionMode::Raster, rc::CollisionMode::Exact,
                                     rc::CollisionMode::Conservative};
@@ -122,6 +125,19 @@ TEST(Checker, PairPaddingActsLikeThePaddingOnItsPairs)
         plain.padding = 0.011;
         checker.check(q.data(), 40, byPadding.data(), plain);
         EXPECT_EQ(byPair, byPadding) << rc::toString(mode);
+        // One row per state: the gap of 1 cm is clear at 0.009 (row 0), not at 0.011 (row 1).
+        auto rows = std::make_shared<rc::PairPadding>();
+        rows->rows = 2;
+        rows->environment = {0.005, 0.007};
+        rc::CollisionRequest perState = request;
+        perState.pairPadding = rows;
+        std::vector<double> twice = gap1cm;
+        twice.insert(twice.end(), gap1cm.begin(), gap1cm.end());
+        std::vector<std::uint8_t> verdicts(2);
+        checker.check(twice.data(), 2, verdicts.data(), perState);
+        EXPECT_EQ(verdicts, (std::vector<std::uint8_t>{1, 0})) << rc::toString(mode);
+        // Rows must match the batch: two rows for one state are a configuration error.
+        EXPECT_THROW(checker.isValid(gap1cm, perState), rc::ConfigurationError);
     }
     // Entries must fit the model and be finite and >= 0.
     rc::CollisionRequest request;
@@ -141,7 +157,8 @@ TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
     rc::RobotModel model;
     model.name = "folding";
     model.links = {{"base", -1, 0}, {"middle", -1, 1}, {"tip", -1, 2}};
-    auto joint = [](const std::string &name, int parent, int child) {
+    auto joint = [](const std::string &name, int parent, int child)
+    {
         rc::Joint j;
         j.name = name;
         j.kind = rc::JointKind::Revolute;
@@ -155,7 +172,8 @@ TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
         return j;
     };
     model.joints = {joint("j1", 0, 1), joint("j2", 1, 2)};
-    auto component = [](const std::string &name, int link, rc::Mesh mesh) {
+    auto component = [](const std::string &name, int link, rc::Mesh mesh)
+    {
         rc::Component c;
         c.name = name;
         c.link = link;
@@ -226,7 +244,8 @@ TEST(Checker, ComponentOfOverlappingShellsContainsWhatEitherShellContains)
     slide.lower = {-2};
     slide.upper = {2};
     model.joints = {slide};
-    model.components = {rc::makeComponent("body", {boxAt({0.4, 0.4, 0.4}, {-0.1, 0, 0}), boxAt({0.4, 0.4, 0.4}, {0.1, 0, 0})})};
+    model.components = {
+        rc::makeComponent("body", {boxAt({0.4, 0.4, 0.4}, {-0.1, 0, 0}), boxAt({0.4, 0.4, 0.4}, {0.1, 0, 0})})};
     model.finalize();
     ASSERT_TRUE(model.components[0].topology.closed);
     ASSERT_EQ(model.components[0].topology.shells, 2u);
@@ -294,18 +313,19 @@ TEST(Checker, SafeModeMatchesTheOracleOnPandaScenes)
     RASTERCHECK_REQUIRE_DATA(root);
     rc::RobotModelPtr panda = rc::loadUrdf(root + "/mbm/panda/panda.urdf");
     rc::applySrdf(*panda, rc::loadSrdf(root + "/mbm/panda/panda.srdf"));
-    for (const char *scenario : {"bookshelf_small", "bookshelf_tall", "bookshelf_thin", "box", "cage", "table_pick",
-                                 "table_under_pick"})
+    for (const char *scenario :
+         {"bookshelf_small", "bookshelf_tall", "bookshelf_thin", "box", "cage", "table_pick", "table_under_pick"})
     {
-        const rc::SceneConstPtr scene = rc::loadMoveItScene(root + "/mbm/panda/problems/" + scenario +
-                                                            "_panda/scene0001.yaml");
+        const rc::SceneConstPtr scene =
+            rc::loadMoveItScene(root + "/mbm/panda/problems/" + scenario + "_panda/scene0001.yaml");
         const rc::Checker checker(panda, scene);
         std::mt19937_64 rng(11);
         const std::size_t n = 150, dof = panda->numCoordinates();
         std::vector<double> q(n * dof);
         for (std::size_t i = 0; i < n; ++i)
             for (std::size_t k = 0; k < dof; ++k)
-                q[i * dof + k] = std::uniform_real_distribution<double>(panda->lowerBounds[k], panda->upperBounds[k])(rng);
+                q[i * dof + k] =
+                    std::uniform_real_distribution<double>(panda->lowerBounds[k], panda->upperBounds[k])(rng);
         std::vector<std::uint8_t> valid(n), exact(n), conservative(n);
         checker.check(q.data(), n, valid.data());
         rc::CollisionRequest exactRequest, conservativeRequest;
@@ -458,10 +478,12 @@ TEST(Checker, RasterImageMarksTheCollisionPixels)
 TEST(Checker, WithoutAUsableDeviceTheCudaChoiceFallsBackToTheCpuWithAWarning)
 {
     std::vector<std::string> warnings;
-    rc::setLogHandler([&](rc::LogLevel level, const std::string &message) {
-        if (level == rc::LogLevel::Warning)
-            warnings.push_back(message);
-    });
+    rc::setLogHandler(
+        [&](rc::LogLevel level, const std::string &message)
+        {
+            if (level == rc::LogLevel::Warning)
+                warnings.push_back(message);
+        });
     rc::CheckerOptions options;
     options.backend = rc::BackendChoice::Cuda;
     const rc::Checker checker(cubeRobot(0.2), tableScene(), options);

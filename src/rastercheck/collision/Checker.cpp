@@ -41,7 +41,8 @@ std::unique_ptr<Backend> makeCudaBackend(const CollisionModelConstPtr &model, st
     }
     try
     {
-        auto backend = std::make_unique<StagedBackend>(model, cuda::makeStageRunner(hostModelArrays(*model), memoryLimit));
+        auto backend =
+            std::make_unique<StagedBackend>(model, cuda::makeStageRunner(hostModelArrays(*model), memoryLimit));
         logInfo("using the CUDA backend on " + device);
         return backend;
     }
@@ -60,10 +61,10 @@ std::unique_ptr<Backend> makeCudaBackend(const CollisionModelConstPtr &model, st
 }  // namespace
 
 Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOptions &options)
-  : model_(std::make_shared<const CollisionModel>(std::move(robot), std::move(scene)))
-  , reference_(model_)
-  , threads_(options.threads)
-  , minDeviceBatch_(options.minDeviceBatch)
+    : model_(std::make_shared<const CollisionModel>(std::move(robot), std::move(scene))),
+      reference_(model_),
+      threads_(options.threads),
+      minDeviceBatch_(options.minDeviceBatch)
 {
     if (options.threads < 0)
         throw ConfigurationError("CheckerOptions::threads must be >= 0 (0 = all cores)");
@@ -100,29 +101,35 @@ void Checker::warnOnceIfNotFinite(const double *q, std::size_t n) const
         {
             if (!warnedNotFinite_.exchange(true))
                 logWarning((n > 1 ? "state " + std::to_string(i / dof) + " of " + std::to_string(n) : "a state") +
-                           " has coordinate '" + model_->robot->coordinateNames[i % dof] + "' = " +
-                           std::to_string(q[i]) +
+                           " has coordinate '" + model_->robot->coordinateNames[i % dof] +
+                           "' = " + std::to_string(q[i]) +
                            ": a state that is not finite is invalid (reported once per checker)");
             return;
         }
 }
 
-void Checker::validateRequest(const CollisionRequest &request) const
+void Checker::validateRequest(const CollisionRequest &request, std::size_t states) const
 {
     validate(request);
-    if (request.pairPadding && (request.pairPadding->environment.size() != model_->numComponents() ||
-                                request.pairPadding->self.size() != model_->selfPairs.size()))
-        throw ConfigurationError("CollisionRequest::pairPadding has " +
-                                 std::to_string(request.pairPadding->environment.size()) + " component and " +
-                                 std::to_string(request.pairPadding->self.size()) + " self-pair entries; robot '" +
-                                 robot().name + "' has " + std::to_string(model_->numComponents()) +
-                                 " components and " + std::to_string(model_->selfPairs.size()) + " self pairs");
+    const PairPadding *extra = request.pairPadding.get();
+    if (!extra)
+        return;
+    if (extra->rows != 1 && extra->rows != states)
+        throw ConfigurationError("CollisionRequest::pairPadding has " + std::to_string(extra->rows) + " rows for " +
+                                 std::to_string(states) + " state(s); give one row for all states or one per state");
+    if (extra->environment.size() != extra->rows * model_->numComponents() ||
+        extra->self.size() != extra->rows * model_->selfPairs.size())
+        throw ConfigurationError("CollisionRequest::pairPadding has " + std::to_string(extra->environment.size()) +
+                                 " component and " + std::to_string(extra->self.size()) + " self-pair entries in " +
+                                 std::to_string(extra->rows) + " row(s); robot '" + robot().name + "' has " +
+                                 std::to_string(model_->numComponents()) + " components and " +
+                                 std::to_string(model_->selfPairs.size()) + " self pairs per row");
 }
 
 void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const CollisionRequest &request,
                     Contact *contacts) const
 {
-    validateRequest(request);
+    validateRequest(request, n);
     warnOnceIfNotFinite(q, n);
     const Backend &backend = n >= minDeviceBatch_ ? *backend_ : static_cast<const Backend &>(reference_);
     backend.check(q, n, valid, contacts, request, threads_);
@@ -130,7 +137,7 @@ void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const C
 
 bool Checker::isValid(const double *q, const CollisionRequest &request, Contact *contact) const
 {
-    validateRequest(request);
+    validateRequest(request, 1);
     warnOnceIfNotFinite(q, 1);
     std::uint8_t valid = 0;
     const Backend &backend = minDeviceBatch_ <= 1 ? *backend_ : static_cast<const Backend &>(reference_);
@@ -142,15 +149,14 @@ bool Checker::isValid(const std::vector<double> &q, const CollisionRequest &requ
 {
     if (q.size() != dof())
         throw ConfigurationError("Checker::isValid: the configuration has " + std::to_string(q.size()) +
-                                 " values, robot '" + robot().name + "' has " + std::to_string(dof()) +
-                                 " coordinates");
+                                 " values, robot '" + robot().name + "' has " + std::to_string(dof()) + " coordinates");
     return isValid(q.data(), request, contact);
 }
 
 bool Checker::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
                           RasterImage &image) const
 {
-    validateRequest(request);
+    validateRequest(request, 1);
     return reference_.rasterImage(q, contact, request, image);
 }
 

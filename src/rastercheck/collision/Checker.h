@@ -84,8 +84,8 @@ public:
     std::string describe(const Contact &contact) const;
 
 private:
-    /** \brief validate(), and a pairPadding that fits this checker's model. */
-    void validateRequest(const CollisionRequest &request) const;
+    /** \brief validate(), and a pairPadding that fits this checker's model and a batch of \a states. */
+    void validateRequest(const CollisionRequest &request, std::size_t states) const;
     void warnOnceIfNotFinite(const double *q, std::size_t n) const;
 
     CollisionModelConstPtr model_;

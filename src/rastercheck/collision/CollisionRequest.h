@@ -55,10 +55,16 @@ CollisionMode parseCollisionMode(const std::string &text);
     pair far from the robot's fast-moving links is not held to their margin. */
 struct PairPadding
 {
-    /** \brief Per component (CollisionModel order), for its pairs with every scene object. */
+    /** \brief Per component (CollisionModel order), for its pairs with every scene object; \a rows
+        rows of numComponents() entries. */
     std::vector<double> environment;
-    /** \brief Per self pair, in CollisionModel::selfPairs order. */
+    /** \brief Per self pair, in CollisionModel::selfPairs order; \a rows rows of selfPairs.size()
+        entries. */
     std::vector<double> self;
+    /** \brief 1: one row for every state of a batch. n (the batch's size, Checker::check): row i for
+        state i, so that one batch can hold states that need different paddings (the midpoints of
+        many edges, each with its own sweeps: BatchRRTConnect). */
+    std::size_t rows = 1;
 };
 
 /** \brief What to check and how (Coal/FCL style). */
@@ -75,7 +81,8 @@ struct CollisionRequest
     bool checkSelfCollision = true;
     /** \brief Optional extra padding per pair (null: none); a pair's solids collide when closer than
         padding + their entry. Each entry finite and >= 0, one per component and per self pair of
-        the checker's model (Checker::check throws ConfigurationError otherwise). The GPU stages
+        the checker's model in each row, one row or one per state (Checker::check throws
+        ConfigurationError otherwise). The GPU stages
         take one padding for all pairs, so such a request runs on the CPU backend. */
     std::shared_ptr<const PairPadding> pairPadding;
 };

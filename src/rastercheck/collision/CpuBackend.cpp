@@ -365,7 +365,8 @@ bool CpuBackend::decideOpenPair(std::uint32_t pair, const CollisionRequest &requ
     return exactOverlap(a, b, request.padding, contact);
 }
 
-bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut) const
+bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut,
+                         std::size_t paddingRow) const
 {
     const CollisionModel &model = *model_;
     Contact contact;
@@ -388,7 +389,9 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     // Paddings: the request's, plus its pairPadding entry per pair. The distance set and the layer
     // culls take the largest padding they stand for.
     const PairPadding *extra = request.pairPadding.get();
-    auto environmentPadding = [&](std::size_t k) { return request.padding + (extra ? extra->environment[k] : 0.0); };
+    const double *extraEnvironment = extra ? extra->environment.data() + paddingRow * m : nullptr;
+    const double *extraSelf = extra ? extra->self.data() + paddingRow * model.selfPairs.size() : nullptr;
+    auto environmentPadding = [&](std::size_t k) { return request.padding + (extra ? extraEnvironment[k] : 0.0); };
     double reachPadding = request.padding;
     for (std::size_t k = 0; k < m; ++k)
     {
@@ -438,7 +441,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
         {
             const auto [a, b] = model.selfPairs[i];
-            const double padding = request.padding + (extra ? extra->self[i] : 0.0);
+            const double padding = request.padding + (extra ? extraSelf[i] : 0.0);
             if (!device::solidsMayMeet(ws.componentBounds[a], ws.componentBox[a], ws.componentBounds[b],
                                        ws.componentBox[b], device::floatPadding(padding)))
                 continue;
@@ -490,11 +493,14 @@ void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Cont
 {
     const std::size_t dof = model_->robot->numCoordinates();
     const int workers = batchWorkers(n, threads);
+    // One pairPadding row for every state, or one per state (PairPadding::rows).
+    const bool rowPerState = request.pairPadding && request.pairPadding->rows > 1;
+    auto paddingRow = [rowPerState](std::size_t i) { return rowPerState ? i : std::size_t{0}; };
     if (workers == 1 || n < 2)
     {
         std::unique_ptr<CpuWorkspace> ws = borrow();
         for (std::size_t i = 0; i < n; ++i)
-            valid[i] = isValid(q + i * dof, request, *ws, contacts ? contacts + i : nullptr) ? 1 : 0;
+            valid[i] = isValid(q + i * dof, request, *ws, contacts ? contacts + i : nullptr, paddingRow(i)) ? 1 : 0;
         giveBack(std::move(ws));
         return;
     }
@@ -503,8 +509,10 @@ void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Cont
         std::unique_ptr<CpuWorkspace> ws = borrow();
 #pragma omp for schedule(dynamic, 16)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
-            valid[i] =
-                isValid(q + static_cast<std::size_t>(i) * dof, request, *ws, contacts ? contacts + i : nullptr) ? 1 : 0;
+            valid[i] = isValid(q + static_cast<std::size_t>(i) * dof, request, *ws, contacts ? contacts + i : nullptr,
+                               paddingRow(static_cast<std::size_t>(i)))
+                           ? 1
+                           : 0;
         giveBack(std::move(ws));
     }
 }

@@ -17,26 +17,26 @@ namespace rastercheck
 struct CpuWorkspace
 {
     explicit CpuWorkspace(const CollisionModel &model)
-      : jointValues(model.robot->joints.size())
-      , linkPoses(model.robot->links.size())
-      , componentPose(model.numComponents())
-      , componentBox(model.numComponents())
-      , componentBounds(model.numComponents())
-      , layerBounds(model.numComponents())
-      , layerPadding(model.numComponents())
-      , componentWorld(model.numComponents())
-      , componentWorldState(model.numComponents(), 0)
-      , proofDirection(model.numPairs(), device::Vec3<double>{0.0, 0.0, 0.0})
+        : jointValues(model.robot->joints.size()),
+          linkPoses(model.robot->links.size()),
+          componentPose(model.numComponents()),
+          componentBox(model.numComponents()),
+          componentBounds(model.numComponents()),
+          layerBounds(model.numComponents()),
+          layerPadding(model.numComponents()),
+          componentWorld(model.numComponents()),
+          componentWorldState(model.numComponents(), 0),
+          proofDirection(model.numPairs(), device::Vec3<double>{0.0, 0.0, 0.0})
     {
     }
 
-    std::vector<double> jointValues;                       // n_joints
-    std::vector<device::Pose<double>> linkPoses;           // n_links
-    std::vector<device::Pose<float>> componentPose;        // n_components
-    std::vector<device::OrientedBox> componentBox;         // n_components, world
-    std::vector<device::Box> componentBounds;              // n_components, world
-    std::vector<device::Box> layerBounds;                  // n_components: bounds of layer k's subtree
-    std::vector<float> layerPadding;                       // n_components: largest padding in layer k's subtree
+    std::vector<double> jointValues;                 // n_joints
+    std::vector<device::Pose<double>> linkPoses;     // n_links
+    std::vector<device::Pose<float>> componentPose;  // n_components
+    std::vector<device::OrientedBox> componentBox;   // n_components, world
+    std::vector<device::Box> componentBounds;        // n_components, world
+    std::vector<device::Box> layerBounds;            // n_components: bounds of layer k's subtree
+    std::vector<float> layerPadding;                 // n_components: largest padding in layer k's subtree
 
     // World vertices of each component, transformed once per state on first use (a component
     // meets several objects); componentWorldState says for which state they are current.
@@ -47,9 +47,9 @@ struct CpuWorkspace
     // the next state (consecutive states of a motion are close); zero until a proof.
     std::vector<device::Vec3<double>> proofDirection;  // n_pairs
     std::vector<std::uint32_t> candidatesA, candidatesB;
-    std::vector<int> pixelCount;                       // n_pixels
-    std::vector<int> pixelStart;                       // n_pixels + 1
-    std::vector<device::Fragment> fragments;           // total fragments
+    std::vector<int> pixelCount;              // n_pixels
+    std::vector<int> pixelStart;              // n_pixels + 1
+    std::vector<device::Fragment> fragments;  // total fragments
 };
 
 /** \brief Worker threads for a batch of \a n states: \a requested (0 = all cores), but at least
@@ -76,11 +76,13 @@ public:
     ~CpuBackend() override;
 
     std::string name() const override { return "cpu"; }
-    void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
-               const CollisionRequest &request, int threads) const override;
+    void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts, const CollisionRequest &request,
+               int threads) const override;
 
-    /** \brief Decides one state with the caller's workspace (no locking, no allocation once warm). */
-    bool isValid(const double *q, const CollisionRequest &request, CpuWorkspace &workspace, Contact *contact) const;
+    /** \brief Decides one state with the caller's workspace (no locking, no allocation once warm),
+        with row \a paddingRow of the request's pairPadding. */
+    bool isValid(const double *q, const CollisionRequest &request, CpuWorkspace &workspace, Contact *contact,
+                 std::size_t paddingRow = 0) const;
 
     std::unique_ptr<CpuWorkspace> makeWorkspace() const;
     /** \brief A pooled workspace (made when the pool is empty); give it back with giveBack(). */
@@ -100,7 +102,8 @@ public:
     /** \brief The raster image of the pair named by \a contact at state \a q (the paper's Fig. 6):
         which pixels each solid covers and where Sort_Search_Pair finds the overlap. For pictures and
         debugging; allocates. False when the contact names no pair or their boxes do not meet. */
-    bool rasterImage(const double *q, const Contact &contact, const CollisionRequest &request, RasterImage &image) const;
+    bool rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
+                     RasterImage &image) const;
 
 private:
     CollisionModelConstPtr model_;

@@ -6,10 +6,9 @@
 #include <utility>
 #include <vector>
 
-#include <ompl/base/MotionValidator.h>
-
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/model/MotionBound.h"
+#include "rastercheck/ompl/BatchMotionValidator.h"
 #include "rastercheck/ompl/StateMapping.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
 
@@ -47,8 +46,10 @@ struct CertifiedMotionOptions
     the request's own mode (a real collision ends the search) and otherwise its interval is
     halved, each half needing half the margin, down to margin / 2^levels. Intervals of one size
     are checked together in one batch (Checker::check: many states in one pass), the coarsest in
-    rake order. The base of a robot that does not move is held to the padding p only, and two
-    links a joint apart only to what that joint can do between them.
+    rake order. checkMotions runs the searches of many edges side by side: each round's midpoints
+    of all of them go to the checker in one batch, each state with its own edge's pair paddings
+    (PairPadding rows), so every edge gets the verdict it gets alone. The base of a robot that does not move is held to
+   the padding p only, and two links a joint apart only to what that joint can do between them.
 
     Semantics: checkMotion(s1, s2) returns true only when every state of the edge, s1 and s2
     included, satisfies the bounds and is valid at the request's padding (in Safe or Exact mode,
@@ -61,7 +62,7 @@ struct CertifiedMotionOptions
     it is certified with the rest.
 
     Thread safe: scratch buffers are thread-local, the counters atomic. */
-class CertifiedMotionValidator : public ::ompl::base::MotionValidator
+class CertifiedMotionValidator : public BatchMotionValidator
 {
 public:
     /** \brief The edge checker of an existing StateValidityChecker: same mapping, checker and
@@ -73,6 +74,8 @@ public:
     bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2) const override;
     bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2,
                      std::pair<::ompl::base::State *, double> &lastValid) const override;
+    void checkMotions(const Edge *edges, std::size_t n, std::uint8_t *valid,
+                      double *lastValid = nullptr) const override;
 
     /** \brief States decided since construction or resetStateCounter(). */
     std::uint64_t getCheckedStateCount() const { return states_.load(std::memory_order_relaxed); }
@@ -83,14 +86,19 @@ public:
     const MotionBound &getMotionBound() const { return bound_; }
 
 private:
-    /** \brief True when the whole edge is certified. Otherwise \a prefix receives the largest
-        fraction t such that [0, t] was certified (0 when an end is outside the bounds), computed
-        only when \a wantFirst: else the search stops at the first sign the edge is not certified. */
-    bool certify(const ::ompl::base::State *s1, const ::ompl::base::State *s2, bool wantFirst, double &prefix) const;
-    /** \brief Checks the midpoints of the intervals [start, start + length) named by \a starts with
-        \a request; verdicts in the thread's scratch. */
-    void checkMidpoints(const ::ompl::base::State *s1, const ::ompl::base::State *s2, const std::vector<double> &starts,
-                        double length, const CollisionRequest &request) const;
+    struct EdgeSearch;
+    /** \brief Starts \a search on \a edge: bounds, sweeps and the coarsest intervals in rake order;
+        finished at once when an end is outside the bounds or the sweeps are not finite. */
+    void start(const Edge &edge, EdgeSearch &search) const;
+    /** \brief Fills search.batch with the next midpoints to check (finishing levels on the way);
+        leaves it empty when the search is finished. */
+    void nextBatch(EdgeSearch &search, bool wantFirst) const;
+    /** \brief Ends the search's current level: its failed intervals, halved, become the next
+        level's (or the search finishes). */
+    void endLevel(EdgeSearch &search, bool wantFirst) const;
+
+    /** \brief The robot configurations of the midpoints of the batches of \a searches, in order. */
+    void midpointRows(const std::vector<EdgeSearch *> &searches, bool closeOnly, std::vector<double> &rows) const;
 
     StateMappingConstPtr mapping_;
     CheckerConstPtr checker_;

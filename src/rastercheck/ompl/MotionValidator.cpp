@@ -12,16 +12,27 @@ namespace ob = ::ompl::base;
 
 namespace rastercheck::ompl
 {
+/** \brief One edge's scan in progress: its states j = 1 .. nd in rake order, the batch in flight
+    and the smallest invalid index found so far (0: none). */
+struct MotionValidator::EdgeScan
+{
+    Edge edge;
+    unsigned int nd = 1;
+    std::vector<unsigned int> order;
+    std::size_t next = 0;   ///< next index of order to batch
+    std::size_t width = 0;  ///< size of the next batch
+    unsigned int found = 0;
+    std::vector<unsigned int> batch;
+};
+
 namespace
 {
-/** \brief Per-thread buffers of findInvalid (a validator is shared by planner threads). */
+/** \brief Per-thread buffers of checkMotions (a validator is shared by planner threads). */
 struct Scratch
 {
-    std::vector<unsigned int> order;
     std::vector<std::pair<unsigned int, unsigned int>> intervals;
-    std::vector<unsigned int> batch;
-    std::vector<unsigned int> inBounds;  ///< indices of batch whose state satisfies the bounds
-    std::vector<double> rows;            ///< inBounds.size() x dof
+    std::vector<std::pair<std::size_t, unsigned int>> inBounds;  ///< (scan, index) of each checked row
+    std::vector<double> rows;                                    ///< inBounds.size() x dof
     std::vector<std::uint8_t> verdicts;
 };
 
@@ -34,7 +45,7 @@ Scratch &scratch()
 
 MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, StateMappingConstPtr mapping,
                                  CheckerConstPtr checker, const CollisionRequest &request, unsigned int rakeWidth)
-    : ob::MotionValidator(si),
+    : BatchMotionValidator(si),
       mapping_(std::move(mapping)),
       checker_(std::move(checker)),
       request_(request),
@@ -53,89 +64,123 @@ MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, const StateV
 {
 }
 
-unsigned int MotionValidator::findInvalid(const ob::State *s1, const ob::State *s2, unsigned int nd,
-                                          bool wantFirst) const
+void MotionValidator::nextBatch(EdgeScan &scan, bool wantFirst) const
 {
+    scan.batch.clear();
+    if (scan.found == 0)
+    {
+        const std::size_t end = std::min(scan.order.size(), scan.next + scan.width);
+        scan.batch.assign(scan.order.begin() + static_cast<std::ptrdiff_t>(scan.next),
+                          scan.order.begin() + static_cast<std::ptrdiff_t>(end));
+        scan.next = end;
+        scan.width *= 2;
+    }
+    else if (wantFirst)
+    {
+        // Everything before the collision found so far, at once: the first invalid is among them or is it.
+        for (; scan.next < scan.order.size(); ++scan.next)
+            if (scan.order[scan.next] < scan.found)
+                scan.batch.push_back(scan.order[scan.next]);
+    }
+}
+
+void MotionValidator::checkMotions(const Edge *edges, std::size_t n, std::uint8_t *valid, double *lastValid) const
+{
+    const bool wantFirst = lastValid != nullptr;
     Scratch &w = scratch();
-    detail::rakeOrder(nd, w.order, w.intervals);
+    // Scans are reused per thread: their vectors keep their capacity between calls.
+    thread_local std::vector<std::unique_ptr<EdgeScan>> pool;
+    while (pool.size() < n)
+        pool.push_back(std::make_unique<EdgeScan>());
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        EdgeScan &scan = *pool[i];
+        scan.edge = edges[i];
+        scan.nd = std::max(1u, space_->validSegmentCount(edges[i].from, edges[i].to));
+        detail::rakeOrder(scan.nd, scan.order, w.intervals);
+        scan.next = 0;
+        scan.width = rakeWidth_;
+        scan.found = 0;
+    }
+
     const std::size_t dof = mapping_->numCoordinates();
     ob::State *test = si_->allocState();
-    unsigned int found = 0;
-    std::size_t next = 0;
-    std::size_t width = rakeWidth_;
-    while (next < w.order.size())
+    for (;;)
     {
-        w.batch.clear();
-        if (found == 0)
-        {
-            const std::size_t end = std::min(w.order.size(), next + width);
-            w.batch.assign(w.order.begin() + static_cast<std::ptrdiff_t>(next),
-                           w.order.begin() + static_cast<std::ptrdiff_t>(end));
-            next = end;
-            width *= 2;
-        }
-        else
-        {
-            // Everything before the collision found so far, at once: the first invalid is among them or is it.
-            for (; next < w.order.size(); ++next)
-                if (w.order[next] < found)
-                    w.batch.push_back(w.order[next]);
-            if (w.batch.empty())
-                break;
-        }
-
         w.inBounds.clear();
-        w.rows.resize(w.batch.size() * dof);
-        for (unsigned int j : w.batch)
+        w.rows.clear();
+        std::size_t batched = 0;
+        for (std::size_t i = 0; i < n; ++i)
         {
-            const ob::State *state = s2;
-            if (j != nd)
+            EdgeScan &scan = *pool[i];
+            nextBatch(scan, wantFirst);
+            batched += scan.batch.size();
+            for (const unsigned int j : scan.batch)
             {
-                space_->interpolate(s1, s2, static_cast<double>(j) / static_cast<double>(nd), test);
-                state = test;
+                const ob::State *state = scan.edge.to;
+                if (j != scan.nd)
+                {
+                    space_->interpolate(scan.edge.from, scan.edge.to,
+                                        static_cast<double>(j) / static_cast<double>(scan.nd), test);
+                    state = test;
+                }
+                if (!si_->satisfiesBounds(state))
+                {
+                    scan.found = scan.found == 0 ? j : std::min(scan.found, j);
+                    continue;
+                }
+                w.rows.resize(w.rows.size() + dof);
+                mapping_->toConfiguration(state, w.rows.data() + w.rows.size() - dof);
+                w.inBounds.emplace_back(i, j);
             }
-            if (!si_->satisfiesBounds(state))
-            {
-                found = found == 0 ? j : std::min(found, j);
-                continue;
-            }
-            mapping_->toConfiguration(state, w.rows.data() + w.inBounds.size() * dof);
-            w.inBounds.push_back(j);
         }
+        if (batched == 0)
+            break;
         w.verdicts.resize(w.inBounds.size());
         if (!w.inBounds.empty())
             checker_->check(w.rows.data(), w.inBounds.size(), w.verdicts.data(), request_);
-        states_.fetch_add(w.batch.size(), std::memory_order_relaxed);
-        for (std::size_t i = 0; i < w.inBounds.size(); ++i)
-            if (!w.verdicts[i])
-                found = found == 0 ? w.inBounds[i] : std::min(found, w.inBounds[i]);
-        if (found != 0 && !wantFirst)
-            break;
+        states_.fetch_add(batched, std::memory_order_relaxed);
+        for (std::size_t k = 0; k < w.inBounds.size(); ++k)
+            if (!w.verdicts[k])
+            {
+                EdgeScan &scan = *pool[w.inBounds[k].first];
+                const unsigned int j = w.inBounds[k].second;
+                scan.found = scan.found == 0 ? j : std::min(scan.found, j);
+            }
     }
     si_->freeState(test);
-    return found;
+
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const EdgeScan &scan = *pool[i];
+        valid[i] = scan.found == 0 ? 1 : 0;
+        if (lastValid)
+            lastValid[i] = scan.found == 0 ? 1.0 : static_cast<double>(scan.found - 1) / static_cast<double>(scan.nd);
+        detail::countMotion(valid_, invalid_, scan.found == 0);
+    }
 }
 
 bool MotionValidator::checkMotion(const ob::State *s1, const ob::State *s2) const
 {
-    const unsigned int nd = std::max(1u, space_->validSegmentCount(s1, s2));
-    const bool valid = findInvalid(s1, s2, nd, false) == 0;
-    detail::countMotion(valid_, invalid_, valid);
-    return valid;
+    const Edge edge{s1, s2};
+    std::uint8_t valid = 0;
+    checkMotions(&edge, 1, &valid);
+    return valid != 0;
 }
 
 bool MotionValidator::checkMotion(const ob::State *s1, const ob::State *s2,
                                   std::pair<ob::State *, double> &lastValid) const
 {
-    const unsigned int nd = std::max(1u, space_->validSegmentCount(s1, s2));
-    const unsigned int first = findInvalid(s1, s2, nd, true);
-    if (first != 0)
+    const Edge edge{s1, s2};
+    std::uint8_t valid = 0;
+    double prefix = 0.0;
+    checkMotions(&edge, 1, &valid, &prefix);
+    if (!valid)
     {
-        lastValid.second = static_cast<double>(first - 1) / static_cast<double>(nd);
+        lastValid.second = prefix;
         if (lastValid.first != nullptr)
             space_->interpolate(s1, s2, lastValid.second, lastValid.first);
     }
-    detail::countMotion(valid_, invalid_, first == 0);
-    return first == 0;
+    return valid != 0;
 }
 }  // namespace rastercheck::ompl

@@ -5,9 +5,8 @@
 #include <memory>
 #include <utility>
 
-#include <ompl/base/MotionValidator.h>
-
 #include "rastercheck/collision/Checker.h"
+#include "rastercheck/ompl/BatchMotionValidator.h"
 #include "rastercheck/ompl/StateMapping.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
 
@@ -29,12 +28,13 @@ namespace rastercheck::ompl
     the whole edge (breadth-first bisection), later batches fill in between, with doubling sizes,
     so a collision anywhere on the edge is found after few states. Once a collision is found,
     checkMotion(s1, s2) stops; checkMotion(s1, s2, lastValid) checks, in one more batch, only the
-    unchecked states before it.
+    unchecked states before it. checkMotions runs the scans of many edges side by side, each
+    round's states of all of them in one batch.
 
     The implementation is thread safe: scratch buffers are thread-local, and the valid / invalid
     motion counters of the base class are updated with atomic operations (OMPL's own getters and
     the Benchmark's "valid segment fraction" read them). */
-class MotionValidator : public ::ompl::base::MotionValidator
+class MotionValidator : public BatchMotionValidator
 {
 public:
     /** \brief \a rakeWidth: states in the first batch (>= 1); later batches double. Throws
@@ -50,6 +50,8 @@ public:
     bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2) const override;
     bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2,
                      std::pair<::ompl::base::State *, double> &lastValid) const override;
+    void checkMotions(const Edge *edges, std::size_t n, std::uint8_t *valid,
+                      double *lastValid = nullptr) const override;
 
     /** \brief States decided (interpolated states and end states) since construction or
         resetStateCounter(). */
@@ -59,10 +61,10 @@ public:
     unsigned int getRakeWidth() const { return rakeWidth_; }
 
 private:
-    /** \brief 0 when the states j = 1 .. nd are all valid; otherwise an invalid index, the first one
-        when \a wantFirst. */
-    unsigned int findInvalid(const ::ompl::base::State *s1, const ::ompl::base::State *s2, unsigned int nd,
-                             bool wantFirst) const;
+    struct EdgeScan;
+    /** \brief Fills scan.batch with the next state indices to check; leaves it empty when the scan
+        is finished. */
+    void nextBatch(EdgeScan &scan, bool wantFirst) const;
 
     StateMappingConstPtr mapping_;
     CheckerConstPtr checker_;
