@@ -160,6 +160,7 @@ protected:
         // under a parallel planner.
         options_.checker.backend = rc::BackendChoice::Cpu;
         options_.checker.threads = 0;
+        options_.edges = rco::EdgeChecking::Batched;  // the states-and-edges test shares its validator
         setup_ = rco::makeSimpleSetup(problem_, options_);
         setup_->getSpaceInformation()->setup();
         sampleStates(perProblem_ / 4);
@@ -430,9 +431,15 @@ TEST_F(PandaBookshelf, SameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCoun
     sameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts();
 }
 
-TEST_F(PandaBookshelf, EightThreadsCertifyEdgesAsOneThread) { certifiedEdgesOnEightThreadsAsOnOne(); }
+TEST_F(PandaBookshelf, EightThreadsCertifyEdgesAsOneThread)
+{
+    certifiedEdgesOnEightThreadsAsOnOne();
+}
 
-TEST_F(CraneInPlant, EightThreadsCertifyEdgesAsOneThread) { certifiedEdgesOnEightThreadsAsOnOne(); }
+TEST_F(CraneInPlant, EightThreadsCertifyEdgesAsOneThread)
+{
+    certifiedEdgesOnEightThreadsAsOnOne();
+}
 
 TEST_F(CraneInPlant, EightThreadsOnOneCheckerDecideStatesAndEdgesAsOneThread)
 {

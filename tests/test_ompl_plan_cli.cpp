@@ -112,7 +112,7 @@ TEST(PlanCli, CollidingSolutionIsReportedLoudly)
     // resolution against a 2 cm wall) the planner steps through it. The exact re-check at 10x the
     // resolution must catch every such path.
     const std::string folder = makeTempDir("plan_cli_wall");
-    const CliRun run = runCli("plan " + wallProblem(folder) +
+    const CliRun run = runCli("plan " + wallProblem(folder) + " --edges batched" +
                               " --runs 1 --time-limit 5 --segment-fraction 0.1 --seed 5 --log " + folder + "/wall.log");
     EXPECT_EQ(run.status, 3) << run.output;
     EXPECT_TRUE(contains(run.output, "rastercheck: ERROR: solution path of RRTConnect run 0 COLLIDES")) << run.output;
@@ -133,6 +133,14 @@ TEST(PlanCli, CertifiedEdgesDoNotStepThroughAThinWall)
     EXPECT_TRUE(contains(run.output, "certified edges")) << run.output;
     EXPECT_TRUE(contains(run.output, "rrtconnect         0/1         0")) << run.output;
     EXPECT_FALSE(contains(run.output, "COLLIDES")) << run.output;
+    // They are the default; raster mode, which cannot certify, falls back to batched edges.
+    const CliRun byDefault = runCli("plan " + wallProblem(makeTempDir("plan_cli_wall_default")) +
+                                    " --runs 1 --time-limit 1 --segment-fraction 0.1 --seed 5");
+    EXPECT_EQ(byDefault.status, 0) << byDefault.output;
+    EXPECT_TRUE(contains(byDefault.output, "certified edges")) << byDefault.output;
+    const CliRun raster = runCli("plan " + wallProblem(makeTempDir("plan_cli_wall_raster")) +
+                                 " --runs 1 --time-limit 1 --segment-fraction 0.1 --seed 5 --mode raster");
+    EXPECT_TRUE(contains(raster.output, "batched edges")) << raster.output;
 }
 
 TEST(PlanCli, MotionBenchMakerProblem)
@@ -152,9 +160,16 @@ TEST(PlanCli, MotionBenchMakerProblem)
     EXPECT_TRUE(contains(run.output, "experiment scene0001_request0001")) << run.output;
     EXPECT_TRUE(contains(run.output, "rrtconnect         2/2         0")) << run.output;
 
-    const CliRun certified = plan("--edges certified");
+    // Certified edges are the default (exact mode above chose them too).
+    const CliRun certified = plan("");
     ASSERT_EQ(certified.status, 0) << certified.output;
+    EXPECT_TRUE(contains(certified.output, "certified edges")) << certified.output;
     EXPECT_TRUE(contains(certified.output, "rrtconnect         2/2         0")) << certified.output;
+
+    // BatchRRTConnect by name, beside RRT-Connect, with its batched shortcutting.
+    const CliRun batch = plan("--planner batchrrtconnect --param batchrrtconnect.shortcut=1");
+    ASSERT_EQ(batch.status, 0) << batch.output;
+    EXPECT_TRUE(contains(batch.output, "batchrrtconnect       2/2         0")) << batch.output;
 }
 
 TEST(PlanCli, BadArgumentsAreErrors)

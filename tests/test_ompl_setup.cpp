@@ -16,6 +16,7 @@
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/ompl/MotionValidator.h"
 #include "rastercheck/ompl/PathCheck.h"
+#include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/Planners.h"
 #include "rastercheck/ompl/Setup.h"
 
@@ -47,7 +48,13 @@ TEST(OmplSetup, MbmProblemStartAndGoal)
     EXPECT_EQ(setup->getStateSpace()->getDimension(), 7u);
     rco::setStartAndGoal(*setup, request);
     setup->setup();
-    EXPECT_TRUE(std::dynamic_pointer_cast<rco::MotionValidator>(setup->getSpaceInformation()->getMotionValidator()));
+    // Certified edges by default (batched ones in raster mode, which cannot certify).
+    EXPECT_TRUE(
+        std::dynamic_pointer_cast<rco::CertifiedMotionValidator>(setup->getSpaceInformation()->getMotionValidator()));
+    rco::SetupOptions raster;
+    raster.request.mode = rc::CollisionMode::Raster;
+    EXPECT_TRUE(std::dynamic_pointer_cast<rco::MotionValidator>(
+        rco::makeSimpleSetup(problem, raster)->getSpaceInformation()->getMotionValidator()));
 
     const rco::StateValidityCheckerPtr checker = rco::getStateValidityChecker(*setup);
     const ob::State *start = setup->getProblemDefinition()->getStartState(0);
@@ -132,6 +139,7 @@ TEST(OmplSetup, DensePathCheckFindsACollisionTheCoarseCheckSkips)
     scene->addObject("wall", rc::makeBox(Eigen::Vector3d(0.02, 3.0, 3.0)));
     problem.scene = scene;
     rco::SetupOptions options;
+    options.edges = rco::EdgeChecking::Batched;  // the discrete resolution is what this test is about
     // SE(3) counts segments per subspace (the largest count wins): 0.45 m steps on the position,
     // whose extent is the diagonal of the 4 m cube.
     options.longestValidSegmentFraction = 0.45 / (4.0 * std::sqrt(3.0));

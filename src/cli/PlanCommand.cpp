@@ -51,7 +51,7 @@ struct PlanOptions
     int threads = 0;
     double padding = 0.0;
     double segmentFraction = 0.01;
-    std::string edges = "batched";
+    std::string edges = "auto";
     double margin = 0.0;
     unsigned int recheckFactor = 10;
     std::string logPath;
@@ -146,6 +146,10 @@ int runPlan(const PlanOptions &options)
     setupOptions.request.padding = options.padding;
     setupOptions.longestValidSegmentFraction = options.segmentFraction;
     setupOptions.edges = ompl::parseEdgeChecking(options.edges);
+    // What "auto" resolves to (certified edges unless raster mode cannot certify), for the log and messages.
+    const std::string edges = options.edges != "auto"    ? options.edges
+                              : options.mode == "raster" ? "batched"
+                                                         : "certified";
     setupOptions.certified.margin = options.margin;
     for (const std::string &text : options.held)
     {
@@ -223,7 +227,7 @@ int runPlan(const PlanOptions &options)
     }
     benchmark.addExperimentParameter("collision_mode", "ENUM", options.mode);
     benchmark.addExperimentParameter("recheck_factor", "INTEGER", std::to_string(options.recheckFactor));
-    benchmark.addExperimentParameter("edge_checking", "ENUM", options.edges);
+    benchmark.addExperimentParameter("edge_checking", "ENUM", edges);
 
     CollisionRequest exact = setupOptions.request;
     exact.mode = CollisionMode::Exact;
@@ -269,8 +273,7 @@ int runPlan(const PlanOptions &options)
     ot::Benchmark::Request request(timeLimit, memoryLimit, static_cast<unsigned int>(runs), 0.05, false, false,
                                    !options.noSimplify);
     std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.mode << ", "
-              << options.edges << " edges, "
-              << runs << " run(s) of " << timeLimit << " s per planner\n";
+              << edges << " edges, " << runs << " run(s) of " << timeLimit << " s per planner\n";
     benchmark.benchmark(request);
     if (!options.logPath.empty() && !benchmark.saveResultsToFile(options.logPath.c_str()))
         throw InputError(options.logPath, "", "cannot write the benchmark log");
@@ -278,9 +281,12 @@ int runPlan(const PlanOptions &options)
     const ot::Benchmark::CompleteExperiment &data = benchmark.getRecordedExperimentData();
     std::cout << "experiment " << experiment << ": " << runs << " run(s) per planner, time limit " << timeLimit
               << " s\n";
-    std::cout << std::left << std::setw(14) << "planner" << std::right << std::setw(8) << "solved" << std::setw(10)
-              << "colliding" << std::setw(14) << "median_time_s" << std::setw(13) << "mean_time_s" << std::setw(14)
-              << "median_length" << '\n';
+    int nameWidth = 14;  // a longer planner name widens the column
+    for (const std::string &label : labels)
+        nameWidth = std::max(nameWidth, static_cast<int>(label.size()) + 2);
+    std::cout << std::left << std::setw(nameWidth) << "planner" << std::right << std::setw(8) << "solved"
+              << std::setw(10) << "colliding" << std::setw(14) << "median_time_s" << std::setw(13) << "mean_time_s"
+              << std::setw(14) << "median_length" << '\n';
     for (std::size_t i = 0; i < data.planners.size(); ++i)
     {
         std::vector<double> times, lengths;
@@ -297,8 +303,9 @@ int runPlan(const PlanOptions &options)
             times.push_back(property(run, "time REAL"));
             lengths.push_back(property(run, "solution length REAL"));
         }
-        std::cout << std::left << std::setw(14) << (i < labels.size() ? labels[i] : data.planners[i].name) << std::right
-                  << std::setw(8) << (std::to_string(times.size()) + "/" + std::to_string(data.planners[i].runs.size()))
+        std::cout << std::left << std::setw(nameWidth) << (i < labels.size() ? labels[i] : data.planners[i].name)
+                  << std::right << std::setw(8)
+                  << (std::to_string(times.size()) + "/" + std::to_string(data.planners[i].runs.size()))
                   << std::setw(10) << colliding << std::setw(14) << std::setprecision(4) << median(times)
                   << std::setw(13) << mean(times) << std::setw(14) << median(lengths) << '\n';
     }
@@ -307,7 +314,7 @@ int runPlan(const PlanOptions &options)
     {
         std::cerr << "rastercheck: ERROR: " << collidingPaths
                   << " solution path(s) collide according to the exact oracle (counted as unsolved above)\n";
-        if (options.edges != "certified")
+        if (edges != "certified")
             std::cerr << "rastercheck: plan with --edges certified to accept only edges that are collision-free "
                          "at every point\n";
         return 3;
@@ -354,9 +361,10 @@ void addPlanCommand(CLI::App &app)
         ->check(CLI::Range(1e-6, 1.0));
     command
         ->add_option("--edges", options->edges,
-                     "edge checking: batched (default; DiscreteMotionValidator's states, in batches), discrete "
-                     "(OMPL's own) or certified (collision-free at every point of an edge; not in raster mode)")
-        ->check(CLI::IsMember({"batched", "discrete", "certified"}));
+                     "edge checking: auto (default: certified, in raster mode batched), certified (collision-free "
+                     "at every point of an edge; not in raster mode), batched (DiscreteMotionValidator's states, in "
+                     "batches) or discrete (OMPL's own)")
+        ->check(CLI::IsMember({"auto", "batched", "discrete", "certified"}));
     command
         ->add_option("--margin", options->margin,
                      "certified edges: clearance margin of the coarsest samples, scene units (default a tenth "

@@ -1,8 +1,12 @@
-// Builds against the installed rastercheck package and runs forward kinematics on a two-link arm.
+// Builds against the installed rastercheck package: forward kinematics on a two-link arm, and
+// BatchRRTConnect from the planners library by its registered name.
 #include <cmath>
 #include <iostream>
 
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+
 #include <rastercheck/model/Kinematics.h>
+#include <rastercheck/ompl/Planners.h>
 
 int main()
 {
@@ -25,6 +29,10 @@ int main()
     rastercheck::forwardKinematics(model, data, std::vector<double>{M_PI / 2});
     const Eigen::Vector3d x = data.oMl[1].linear().col(0);
     const bool ok = std::abs(x.y() - 1.0) < 1e-12 && std::abs(data.oMl[1].translation().x() - 1.0) < 1e-12;
-    std::cout << (ok ? "consumer: ok" : "consumer: wrong pose") << '\n';
-    return ok ? 0 : 1;
+    auto space = std::make_shared<ompl::base::RealVectorStateSpace>(1);
+    space->setBounds(-1, 1);
+    const auto si = std::make_shared<ompl::base::SpaceInformation>(space);
+    const bool planner = rastercheck::ompl::allocatePlanner("batchrrtconnect", si)->getName() == "BatchRRTConnect";
+    std::cout << (!ok ? "consumer: wrong pose" : !planner ? "consumer: no BatchRRTConnect" : "consumer: ok") << '\n';
+    return ok && planner ? 0 : 1;
 }

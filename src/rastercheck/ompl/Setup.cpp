@@ -30,8 +30,12 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
     const ob::SpaceInformationPtr &si = setup->getSpaceInformation();
     auto validityChecker = std::make_shared<StateValidityChecker>(si, mapping, checker, options.request);
     setup->setStateValidityChecker(validityChecker);
-    switch (options.edges)
+    EdgeChecking edges = options.edges;
+    if (edges == EdgeChecking::Auto)
+        edges = options.request.mode == CollisionMode::Raster ? EdgeChecking::Batched : EdgeChecking::Certified;
+    switch (edges)
     {
+        case EdgeChecking::Auto:  // resolved above
         case EdgeChecking::Batched:
             si->setMotionValidator(std::make_shared<MotionValidator>(si, *validityChecker, options.rakeWidth));
             break;
@@ -46,13 +50,15 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
 
 EdgeChecking parseEdgeChecking(const std::string &text)
 {
+    if (text == "auto")
+        return EdgeChecking::Auto;
     if (text == "batched")
         return EdgeChecking::Batched;
     if (text == "discrete")
         return EdgeChecking::Discrete;
     if (text == "certified")
         return EdgeChecking::Certified;
-    throw ConfigurationError("unknown edge checking '" + text + "' (expected batched, discrete or certified)");
+    throw ConfigurationError("unknown edge checking '" + text + "' (expected auto, batched, discrete or certified)");
 }
 
 StateValidityCheckerPtr getStateValidityChecker(const og::SimpleSetup &setup)

@@ -10,7 +10,9 @@
 namespace rastercheck::ompl
 {
 /** \brief The geometric planners known by their OMPL.app names ("rrtconnect", "rrt", "prm",
-    "kpiece", "bkpiece", "lbkpiece", "est", "sbl", "stride", "pdst", "trrt", "rrtstar", ...), sorted. */
+    "kpiece", "bkpiece", "lbkpiece", "est", "sbl", "stride", "pdst", "trrt", "rrtstar", ...) and
+    rastercheck's own ("batchrrtconnect": rastercheck::planners::BatchRRTConnect), sorted. The
+    registry lives in the rastercheck::planners library (link rastercheck::planners). */
 const std::vector<std::string> &knownPlannerNames();
 
 /** \brief A new planner of OMPL.app name \a name (case-insensitive) on \a si. Throws

@@ -36,6 +36,7 @@
 #include <ompl/geometric/planners/stride/STRIDE.h>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/planners/BatchRRTConnect.h"
 
 namespace og = ::ompl::geometric;
 namespace ob = ::ompl::base;
@@ -55,6 +56,7 @@ Allocator make()
 const std::map<std::string, Allocator> &registry()
 {
     static const std::map<std::string, Allocator> planners{
+        {"batchrrtconnect", make<rastercheck::planners::BatchRRTConnect>()},
         {"bfmt", make<og::BFMT>()},
         {"biest", make<og::BiEST>()},
         {"bitrrt", make<og::BiTRRT>()},

@@ -1,0 +1,68 @@
+#include "rastercheck/planners/EdgeChecker.h"
+
+#include "rastercheck/planners/Log.h"
+
+#include "rastercheck/core/Error.h"
+#include "rastercheck/ompl/CertifiedMotionValidator.h"
+#include "rastercheck/ompl/MotionValidator.h"
+#include "rastercheck/ompl/StateValidityChecker.h"
+
+namespace ob = ::ompl::base;
+
+namespace rastercheck::planners
+{
+EdgeChecker::EdgeChecker(const ob::SpaceInformationPtr &si) : si_(si)
+{
+    const ob::MotionValidatorPtr &validator = si_->getMotionValidator();
+    batch_ = dynamic_cast<const ompl::BatchMotionValidator *>(validator.get());
+    if (batch_)
+    {
+        description_ = dynamic_cast<const ompl::CertifiedMotionValidator *>(batch_) ? "certified" : "batched";
+        return;
+    }
+    const auto checker = std::dynamic_pointer_cast<ompl::StateValidityChecker>(si_->getStateValidityChecker());
+    if (!checker)
+    {
+        description_ = "one at a time";
+        return;
+    }
+    try
+    {
+        owned_ = std::make_shared<ompl::CertifiedMotionValidator>(si_, *checker);
+        description_ = "certified";
+    }
+    catch (const ConfigurationError &error)
+    {
+        OMPL_LOG(WARN, "%s; edges are checked at the space's resolution instead", error.what());
+        owned_ = std::make_shared<ompl::MotionValidator>(si_, *checker);
+        description_ = "batched";
+    }
+    batch_ = owned_.get();
+}
+
+void EdgeChecker::check(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid,
+                        std::vector<double> *lastValid) const
+{
+    valid.assign(edges.size(), 0);
+    if (lastValid)
+        lastValid->assign(edges.size(), 0.0);
+    if (edges.empty())
+        return;
+    if (batch_)
+    {
+        batch_->checkMotions(edges.data(), edges.size(), valid.data(), lastValid ? lastValid->data() : nullptr);
+        return;
+    }
+    for (std::size_t i = 0; i < edges.size(); ++i)
+    {
+        if (!lastValid)
+        {
+            valid[i] = si_->checkMotion(edges[i].from, edges[i].to) ? 1 : 0;
+            continue;
+        }
+        std::pair<ob::State *, double> last(nullptr, 0.0);
+        valid[i] = si_->checkMotion(edges[i].from, edges[i].to, last) ? 1 : 0;
+        (*lastValid)[i] = valid[i] ? 1.0 : last.second;
+    }
+}
+}  // namespace rastercheck::planners

@@ -1,0 +1,328 @@
+// planners/: BatchRRTConnect and BatchShortcutter. Every returned path is re-checked by the exact
+// oracle densely; seeded runs repeat; every kind of state space StateMapping builds (real vector,
+// SO2 inside the crane's compound, SE2, SE3); time limits; planners sharing one checker from
+// several threads; a foreign validity checker; shortcuts that would cross an obstacle are refused.
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include <ompl/base/PlannerData.h>
+#include <ompl/base/ScopedState.h>
+#include <ompl/base/goals/GoalState.h>
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/geometric/SimpleSetup.h>
+#include <ompl/util/Console.h>
+#include <ompl/util/RandomNumbers.h>
+
+#include "NonConvex.h"
+#include "TestSupport.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/io/MoveItYaml.h"
+#include "rastercheck/model/RigidBody.h"
+#include "rastercheck/ompl/PathCheck.h"
+#include "rastercheck/ompl/Planners.h"
+#include "rastercheck/ompl/Setup.h"
+#include "rastercheck/planners/BatchRRTConnect.h"
+#include "rastercheck/planners/BatchShortcutter.h"
+
+namespace rc = rastercheck;
+namespace rco = rastercheck::ompl;
+namespace rcp = rastercheck::planners;
+namespace ob = ::ompl::base;
+namespace og = ::ompl::geometric;
+
+namespace
+{
+/** \brief Seeds OMPL's random numbers (before the planner and its sampler exist). */
+void seed(std::uint_fast32_t value)
+{
+    ::ompl::msg::setLogLevel(::ompl::msg::LOG_NONE);  // OMPL warns when the seed changes after RNGs exist
+    ::ompl::RNG::setSeed(value);
+    ::ompl::msg::setLogLevel(::ompl::msg::LOG_WARN);
+}
+
+/** \brief The exact oracle on \a path at 20 times the planner's resolution. */
+::testing::AssertionResult collisionFree(const og::SimpleSetup &setup, const og::PathGeometric &path)
+{
+    const rco::StateValidityCheckerPtr checker = rco::getStateValidityChecker(setup);
+    rc::CollisionRequest exact = checker->getRequest();
+    exact.mode = rc::CollisionMode::Exact;
+    const rco::PathCheckResult dense =
+        rco::checkPathDensely(path, checker->getStateMapping(), checker->getChecker(), exact, 20);
+    if (dense.valid)
+        return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << "segment " << dense.segment << " at t = " << dense.time << ": "
+                                         << checker->getChecker().describe(dense.contact);
+}
+
+/** \brief Solves with a new BatchRRTConnect; asserts an exact solution that the oracle accepts. */
+og::PathGeometric solveAndCheck(og::SimpleSetup &setup, double timeLimit, bool shortcut = false)
+{
+    setup.clear();
+    auto planner = std::make_shared<rcp::BatchRRTConnect>(setup.getSpaceInformation());
+    planner->setShortcut(shortcut);
+    setup.setPlanner(planner);
+    const ob::PlannerStatus status = setup.solve(timeLimit);
+    EXPECT_EQ(status, ob::PlannerStatus::EXACT_SOLUTION);
+    if (status != ob::PlannerStatus::EXACT_SOLUTION)
+        return og::PathGeometric(setup.getSpaceInformation());
+    og::PathGeometric &path = setup.getSolutionPath();
+    EXPECT_TRUE(setup.getProblemDefinition()->getGoal()->isSatisfied(path.getStates().back()));
+    EXPECT_TRUE(collisionFree(setup, path));
+    return path;
+}
+
+/** \brief A wall across x = 0 (0.1 thick, y and z in [-2, 2]) with a gap at y in [-0.3, 0.3], and a
+    0.2 m cube that starts at x = -1 and must pass the gap to x = 1; planar (SE2) or free (SE3). */
+rc::Problem wallWithGap(bool planar)
+{
+    const rc::Mesh wall = rc::test::blockSolid(
+        {rc::test::box({-0.05, -2, -2}, {0.05, -0.3, 2}), rc::test::box({-0.05, 0.3, -2}, {0.05, 2, 2})});
+    auto scene = std::make_shared<rc::Scene>();
+    scene->addObject("wall", wall);
+    rc::Aabb bounds;
+    bounds.min = Eigen::Vector3d(-1.5, -1.5, -1.5);
+    bounds.max = Eigen::Vector3d(1.5, 1.5, 1.5);
+    return {rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.2)), bounds, planar), scene,
+            nullptr};
+}
+
+/** \brief A start at (-1, 1) and a goal at (1, 1) (the rest of the coordinates neutral). */
+void setAcrossTheWall(og::SimpleSetup &setup)
+{
+    const rco::StateMapping &mapping = rco::getStateValidityChecker(setup)->getStateMapping();
+    std::vector<double> start = mapping.baseConfiguration();
+    std::vector<double> goal = start;
+    start[0] = -1.0;
+    start[1] = 1.0;
+    goal[0] = 1.0;
+    goal[1] = 1.0;  // the straight line hits the wall
+    rco::setStartAndGoal(setup, start, goal);
+}
+
+og::SimpleSetupPtr pandaSetup(const std::string &root, const std::string &scenario)
+{
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    options.checker.threads = 1;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(rc::test::pandaProblem(root, scenario), options);
+    rco::setStartAndGoal(*setup,
+                         rc::loadMoveItRequest(root + "/mbm/panda/problems/" + scenario + "_panda/request0001.yaml"));
+    return setup;
+}
+}  // namespace
+
+TEST(BatchRRTConnect, SolvesPandaProblemsWithPathsTheOracleAccepts)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    for (const char *scenario : {"table_pick", "bookshelf_small", "box"})
+    {
+        og::SimpleSetupPtr setup = pandaSetup(root, scenario);
+        // Certified edges: the default of makeSimpleSetup, and what the planner uses.
+        ASSERT_TRUE(std::dynamic_pointer_cast<rco::CertifiedMotionValidator>(
+            setup->getSpaceInformation()->getMotionValidator()));
+        seed(7);
+        const og::PathGeometric path = solveAndCheck(*setup, 60.0);
+        EXPECT_GE(path.getStateCount(), 2u) << scenario;
+    }
+}
+
+TEST(BatchRRTConnect, SeededRunsRepeat)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    og::SimpleSetupPtr setup = pandaSetup(root, "bookshelf_small");
+    setup->getSpaceInformation()->setup();  // its first setup draws random numbers too
+    std::vector<std::vector<double>> paths[2];
+    for (auto &states : paths)
+    {
+        seed(11);
+        og::PathGeometric path = solveAndCheck(*setup, 60.0);
+        for (const ob::State *state : path.getStates())
+            states.push_back(rco::getStateValidityChecker(*setup)->getStateMapping().toConfiguration(state));
+    }
+    ASSERT_FALSE(paths[0].empty());
+    EXPECT_EQ(paths[0], paths[1]);
+}
+
+TEST(BatchRRTConnect, PlansForSE2AndSE3BodiesThroughAGap)
+{
+    for (const bool planar : {true, false})
+    {
+        rco::SetupOptions options;
+        options.checker.backend = rc::BackendChoice::Cpu;
+        og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(planar), options);
+        setAcrossTheWall(*setup);
+        seed(3);
+        const og::PathGeometric path = solveAndCheck(*setup, 60.0, true);
+        // The path passes the gap: some state has |y| < 0.3 while near x = 0.
+        bool throughGap = false;
+        const rco::StateMapping &mapping = rco::getStateValidityChecker(*setup)->getStateMapping();
+        og::PathGeometric dense = path;
+        dense.interpolate(200);
+        for (const ob::State *state : dense.getStates())
+        {
+            const std::vector<double> q = mapping.toConfiguration(state);
+            throughGap = throughGap || (std::abs(q[0]) < 0.1 && std::abs(q[1]) < 0.3);
+        }
+        EXPECT_TRUE(throughGap) << (planar ? "SE2" : "SE3");
+    }
+}
+
+TEST(BatchRRTConnect, PlansTheCraneLiftWithItsCompoundSpace)
+{
+    // The crane's slew is continuous (SO2) beside luff, telescope and hoist: a compound space.
+    const rc::Problem &plant = rc::test::plant();
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    options.heldCoordinates = {{"base_x", 0.0}, {"base_y", 0.0}, {"base_yaw", 0.0}};
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(plant, options);
+    rco::setStartAndGoal(*setup, rc::loadMoveItRequest(rc::test::sourcePath("robots/sites/plant_lift.yaml")));
+    seed(5);
+    const og::PathGeometric path = solveAndCheck(*setup, 120.0, true);
+    EXPECT_GE(path.getStateCount(), 2u);
+}
+
+TEST(BatchRRTConnect, HonoursTheTimeLimitAndReportsItsTrees)
+{
+    // No way across a wall without a gap: the planner runs until the limit, then stops.
+    rc::Problem problem = wallWithGap(true);
+    auto closed = std::make_shared<rc::Scene>();
+    closed->addObject("wall", rc::test::blockSolid({rc::test::box({-0.05, -2, -2}, {0.05, 2, 2})}));
+    problem.scene = closed;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(problem);
+    setAcrossTheWall(*setup);
+    auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
+    setup->setPlanner(planner);
+    const auto begin = std::chrono::steady_clock::now();
+    EXPECT_EQ(setup->solve(0.5), ob::PlannerStatus::TIMEOUT);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+    EXPECT_LT(seconds, 5.0);  // one batch past the limit at most (generous: sanitizer builds are slow)
+
+    ob::PlannerData data(setup->getSpaceInformation());
+    planner->getPlannerData(data);
+    EXPECT_EQ(data.numStartVertices(), 1u);
+    EXPECT_EQ(data.numGoalVertices(), 1u);
+    EXPECT_GT(data.numVertices(), 20u);
+    // clear() forgets the trees; the planner solves again afterwards.
+    planner->clear();
+    ob::PlannerData cleared(setup->getSpaceInformation());
+    planner->getPlannerData(cleared);
+    EXPECT_EQ(cleared.numVertices(), 0u);
+    setup->getProblemDefinition()->clearSolutionPaths();
+    EXPECT_EQ(setup->solve(0.2), ob::PlannerStatus::TIMEOUT);
+}
+
+TEST(BatchRRTConnect, ParametersAndRegistry)
+{
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true));
+    const ob::PlannerPtr planner = rco::allocatePlanner("BatchRRTConnect", setup->getSpaceInformation());
+    ASSERT_TRUE(std::dynamic_pointer_cast<rcp::BatchRRTConnect>(planner));
+    EXPECT_EQ(planner->getName(), "BatchRRTConnect");
+    rco::setPlannerParameters(*planner, {{"batch_size", "16"}, {"range", "0.5"}, {"shortcut", "1"}});
+    auto batch = std::static_pointer_cast<rcp::BatchRRTConnect>(planner);
+    EXPECT_EQ(batch->getBatchSize(), 16u);
+    EXPECT_DOUBLE_EQ(batch->getRange(), 0.5);
+    EXPECT_TRUE(batch->getShortcut());
+    EXPECT_THROW(rco::setPlannerParameters(*planner, {{"batch_size", "0"}}), rc::ConfigurationError);
+    EXPECT_EQ(batch->getBatchSize(), 16u);
+}
+
+TEST(BatchRRTConnect, SeveralPlannersShareOneChecker)
+{
+    // Four planners on one space information (one checker, one certified validator), each in its
+    // own thread with its own problem definition.
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(false));
+    setAcrossTheWall(*setup);
+    const ob::SpaceInformationPtr si = setup->getSpaceInformation();
+    si->setup();
+    std::vector<ob::PlannerStatus> results(4, ob::PlannerStatus::UNKNOWN);
+    std::vector<og::PathGeometric> paths(4, og::PathGeometric(si));
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back(
+            [&, t]
+            {
+                auto pdef = std::make_shared<ob::ProblemDefinition>(si);
+                pdef->setStartAndGoalStates(setup->getProblemDefinition()->getStartState(0),
+                                            setup->getProblemDefinition()->getGoal()->as<ob::GoalState>()->getState());
+                rcp::BatchRRTConnect planner(si);
+                planner.setProblemDefinition(pdef);
+                results[t] = planner.solve(ob::timedPlannerTerminationCondition(60.0));
+                if (results[t] == ob::PlannerStatus::EXACT_SOLUTION)
+                    paths[t] = *pdef->getSolutionPath()->as<og::PathGeometric>();
+            });
+    for (std::thread &thread : threads)
+        thread.join();
+    for (int t = 0; t < 4; ++t)
+    {
+        EXPECT_EQ(results[t], ob::PlannerStatus::EXACT_SOLUTION) << t;
+        EXPECT_TRUE(collisionFree(*setup, paths[t])) << t;
+    }
+}
+
+TEST(BatchRRTConnect, WorksWithAForeignValidityChecker)
+{
+    // A point in the unit square around a disc of radius 0.3 at the centre, checked by a lambda:
+    // edges go one at a time through OMPL's own motion validator.
+    auto space = std::make_shared<ob::RealVectorStateSpace>(2);
+    space->setBounds(0.0, 1.0);
+    og::SimpleSetup setup(space);
+    auto outsideDisc = [](const ob::State *state)
+    {
+        const double *x = state->as<ob::RealVectorStateSpace::StateType>()->values;
+        return std::hypot(x[0] - 0.5, x[1] - 0.5) > 0.3;
+    };
+    setup.setStateValidityChecker(outsideDisc);
+    ob::ScopedState<> start(space), goal(space);
+    start[0] = 0.05;
+    start[1] = 0.5;
+    goal[0] = 0.95;
+    goal[1] = 0.5;
+    setup.setStartAndGoalStates(start, goal);
+    auto planner = std::make_shared<rcp::BatchRRTConnect>(setup.getSpaceInformation());
+    planner->setShortcut(true);
+    setup.setPlanner(planner);
+    seed(2);
+    ASSERT_EQ(setup.solve(10.0), ob::PlannerStatus::EXACT_SOLUTION);
+    og::PathGeometric path = setup.getSolutionPath();
+    path.interpolate(1000);
+    for (const ob::State *state : path.getStates())
+        EXPECT_TRUE(outsideDisc(state));
+}
+
+TEST(BatchShortcutter, ShortensAPathAndKeepsItCollisionFree)
+{
+    // A zigzag through the gap: shortcuts straighten it, the ones through the wall are refused.
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    const ob::SpaceInformationPtr si = setup->getSpaceInformation();
+    si->setup();
+    const rco::StateMapping &mapping = rco::getStateValidityChecker(*setup)->getStateMapping();
+    og::PathGeometric path(si);
+    ob::ScopedState<> state(si);
+    for (const auto &[x, y] : std::vector<std::pair<double, double>>{
+             {-1.0, 1.0}, {-0.8, -1.0}, {-0.6, 0.8}, {-0.4, -0.6}, {-0.3, 0.0}, {0.3, 0.0}, {0.5, -1.0}, {1.0, 1.0}})
+    {
+        std::vector<double> q = mapping.baseConfiguration();
+        q[0] = x;
+        q[1] = y;
+        mapping.fromConfiguration(q, state.get());
+        path.append(state.get());
+    }
+    ASSERT_TRUE(collisionFree(*setup, path));
+    const double before = path.length();
+    seed(9);
+    rcp::BatchShortcutter shortcutter(si);
+    EXPECT_EQ(shortcutter.edgeChecker().description(), "certified");
+    EXPECT_TRUE(shortcutter.shortcut(path, ob::timedPlannerTerminationCondition(30.0)));
+    EXPECT_LT(path.length(), 0.7 * before);
+    EXPECT_TRUE(collisionFree(*setup, path));
+    // The ends stay.
+    EXPECT_DOUBLE_EQ(mapping.toConfiguration(path.getState(0))[0], -1.0);
+    EXPECT_DOUBLE_EQ(mapping.toConfiguration(path.getStates().back())[0], 1.0);
+    // The straight line from start to goal crosses the wall: the path still bends through the gap.
+    EXPECT_GE(path.getStateCount(), 3u);
+}
