@@ -29,6 +29,7 @@
 #include <ompl/util/RandomNumbers.h>
 
 #include "BenchSupport.h"
+#include "FclValidity.h"
 #include "Reference.h"
 #include "rastercheck/core/Statistics.h"
 #include "rastercheck/ompl/PathCheck.h"
@@ -40,42 +41,6 @@ namespace og = ::ompl::geometric;
 
 namespace
 {
-/** \brief FCL as an OMPL validity checker. FclReference is not thread-safe, so each thread gets its
-    own instance (keyed by a per-checker id, not by address, so that a new checker never reuses an
-    old one's). */
-class FclStateValidityChecker : public ob::StateValidityChecker
-{
-public:
-    FclStateValidityChecker(const ob::SpaceInformationPtr &si, rastercheck::ompl::StateMappingConstPtr mapping,
-                            rastercheck::ompl::CheckerConstPtr owner)
-        : ob::StateValidityChecker(si), mapping_(std::move(mapping)), owner_(std::move(owner)), id_(nextId_++)
-    {
-    }
-
-    bool isValid(const ob::State *state) const override
-    {
-        if (!si_->satisfiesBounds(state))
-            return false;
-        thread_local std::unordered_map<std::uint64_t, std::unique_ptr<test::FclReference>> references;
-        thread_local std::vector<double> q;
-        std::unique_ptr<test::FclReference> &fcl = references[id_];
-        if (!fcl)
-            fcl = std::make_unique<test::FclReference>(owner_->collisionModel());
-        q.resize(mapping_->numCoordinates());
-        mapping_->toConfiguration(state, q.data());
-        for (double v : q)
-            if (!std::isfinite(v))
-                return false;
-        return !fcl->collides(q.data());
-    }
-
-private:
-    rastercheck::ompl::StateMappingConstPtr mapping_;
-    rastercheck::ompl::CheckerConstPtr owner_;  ///< only for its collision model (robot, scene, ACM)
-    std::uint64_t id_;
-    static std::atomic<std::uint64_t> nextId_;
-};
-std::atomic<std::uint64_t> FclStateValidityChecker::nextId_{0};
 
 struct Outcome
 {
@@ -216,7 +181,7 @@ int main(int argc, char **argv)
             og::SimpleSetupPtr fcl = rastercheck::ompl::makeSimpleSetup(problem, fclOptions);
             rastercheck::ompl::setStartAndGoal(*fcl, request);
             const rastercheck::ompl::StateValidityCheckerPtr oracle = rastercheck::ompl::getStateValidityChecker(*fcl);
-            fcl->setStateValidityChecker(std::make_shared<FclStateValidityChecker>(
+            fcl->setStateValidityChecker(std::make_shared<bench::FclStateValidityChecker>(
                 fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
 
             for (int run = 0; run < runsPerProblem; ++run)

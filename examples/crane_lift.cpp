@@ -29,6 +29,7 @@
 #include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/PathCheck.h"
 #include "rastercheck/ompl/Setup.h"
+#include "rastercheck/planners/BatchRRTConnect.h"
 #include "render/RasterPicture.h"
 #include "render/SitePicture.h"
 
@@ -219,7 +220,6 @@ int run(const Options &options)
     // apart (CertifiedMotionValidator bounds how far each part of the crane swings along an edge).
     setupOptions.edges = rc::ompl::EdgeChecking::Certified;
     const og::SimpleSetupPtr setup = rc::ompl::makeSimpleSetup(problem, setupOptions);
-    setup->setPlanner(std::make_shared<og::RRTConnect>(setup->getSpaceInformation()));
     rc::ompl::setStartAndGoal(*setup, lift);
     // The resolution in metres of crane motion paces the exact re-check below (certified edges do not
     // use it). The state metric adds radians of slew to metres of hoist, and one radian of slew or
@@ -281,26 +281,48 @@ int run(const Options &options)
         std::printf("\nstraight line start -> goal (linear in the joints): first collision %d %% of the way:\n  %s\n",
                     lineHit, checker.describe(lineContacts[static_cast<std::size_t>(lineHit)]).c_str());
 
-    std::printf("\nplanning: RRT-Connect, %.0f s limit, seed %u\n", options.time, options.seed);
-    auto phase = std::chrono::steady_clock::now();
-    const ::ompl::base::PlannerStatus status = setup->solve(options.time);
-    const double planSeconds = secondsSince(phase);
+    // OMPL's RRT-Connect first, for its time; then BatchRRTConnect (planners/), whose path the rest
+    // of the program shows. Both on the same checker and certified edges.
+    std::printf("\nplanning: %.0f s limit each, seed %u, certified edges\n", options.time, options.seed);
     const auto edges = std::dynamic_pointer_cast<rc::ompl::CertifiedMotionValidator>(
         setup->getSpaceInformation()->getMotionValidator());
-    const std::uint64_t planChecks = validity->getCallCount() + (edges ? edges->getCheckedStateCount() : 0);
+    auto planChecks = [&] { return validity->getCallCount() + (edges ? edges->getCheckedStateCount() : 0); };
+    auto plan = [&](const ::ompl::base::PlannerPtr &planner, double &seconds)
+    {
+        setup->clear();
+        validity->resetCounters();
+        if (edges)
+            edges->resetStateCounter();
+        setup->setPlanner(planner);
+        const auto begin = std::chrono::steady_clock::now();
+        const ::ompl::base::PlannerStatus result = setup->solve(options.time);
+        seconds = secondsSince(begin);
+        return result;
+    };
+    double rrtSeconds = 0.0;
+    plan(std::make_shared<og::RRTConnect>(setup->getSpaceInformation()), rrtSeconds);
+    std::printf("  RRT-Connect      %s in %.3f s, %llu states checked\n",
+                setup->haveExactSolutionPath() ? "solved" : "no solution", rrtSeconds,
+                static_cast<unsigned long long>(planChecks()));
+    double planSeconds = 0.0;
+    const ::ompl::base::PlannerStatus status =
+        plan(std::make_shared<rc::planners::BatchRRTConnect>(setup->getSpaceInformation()), planSeconds);
+    std::printf("  BatchRRTConnect  %s in %.3f s, %llu states checked (%.1fx RRT-Connect's time)\n",
+                setup->haveExactSolutionPath() ? "solved" : "no solution", planSeconds,
+                static_cast<unsigned long long>(planChecks()), planSeconds / rrtSeconds);
+    const std::uint64_t planStates = planChecks();
     if (!setup->haveExactSolutionPath())
     {
         std::printf("  no solution within %.1f s (%s, %llu state checks)\n", planSeconds, status.asString().c_str(),
-                    static_cast<unsigned long long>(planChecks));
+                    static_cast<unsigned long long>(planStates));
         return 2;
     }
     og::PathGeometric &path = setup->getSolutionPath();
     const std::size_t rawStates = path.getStateCount();
-    phase = std::chrono::steady_clock::now();
+    auto phase = std::chrono::steady_clock::now();
     setup->simplifySolution(2.0);
     const double simplifySeconds = secondsSince(phase);
-    std::printf("  solved in %.2f s: %zu waypoints, %llu states checked (samples and edges)\n", planSeconds, rawStates,
-                static_cast<unsigned long long>(planChecks));
+    std::printf("  BatchRRTConnect's path: %zu waypoints\n", rawStates);
     std::printf("  simplified in %.2f s to %zu waypoints\n", simplifySeconds, path.getStateCount());
 
     std::printf("\nplan (hook = hook block's rope end; the load hangs 1.5 m below it)\n");

@@ -881,15 +881,20 @@ TEST(BadInput, RequestNamesUnknownJoint)
         std::make_shared<const rco::StateMapping>(rc::loadUrdfString(foldingArm(), ".", {}, "arm.urdf"));
     const rc::MotionPlanRequest request = rc::loadMoveItRequestString(
         "start_state:\n  joint_state:\n    name: [j1, ghost]\n    position: [0.1, 0.2]\n", "request.yaml");
+    // A goal the robot cannot meet is an error.
     try
     {
-        rco::configurationFromJoints(*mapping, request.startJoints, "start");
+        rco::configurationFromJoints(*mapping, request.startJoints, "goal");
         ADD_FAILURE() << "expected a ConfigurationError";
     }
     catch (const rc::ConfigurationError &e)
     {
-        EXPECT_STREQ(e.what(), "start names joint 'ghost', which robot 'test' lacks");
+        EXPECT_STREQ(e.what(), "goal names joint 'ghost', which robot 'test' lacks");
     }
+    // A start state lists the whole robot (a reduced model may lack some): skipped, the rest kept.
+    const std::vector<double> start =
+        rco::configurationFromJoints(*mapping, request.startJoints, "start", rco::UnknownJoints::Skip);
+    EXPECT_DOUBLE_EQ(start[0], 0.1);
 }
 
 // ---- OMPL.app .cfg ----------------------------------------------------------------------------

@@ -36,7 +36,7 @@ public:
     bool shortcut(::ompl::geometric::PathGeometric &path, const ::ompl::base::PlannerTerminationCondition &ptc);
 
     /** \brief Candidate shortcuts per round (>= 1). */
-    unsigned int candidates = 64;
+    unsigned int candidates = 16;
     /** \brief Rounds in a row without a real gain before stopping. */
     unsigned int idleRounds = 2;
 

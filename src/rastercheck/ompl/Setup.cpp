@@ -70,13 +70,19 @@ StateValidityCheckerPtr getStateValidityChecker(const og::SimpleSetup &setup)
 }
 
 std::vector<double> configurationFromJoints(const StateMapping &mapping, const std::map<std::string, double> &joints,
-                                            const std::string &what)
+                                            const std::string &what, UnknownJoints unknown)
 {
     const RobotModel &robot = mapping.robot();
     std::vector<double> q = mapping.baseConfiguration();
+    std::string skipped;
     for (const auto &[name, value] : joints)
     {
         const int index = robot.jointIndex(name);
+        if (index < 0 && unknown == UnknownJoints::Skip)
+        {
+            skipped += (skipped.empty() ? "'" : ", '") + name + "'";
+            continue;
+        }
         if (index < 0)
             throw ConfigurationError(what + " names joint '" + name + "', which robot '" + robot.name + "' lacks");
         const Joint &joint = robot.joints[index];
@@ -97,6 +103,8 @@ std::vector<double> configurationFromJoints(const StateMapping &mapping, const s
         }
         q[c] = value;
     }
+    if (!skipped.empty())
+        logWarning(what + " names joint(s) " + skipped + ", which robot '" + robot.name + "' lacks; ignored");
     return q;
 }
 
@@ -118,7 +126,7 @@ void setStartAndGoal(og::SimpleSetup &setup, const OmplAppProblem &problem)
 void setStartAndGoal(og::SimpleSetup &setup, const MotionPlanRequest &request)
 {
     const StateMapping &mapping = getStateValidityChecker(setup)->getStateMapping();
-    setStartAndGoal(setup, configurationFromJoints(mapping, request.startJoints, "start"),
+    setStartAndGoal(setup, configurationFromJoints(mapping, request.startJoints, "start", UnknownJoints::Skip),
                     configurationFromJoints(mapping, request.goalJoints, "goal"));
 }
 }  // namespace rastercheck::ompl

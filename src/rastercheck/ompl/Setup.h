@@ -67,19 +67,31 @@ struct SetupOptions
     ConfigurationError when \a setup's checker is not one. */
 StateValidityCheckerPtr getStateValidityChecker(const ::ompl::geometric::SimpleSetup &setup);
 
+/** \brief What configurationFromJoints does with a joint the robot lacks. */
+enum class UnknownJoints
+{
+    Error,  ///< ConfigurationError naming the joint (a goal that cannot be met)
+    /** \brief One warning listing them, then ignored: a MoveIt start state lists the whole robot's
+        joints, also those a reduced model leaves out (MotionBenchMaker's Fetch requests name its
+        wheels, which VAMP's fetch.urdf lacks). */
+    Skip
+};
+
 /** \brief \a base with the joints of \a joints (name -> position, rad or m) written in. Joints that
     consume no coordinate (fixed, mimic) are skipped; held coordinates keep their value in \a base
     (a warning when the request disagrees by more than 1e-9). Throws ConfigurationError naming the
-    joint when \a joints names a joint the robot lacks or a joint with several coordinates.
-    \a what names the configuration in messages ("start", "goal"). */
+    joint for a joint with several coordinates, and for a joint the robot lacks unless \a unknown
+    is Skip. \a what names the configuration in messages ("start", "goal"). */
 std::vector<double> configurationFromJoints(const StateMapping &mapping, const std::map<std::string, double> &joints,
-                                            const std::string &what);
+                                            const std::string &what, UnknownJoints unknown = UnknownJoints::Error);
 
 /** \brief Start and goal of an OMPL.app problem (its start / goal configurations). */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
 
 /** \brief Start (start_state.joint_state) and goal (goal_constraints[0] joint positions) of a MoveIt
-    request; coordinates a request does not name keep their neutral (or held) values. */
+    request; coordinates a request does not name keep their neutral (or held) values. Start joints
+    the robot lacks are skipped with a warning (UnknownJoints::Skip); goal joints it lacks are a
+    ConfigurationError. */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const MotionPlanRequest &request);
 
 /** \brief Start and goal from two configurations (robot coordinate order). */
