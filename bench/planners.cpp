@@ -9,10 +9,13 @@
 //
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
+// A robot "omplapp:NAME" plans OMPL.app's NAME.cfg (from $RASTERCHECK_OMPLAPP, a resources/3D
+// folder; never bundled), problems_per_scenario runs with different seeds.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <sstream>
 
@@ -23,6 +26,7 @@
 
 #include "BenchSupport.h"
 #include "FclValidity.h"
+#include "rastercheck/io/Problem.h"
 #include "rastercheck/ompl/PathCheck.h"
 #include "rastercheck/ompl/Setup.h"
 #include "rastercheck/planners/BatchRRTConnect.h"
@@ -140,51 +144,82 @@ int main(int argc, char **argv)
     const std::vector<std::string> labels{"FCL RRTConnect (discrete edges)", "RRTConnect (rastercheck, certified)",
                                           "BatchRRTConnect (rastercheck, certified)"};
 
-    std::printf("MotionBenchMaker, problems %d..%d of each of the 7 scenarios, time limit %g s, one core; "
-                "BatchRRTConnect batch_size %u.\n",
+    std::printf("Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
+                "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u.\n",
                 firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize);
     std::printf("Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution. "
                 "Times: median and p95 over all runs, unsolved ones at the limit (+1 s with simplification).\n\n");
     for (const std::string &robotName : robots)
     {
-        const RobotModelConstPtr robot = bench::loadMbmRobot(root, robotName);
         std::map<std::string, Tally> tallies;
-        for (const std::string &scenario : bench::mbmScenarios())
+        // One problem: both setups, the three planners with one seed.
+        auto benchProblem = [&](const Problem &problem,
+                                const std::function<void(og::SimpleSetup &)> &setStartAndGoal,
+                                std::uint_fast32_t runSeed)
+        {
+            rastercheck::ompl::SetupOptions options;  // certified edges: the default
+            options.checker.backend = BackendChoice::Cpu;
+            options.checker.threads = 1;
+            og::SimpleSetupPtr ours = rastercheck::ompl::makeSimpleSetup(problem, options);
+            setStartAndGoal(*ours);
+            const rastercheck::ompl::StateValidityCheckerPtr oracle = rastercheck::ompl::getStateValidityChecker(*ours);
+
+            rastercheck::ompl::SetupOptions fclOptions = options;
+            fclOptions.edges = rastercheck::ompl::EdgeChecking::Discrete;
+            og::SimpleSetupPtr fcl = rastercheck::ompl::makeSimpleSetup(problem, fclOptions);
+            setStartAndGoal(*fcl);
+            fcl->setStateValidityChecker(std::make_shared<bench::FclStateValidityChecker>(
+                fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
+
+            run(*fcl, std::make_shared<og::RRTConnect>(fcl->getSpaceInformation()), false, timeLimit, *oracle,
+                runSeed, tallies[labels[0]]);
+            run(*ours, std::make_shared<og::RRTConnect>(ours->getSpaceInformation()), false, timeLimit, *oracle,
+                runSeed, tallies[labels[1]]);
+            auto batch = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
+            batch->setBatchSize(batchSize);
+            run(*ours, batch, true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
+        };
+
+        if (robotName.rfind("omplapp:", 0) == 0)
+        {
+            const char *folder = std::getenv("RASTERCHECK_OMPLAPP");
+            if (!folder)
+            {
+                std::printf("### %s: skipped (set RASTERCHECK_OMPLAPP to OMPL.app's resources/3D)\n\n",
+                            robotName.c_str());
+                continue;
+            }
+            ProblemSource source;
+            source.cfgPath = std::string(folder) + "/" + robotName.substr(8) + ".cfg";
+            const Problem problem = loadProblem(source);
             for (int index = firstProblem; index < firstProblem + problemsPerScenario; ++index)
             {
-                Problem problem;
-                problem.robot = robot;
-                problem.scene = loadMoveItScene(bench::mbmProblemPath(root, robotName, scenario, index, "scene"));
-                const MotionPlanRequest request =
-                    loadMoveItRequest(bench::mbmProblemPath(root, robotName, scenario, index, "request"));
-
-                rastercheck::ompl::SetupOptions options;  // certified edges: the default
-                options.checker.backend = BackendChoice::Cpu;
-                options.checker.threads = 1;
-                og::SimpleSetupPtr ours = rastercheck::ompl::makeSimpleSetup(problem, options);
-                rastercheck::ompl::setStartAndGoal(*ours, request);
-                const rastercheck::ompl::StateValidityCheckerPtr oracle =
-                    rastercheck::ompl::getStateValidityChecker(*ours);
-
-                rastercheck::ompl::SetupOptions fclOptions = options;
-                fclOptions.edges = rastercheck::ompl::EdgeChecking::Discrete;
-                og::SimpleSetupPtr fcl = rastercheck::ompl::makeSimpleSetup(problem, fclOptions);
-                rastercheck::ompl::setStartAndGoal(*fcl, request);
-                fcl->setStateValidityChecker(std::make_shared<bench::FclStateValidityChecker>(
-                    fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
-
-                const std::uint_fast32_t runSeed = static_cast<std::uint_fast32_t>(1000 * index + 1);
-                run(*fcl, std::make_shared<og::RRTConnect>(fcl->getSpaceInformation()), false, timeLimit, *oracle,
-                    runSeed, tallies[labels[0]]);
-                run(*ours, std::make_shared<og::RRTConnect>(ours->getSpaceInformation()), false, timeLimit, *oracle,
-                    runSeed, tallies[labels[1]]);
-                auto batch = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
-                batch->setBatchSize(batchSize);
-                run(*ours, batch, true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
-                std::fprintf(stderr, "%s %s %04d done\n", robotName.c_str(), scenario.c_str(), index);
+                benchProblem(
+                    problem, [&](og::SimpleSetup &setup)
+                    { rastercheck::ompl::setStartAndGoal(setup, *problem.omplApp); },
+                    static_cast<std::uint_fast32_t>(1000 * index + 1));
+                std::fprintf(stderr, "%s run %d done\n", robotName.c_str(), index);
             }
+        }
+        else
+        {
+            const RobotModelConstPtr robot = bench::loadMbmRobot(root, robotName);
+            for (const std::string &scenario : bench::mbmScenarios())
+                for (int index = firstProblem; index < firstProblem + problemsPerScenario; ++index)
+                {
+                    Problem problem;
+                    problem.robot = robot;
+                    problem.scene = loadMoveItScene(bench::mbmProblemPath(root, robotName, scenario, index, "scene"));
+                    const MotionPlanRequest request =
+                        loadMoveItRequest(bench::mbmProblemPath(root, robotName, scenario, index, "request"));
+                    benchProblem(
+                        problem, [&](og::SimpleSetup &setup) { rastercheck::ompl::setStartAndGoal(setup, request); },
+                        static_cast<std::uint_fast32_t>(1000 * index + 1));
+                    std::fprintf(stderr, "%s %s %04d done\n", robotName.c_str(), scenario.c_str(), index);
+                }
+        }
 
-        std::printf("### %s (%zu problems)\n\n", robotName.c_str(), tallies[labels[0]].times.size());
+        std::printf("### %s (%zu runs)\n\n", robotName.c_str(), tallies[labels[0]].times.size());
         std::printf("| planner | solved | colliding | median s | p95 s | median s, simplified | p95 s, simplified | "
                     "median length raw -> simplified | median states checked |\n");
         std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");

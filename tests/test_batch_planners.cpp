@@ -326,3 +326,22 @@ TEST(BatchShortcutter, ShortensAPathAndKeepsItCollisionFree)
     // The straight line from start to goal crosses the wall: the path still bends through the gap.
     EXPECT_GE(path.getStateCount(), 3u);
 }
+
+TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)
+{
+    auto describe = [](rco::EdgeChecking edges, rc::CollisionMode mode)
+    {
+        rco::SetupOptions options;
+        options.edges = edges;
+        options.request.mode = mode;
+        og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+        setup->getSpaceInformation()->setup();
+        return rcp::EdgeChecker(setup->getSpaceInformation()).description();
+    };
+    EXPECT_EQ(describe(rco::EdgeChecking::Auto, rc::CollisionMode::Safe), "certified");
+    EXPECT_EQ(describe(rco::EdgeChecking::Batched, rc::CollisionMode::Safe), "batched");
+    // OMPL's own validator: the checker is rastercheck's, so certified edges of its own ...
+    EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Exact), "certified");
+    // ... except in raster mode, which cannot certify: batched at the space's resolution.
+    EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Raster), "batched");
+}
