@@ -66,9 +66,10 @@ TEST(OmplSetup, MbmProblemStartAndGoal)
     EXPECT_DOUBLE_EQ(checker->getStateMapping().toConfiguration(goal)[0], request.goalJoints.at("panda_joint1"));
     EXPECT_TRUE(checker->isValid(goal));
 
-    // A request naming a joint the robot lacks is refused, naming the joint.
+    // A goal naming a joint the robot lacks is refused, naming the joint (a start state's are
+    // skipped: a MoveIt start state lists the whole robot; test_bad_input).
     rc::MotionPlanRequest bad = request;
-    bad.startJoints["elbow_of_another_robot"] = 0.0;
+    bad.goalJoints["elbow_of_another_robot"] = 0.0;
     try
     {
         rco::setStartAndGoal(*setup, bad);
