@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,9 +18,21 @@ namespace rastercheck::bench
 /** \brief The seven MotionBenchMaker scenarios of the shared data. */
 inline const std::vector<std::string> &mbmScenarios()
 {
-    static const std::vector<std::string> names{"bookshelf_small", "bookshelf_tall", "bookshelf_thin", "box",
-                                                "cage",            "table_pick",     "table_under_pick"};
+    static const std::vector<std::string> names{"bookshelf_small", "bookshelf_tall",  "bookshelf_thin", "box", "cage",
+                                                "table_pick",      "table_under_pick"};
     return names;
+}
+
+/** \brief "a,b,c" -> {"a", "b", "c"} (empty parts dropped): list arguments of the benches. */
+inline std::vector<std::string> splitList(const std::string &text)
+{
+    std::vector<std::string> parts;
+    std::stringstream in(text);
+    std::string part;
+    while (std::getline(in, part, ','))
+        if (!part.empty())
+            parts.push_back(part);
+    return parts;
 }
 
 inline std::string sharedDataOrExit()
@@ -27,7 +40,8 @@ inline std::string sharedDataOrExit()
     const std::string root = dataRoot(RASTERCHECK_DEFAULT_DATA);
     if (root.empty())
     {
-        std::fprintf(stderr, "shared data not found: set RASTERCHECK_DATA or place ../shared/data beside the checkout\n");
+        std::fprintf(stderr,
+                     "shared data not found: set RASTERCHECK_DATA or place ../shared/data beside the checkout\n");
         std::exit(2);
     }
     return root;

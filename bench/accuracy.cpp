@@ -25,11 +25,14 @@ struct Setting
 
 const std::vector<Setting> &settings()
 {
-    static const std::vector<Setting> list{
-        {"exact", CollisionMode::Exact, 1},      {"safe (default)", CollisionMode::Safe, 1},
-        {"safe, pixel x4", CollisionMode::Safe, 4}, {"raster, pixel x0.5", CollisionMode::Raster, 0.5},
-        {"raster, pixel x1", CollisionMode::Raster, 1}, {"raster, pixel x4", CollisionMode::Raster, 4},
-        {"raster, pixel x16", CollisionMode::Raster, 16}, {"conservative", CollisionMode::Conservative, 1}};
+    static const std::vector<Setting> list{{"exact", CollisionMode::Exact, 1},
+                                           {"safe (default)", CollisionMode::Safe, 1},
+                                           {"safe, pixel x4", CollisionMode::Safe, 4},
+                                           {"raster, pixel x0.5", CollisionMode::Raster, 0.5},
+                                           {"raster, pixel x1", CollisionMode::Raster, 1},
+                                           {"raster, pixel x4", CollisionMode::Raster, 4},
+                                           {"raster, pixel x16", CollisionMode::Raster, 16},
+                                           {"conservative", CollisionMode::Conservative, 1}};
     return list;
 }
 
@@ -124,8 +127,9 @@ int main(int argc, char **argv)
         evaluate(result, suite.robot, suite.scene, suite.states);
         results.push_back(result);
     }
-    std::printf("FN = colliding state called valid, FP = free state called invalid, both against the exact oracle "
-                "(every pair, triangle-triangle plus point-in-solid).\n\n");
+    std::printf(
+        "FN = colliding state called valid, FP = free state called invalid, both against the exact oracle "
+        "(every pair, triangle-triangle plus point-in-solid).\n\n");
     print(results);
     return 0;
 }

@@ -148,7 +148,8 @@ int main(int argc, char **argv)
 
     // What the stages leave to the host in this mode.
     std::printf(
-        "\n| scene | states | pairs past the box culls / state | settled apart by the stages | settled colliding by the stages | "
+        "\n| scene | states | pairs past the box culls / state | settled apart by the stages | settled colliding by "
+        "the stages | "
         "left to the host | host ceiling, states/s per core |\n|---|---|---|---|---|---|---|\n");
     for (const SceneCase &c : cases)
     {
@@ -217,7 +218,8 @@ int main(int argc, char **argv)
                 });
             si->freeState(between);
             std::uint64_t states = 0;
-            if (const auto certified = std::dynamic_pointer_cast<rastercheck::ompl::CertifiedMotionValidator>(validator))
+            if (const auto certified =
+                    std::dynamic_pointer_cast<rastercheck::ompl::CertifiedMotionValidator>(validator))
                 states = certified->getCheckedStateCount();
             else
                 for (int e = 0; e < edges; ++e)

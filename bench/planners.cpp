@@ -73,8 +73,8 @@ std::uint64_t statesChecked(const og::SimpleSetup &setup)
 {
     const auto edges = std::dynamic_pointer_cast<rastercheck::ompl::CertifiedMotionValidator>(
         setup.getSpaceInformation()->getMotionValidator());
-    const auto validity = std::dynamic_pointer_cast<rastercheck::ompl::StateValidityChecker>(
-        setup.getStateValidityChecker());
+    const auto validity =
+        std::dynamic_pointer_cast<rastercheck::ompl::StateValidityChecker>(setup.getStateValidityChecker());
     return (edges ? edges->getCheckedStateCount() : 0) + (validity ? validity->getCallCount() : 0);
 }
 
@@ -120,21 +120,11 @@ void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortc
     tally.simplifiedColliding += collisionFree(path, oracle) ? 0 : 1;
 }
 
-std::vector<std::string> split(const std::string &text)
-{
-    std::vector<std::string> parts;
-    std::stringstream in(text);
-    std::string part;
-    while (std::getline(in, part, ','))
-        if (!part.empty())
-            parts.push_back(part);
-    return parts;
-}
 }  // namespace
 
 int main(int argc, char **argv)
 {
-    const std::vector<std::string> robots = split(argc > 1 ? argv[1] : "panda,ur5,fetch");
+    const std::vector<std::string> robots = bench::splitList(argc > 1 ? argv[1] : "panda,ur5,fetch");
     const int problemsPerScenario = argc > 2 ? std::atoi(argv[2]) : 5;
     const double timeLimit = argc > 3 ? std::atof(argv[3]) : 2.0;
     const unsigned int batchSize = argc > 4 ? static_cast<unsigned int>(std::atoi(argv[4])) : 8u;
@@ -144,17 +134,18 @@ int main(int argc, char **argv)
     const std::vector<std::string> labels{"FCL RRTConnect (discrete edges)", "RRTConnect (rastercheck, certified)",
                                           "BatchRRTConnect (rastercheck, certified)"};
 
-    std::printf("Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
-                "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u.\n",
-                firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize);
-    std::printf("Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution. "
-                "Times: median and p95 over all runs, unsolved ones at the limit (+1 s with simplification).\n\n");
+    std::printf(
+        "Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
+        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u.\n",
+        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize);
+    std::printf(
+        "Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution. "
+        "Times: median and p95 over all runs, unsolved ones at the limit (+1 s with simplification).\n\n");
     for (const std::string &robotName : robots)
     {
         std::map<std::string, Tally> tallies;
         // One problem: both setups, the three planners with one seed.
-        auto benchProblem = [&](const Problem &problem,
-                                const std::function<void(og::SimpleSetup &)> &setStartAndGoal,
+        auto benchProblem = [&](const Problem &problem, const std::function<void(og::SimpleSetup &)> &setStartAndGoal,
                                 std::uint_fast32_t runSeed)
         {
             rastercheck::ompl::SetupOptions options;  // certified edges: the default
@@ -171,8 +162,8 @@ int main(int argc, char **argv)
             fcl->setStateValidityChecker(std::make_shared<bench::FclStateValidityChecker>(
                 fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
 
-            run(*fcl, std::make_shared<og::RRTConnect>(fcl->getSpaceInformation()), false, timeLimit, *oracle,
-                runSeed, tallies[labels[0]]);
+            run(*fcl, std::make_shared<og::RRTConnect>(fcl->getSpaceInformation()), false, timeLimit, *oracle, runSeed,
+                tallies[labels[0]]);
             run(*ours, std::make_shared<og::RRTConnect>(ours->getSpaceInformation()), false, timeLimit, *oracle,
                 runSeed, tallies[labels[1]]);
             auto batch = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
@@ -195,8 +186,8 @@ int main(int argc, char **argv)
             for (int index = firstProblem; index < firstProblem + problemsPerScenario; ++index)
             {
                 benchProblem(
-                    problem, [&](og::SimpleSetup &setup)
-                    { rastercheck::ompl::setStartAndGoal(setup, *problem.omplApp); },
+                    problem,
+                    [&](og::SimpleSetup &setup) { rastercheck::ompl::setStartAndGoal(setup, *problem.omplApp); },
                     static_cast<std::uint_fast32_t>(1000 * index + 1));
                 std::fprintf(stderr, "%s run %d done\n", robotName.c_str(), index);
             }
@@ -220,22 +211,25 @@ int main(int argc, char **argv)
         }
 
         std::printf("### %s (%zu runs)\n\n", robotName.c_str(), tallies[labels[0]].times.size());
-        std::printf("| planner | solved | colliding | median s | p95 s | median s, simplified | p95 s, simplified | "
-                    "median length raw -> simplified | median states checked |\n");
+        std::printf(
+            "| planner | solved | colliding | median s | p95 s | median s, simplified | p95 s, simplified | "
+            "median length raw -> simplified | median states checked |\n");
         std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
         for (const std::string &label : labels)
         {
             const Tally &t = tallies[label];
             std::printf("| %s | %d/%d | %d (+%d simplified) | %.4f | %.4f | %.4f | %.4f | %.2f -> %.2f | %.0f |\n",
-                        label.c_str(), t.solved, t.attempts, t.colliding, t.simplifiedColliding,
-                        quantile(t.times, 0.5), quantile(t.times, 0.95), quantile(t.simplifiedTimes, 0.5),
-                        quantile(t.simplifiedTimes, 0.95), quantile(t.lengths, 0.5),
-                        quantile(t.simplifiedLengths, 0.5), label == labels[0] ? 0.0 : quantile(t.states, 0.5));
+                        label.c_str(), t.solved, t.attempts, t.colliding, t.simplifiedColliding, quantile(t.times, 0.5),
+                        quantile(t.times, 0.95), quantile(t.simplifiedTimes, 0.5), quantile(t.simplifiedTimes, 0.95),
+                        quantile(t.lengths, 0.5), quantile(t.simplifiedLengths, 0.5),
+                        label == labels[0] ? 0.0 : quantile(t.states, 0.5));
         }
-        const double rrt = quantile(tallies[labels[1]].times, 0.5), batchMedian = quantile(tallies[labels[2]].times, 0.5);
-        std::printf("\nMedian solve time: BatchRRTConnect %.2fx faster than RRTConnect on the same checker, "
-                    "%.2fx faster than FCL RRTConnect.\n\n",
-                    rrt / batchMedian, quantile(tallies[labels[0]].times, 0.5) / batchMedian);
+        const double rrt = quantile(tallies[labels[1]].times, 0.5),
+                     batchMedian = quantile(tallies[labels[2]].times, 0.5);
+        std::printf(
+            "\nMedian solve time: BatchRRTConnect %.2fx faster than RRTConnect on the same checker, "
+            "%.2fx faster than FCL RRTConnect.\n\n",
+            rrt / batchMedian, quantile(tallies[labels[0]].times, 0.5) / batchMedian);
     }
     return 0;
 }

@@ -124,16 +124,6 @@ std::string solvedText(const Tally &t)
     return text;
 }
 
-std::vector<std::string> split(const std::string &text)
-{
-    std::vector<std::string> parts;
-    std::stringstream in(text);
-    std::string part;
-    while (std::getline(in, part, ','))
-        if (!part.empty())
-            parts.push_back(part);
-    return parts;
-}
 }  // namespace
 
 int main(int argc, char **argv)
@@ -141,7 +131,7 @@ int main(int argc, char **argv)
     const int problemsPerScenario = argc > 1 ? std::atoi(argv[1]) : 3;
     const double timeLimit = argc > 2 ? std::atof(argv[2]) : 5.0;
     const int runsPerProblem = argc > 3 ? std::atoi(argv[3]) : 1;
-    const std::vector<std::string> modes = split(argc > 4 ? argv[4] : "safe,exact");
+    const std::vector<std::string> modes = bench::splitList(argc > 4 ? argv[4] : "safe,exact");
     const int threads = argc > 5 ? std::atoi(argv[5]) : 1;
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_WARN);
     const std::string root = bench::sharedDataOrExit();

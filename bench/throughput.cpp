@@ -48,10 +48,12 @@ int main(int argc, char **argv)
             const Checker allThreads(robot, scene, CheckerOptions{BackendChoice::Cpu, 0});
             test::FclReference fcl(oneThread.collisionModel());
             std::vector<std::uint8_t> fclValid(statesPerScene);
-            fclTime += bench::seconds([&] {
-                for (std::size_t i = 0; i < statesPerScene; ++i)
-                    fclValid[i] = fcl.collides(q.data() + i * dof) ? 0 : 1;
-            });
+            fclTime += bench::seconds(
+                [&]
+                {
+                    for (std::size_t i = 0; i < statesPerScene; ++i)
+                        fclValid[i] = fcl.collides(q.data() + i * dof) ? 0 : 1;
+                });
             std::vector<std::uint8_t> exactValid;
             for (const Run &run : runs)
             {
@@ -59,7 +61,8 @@ int main(int argc, char **argv)
                 std::vector<std::uint8_t> valid(statesPerScene);
                 CollisionRequest request;
                 request.mode = run.mode;
-                time[run.name] += bench::seconds([&] { checker.check(q.data(), statesPerScene, valid.data(), request); });
+                time[run.name] +=
+                    bench::seconds([&] { checker.check(q.data(), statesPerScene, valid.data(), request); });
                 if (run.mode == CollisionMode::Exact)
                     exactValid = valid;
                 for (std::size_t i = 0; i < statesPerScene; ++i)
@@ -73,9 +76,10 @@ int main(int argc, char **argv)
             total += statesPerScene;
         }
 
-    std::printf("Panda, MotionBenchMaker scenes: %d per scenario x 7 scenarios, %zu uniform states each "
-                "(%zu states, %.1f %% colliding); %d cores\n\n",
-                scenesPerScenario, statesPerScene, total, 100.0 * colliding / total, cores);
+    std::printf(
+        "Panda, MotionBenchMaker scenes: %d per scenario x 7 scenarios, %zu uniform states each "
+        "(%zu states, %.1f %% colliding); %d cores\n\n",
+        scenesPerScenario, statesPerScene, total, 100.0 * colliding / total, cores);
     std::printf("| checker | states/s | ratio to FCL (1 thread) | verdicts differing from exact |\n");
     std::printf("|---|---:|---:|---:|\n");
     std::printf("| FCL 0.7 OBBRSS, 1 thread | %.0f | 1.00 | %zu |\n", total / fclTime, disagreements["fcl"]);

@@ -2,7 +2,7 @@
 # The tests again under sanitizers (CI runs this after the Release tests; see .ci/run):
 #   asan  build-asan: the whole test suite, built by GCC with AddressSanitizer (and LeakSanitizer)
 #         and UndefinedBehaviorSanitizer; every report fails the test.
-#   tsan  build-tsan: the tests labelled concurrency (tests/test_concurrency.cpp), built by clang
+#   tsan  build-tsan: the tests labelled concurrency (test_concurrency, test_batch_planners), built by clang
 #         with ThreadSanitizer. Clang, because LLVM's OpenMP runtime with its Archer tool tells TSan
 #         about OpenMP's barriers and locks, so the OpenMP batch path runs as it ships; GCC's
 #         libgomp is not instrumented and TSan would report races in every parallel region.
@@ -44,7 +44,7 @@ asan() {
 tsan() {
     local start=$SECONDS
     configure build-tsan -DCMAKE_CXX_COMPILER=clang++ -DRASTERCHECK_TSAN=ON
-    cmake --build build-tsan -j2 --target test_concurrency
+    cmake --build build-tsan -j2 --target test_concurrency test_batch_planners
     local openmp archer
     openmp=$(sed -n 's/^OpenMP_omp_LIBRARY:FILEPATH=//p' build-tsan/CMakeCache.txt)
     archer=$(dirname "$(readlink -f "${openmp:-/missing}")")/libarcher.so

@@ -2,8 +2,10 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 
 #include <ompl/base/MotionValidator.h>
+#include <ompl/base/SpaceInformation.h>
 
 namespace rastercheck::ompl
 {
@@ -34,5 +36,32 @@ public:
         counters. */
     virtual void checkMotions(const Edge *edges, std::size_t n, std::uint8_t *valid,
                               double *lastValid = nullptr) const = 0;
+
+    /** \brief One edge: checkMotions of it alone. */
+    bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2) const override
+    {
+        const Edge edge{s1, s2};
+        std::uint8_t valid = 0;
+        checkMotions(&edge, 1, &valid);
+        return valid != 0;
+    }
+
+    /** \brief One edge; for a rejected one, lastValid.second = the fraction known valid and
+        lastValid.first (when given) the state there. */
+    bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2,
+                     std::pair<::ompl::base::State *, double> &lastValid) const override
+    {
+        const Edge edge{s1, s2};
+        std::uint8_t valid = 0;
+        double prefix = 0.0;
+        checkMotions(&edge, 1, &valid, &prefix);
+        if (!valid)
+        {
+            lastValid.second = prefix;
+            if (lastValid.first != nullptr)
+                si_->getStateSpace()->interpolate(s1, s2, prefix, lastValid.first);
+        }
+        return valid != 0;
+    }
 };
 }  // namespace rastercheck::ompl

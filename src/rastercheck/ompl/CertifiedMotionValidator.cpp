@@ -320,28 +320,4 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         detail::countMotion(valid_, invalid_, pool[i]->accepted);
     }
 }
-
-bool CertifiedMotionValidator::checkMotion(const ob::State *s1, const ob::State *s2) const
-{
-    const Edge edge{s1, s2};
-    std::uint8_t valid = 0;
-    checkMotions(&edge, 1, &valid);
-    return valid != 0;
-}
-
-bool CertifiedMotionValidator::checkMotion(const ob::State *s1, const ob::State *s2,
-                                           std::pair<ob::State *, double> &lastValid) const
-{
-    const Edge edge{s1, s2};
-    std::uint8_t valid = 0;
-    double prefix = 0.0;
-    checkMotions(&edge, 1, &valid, &prefix);
-    if (!valid)
-    {
-        lastValid.second = prefix;
-        if (lastValid.first != nullptr)
-            space_->interpolate(s1, s2, prefix, lastValid.first);
-    }
-    return valid != 0;
-}
 }  // namespace rastercheck::ompl

@@ -71,9 +71,6 @@ public:
     CertifiedMotionValidator(const ::ompl::base::SpaceInformationPtr &si, const StateValidityChecker &validityChecker,
                              const CertifiedMotionOptions &options = {});
 
-    bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2) const override;
-    bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2,
-                     std::pair<::ompl::base::State *, double> &lastValid) const override;
     void checkMotions(const Edge *edges, std::size_t n, std::uint8_t *valid,
                       double *lastValid = nullptr) const override;
 

@@ -159,28 +159,4 @@ void MotionValidator::checkMotions(const Edge *edges, std::size_t n, std::uint8_
         detail::countMotion(valid_, invalid_, scan.found == 0);
     }
 }
-
-bool MotionValidator::checkMotion(const ob::State *s1, const ob::State *s2) const
-{
-    const Edge edge{s1, s2};
-    std::uint8_t valid = 0;
-    checkMotions(&edge, 1, &valid);
-    return valid != 0;
-}
-
-bool MotionValidator::checkMotion(const ob::State *s1, const ob::State *s2,
-                                  std::pair<ob::State *, double> &lastValid) const
-{
-    const Edge edge{s1, s2};
-    std::uint8_t valid = 0;
-    double prefix = 0.0;
-    checkMotions(&edge, 1, &valid, &prefix);
-    if (!valid)
-    {
-        lastValid.second = prefix;
-        if (lastValid.first != nullptr)
-            space_->interpolate(s1, s2, lastValid.second, lastValid.first);
-    }
-    return valid != 0;
-}
 }  // namespace rastercheck::ompl

@@ -47,9 +47,6 @@ public:
     MotionValidator(const ::ompl::base::SpaceInformationPtr &si, const StateValidityChecker &validityChecker,
                     unsigned int rakeWidth = 8);
 
-    bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2) const override;
-    bool checkMotion(const ::ompl::base::State *s1, const ::ompl::base::State *s2,
-                     std::pair<::ompl::base::State *, double> &lastValid) const override;
     void checkMotions(const Edge *edges, std::size_t n, std::uint8_t *valid,
                       double *lastValid = nullptr) const override;
 
