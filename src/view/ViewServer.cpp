@@ -9,13 +9,14 @@
 #include <sstream>
 #include <utility>
 
-#include <httplib.h>
 #include <nlohmann/json.hpp>
 
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/model/Kinematics.h"
 #include "render/RasterPicture.h"
+// After Eigen: httplib.h brings in <resolv.h>, whose `_res` macro breaks Eigen's headers.
+#include <httplib.h>
 
 namespace rastercheck::view
 {
@@ -70,7 +71,7 @@ std::vector<double> configurationFromJson(const json &value, const RobotModel &r
             throw RequestError{
                 400, what + "[" + std::to_string(i) + "] ('" + robot.coordinateNames[i] + "') is not a number"};
         q[i] = value[i].get<double>();
-        // JSON has no NaN, but an overflowing literal such as 1e999 parses to infinity.
+        // JSON has neither NaN nor infinity, but a query string ("q=nan,...") has both.
         if (!std::isfinite(q[i]))
             throw RequestError{400,
                                what + "[" + std::to_string(i) + "] ('" + robot.coordinateNames[i] + "') is not finite"};
@@ -91,8 +92,6 @@ std::vector<double> configurationFromText(const std::string &text, const RobotMo
         const double value = std::strtod(item.c_str(), &stop);
         if (item.empty() || *stop != '\0')
             throw RequestError{400, "q: '" + item + "' is not a number (expected q=v1,v2,...)"};
-        if (!std::isfinite(value))
-            throw RequestError{400, "q: '" + item + "' is not finite"};
         values.push_back(value);
         begin = end + 1;
     }
@@ -194,22 +193,26 @@ fs::path environmentPath(const char *variable)
 
 std::string findWebDir(const std::string &executable)
 {
+    const fs::path chosen = environmentPath("RASTERCHECK_WEB_DIR");
     std::error_code error;
     fs::path installed;
     const fs::path binary = fs::canonical(executable, error);
     if (!error)
         installed = binary.parent_path() / RASTERCHECK_VIEW_WEB_FROM_BINDIR;
-    return firstHolding({environmentPath("RASTERCHECK_WEB_DIR"), installed, RASTERCHECK_VIEW_SOURCE_WEB_DIR},
+    return firstHolding(chosen.empty() ? std::vector<fs::path>{installed, RASTERCHECK_VIEW_SOURCE_WEB_DIR}
+                                       : std::vector<fs::path>{chosen},
                         "index.html", "the viewer's page (index.html)",
                         "set RASTERCHECK_WEB_DIR to the folder that holds it (src/view/web in the source tree)");
 }
 
 std::string findThreeDir()
 {
-    return firstHolding({environmentPath("RASTERCHECK_THREE_DIR"), RASTERCHECK_VIEW_THREE_DIR}, "build/three.module.js",
-                        "three.js",
-                        "install Debian's libjs-three (scripts/install-deps.sh) or set RASTERCHECK_THREE_DIR to "
-                        "the folder that holds build/three.module.js");
+    const fs::path chosen = environmentPath("RASTERCHECK_THREE_DIR");
+    return firstHolding(
+        chosen.empty() ? std::vector<fs::path>{RASTERCHECK_VIEW_THREE_DIR} : std::vector<fs::path>{chosen},
+        "build/three.module.js", "three.js",
+        "install Debian's libjs-three (scripts/install-deps.sh) or set RASTERCHECK_THREE_DIR to "
+        "the folder that holds build/three.module.js");
 }
 
 struct ViewServer::Impl
@@ -369,7 +372,7 @@ struct ViewServer::Impl
         {
             body = json::parse(request.body);
         }
-        catch (const json::parse_error &e)
+        catch (const json::exception &e)  // a syntax error, or a number too large for a double
         {
             throw RequestError{400, std::string("malformed JSON: ") + e.what()};
         }
@@ -434,6 +437,15 @@ struct ViewServer::Impl
 
     void addRoutes()
     {
+        // httplib's default sets SO_REUSEPORT, with which a second server binds a port in use and
+        // silently takes part of its connections. SO_REUSEADDR alone still lets a stopped viewer
+        // be restarted on its port at once.
+        server.set_socket_options(
+            [](socket_t socket)
+            {
+                const int yes = 1;
+                setsockopt(socket, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+            });
         server.set_payload_max_length(options.maxBodyBytes);
         // Module scripts load only with a JavaScript type.
         server.set_file_extension_and_mimetype_mapping("js", "text/javascript");

@@ -45,13 +45,13 @@ struct ViewServerOptions
     CollisionRequest request;
 };
 
-/** \brief The folder of the page's files: $RASTERCHECK_WEB_DIR when set, else the installed copy
-    (<prefix>/share/rastercheck/web beside <prefix>/bin/rastercheck, found from \a executable),
-    else the source tree this build came from. Throws ConfigurationError naming the places tried
-    when none holds index.html. */
+/** \brief The folder of the page's files: $RASTERCHECK_WEB_DIR when set (and then only it), else
+    the installed copy (<prefix>/share/rastercheck/web beside <prefix>/bin/rastercheck, found from
+    \a executable), else the source tree this build came from. Throws ConfigurationError naming the
+    places tried when none holds index.html. */
 std::string findWebDir(const std::string &executable);
 
-/** \brief The root of three.js: $RASTERCHECK_THREE_DIR when set, else the one CMake found at
+/** \brief The root of three.js: $RASTERCHECK_THREE_DIR when set (and then only it), else the one CMake found at
     configure time (Debian's libjs-three: /usr/share/javascript/three). Throws ConfigurationError
     naming the places tried when none holds build/three.module.js. */
 std::string findThreeDir();
