@@ -446,6 +446,9 @@ struct ViewServer::Impl
                 const int yes = 1;
                 setsockopt(socket, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
             });
+        // An answer goes out in two writes (head, body); with Nagle's algorithm the second waits for
+        // the client's delayed ACK, and every check took 40 ms more in Chromium.
+        server.set_tcp_nodelay(true);
         server.set_payload_max_length(options.maxBodyBytes);
         // Module scripts load only with a JavaScript type.
         server.set_file_extension_and_mimetype_mapping("js", "text/javascript");

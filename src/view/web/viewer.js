@@ -329,8 +329,14 @@ function showAnswer(asked, answer, roundTrip) {
   model.components.forEach((component, c) => {
     componentNodes[c].material.color.setHex(collidingComponents.has(component.name) ? COLOURS.colliding : COLOURS.component);
   });
+  // A touched object turns see-through, so that the red links inside it show.
   model.objects.forEach((object, o) => {
-    objectMeshes[o].material.color.setHex(touchedObjects.has(object.name) ? COLOURS.touchedObject : COLOURS.object);
+    const material = objectMeshes[o].material;
+    const touched = touchedObjects.has(object.name);
+    material.color.setHex(touched ? COLOURS.touchedObject : COLOURS.object);
+    material.transparent = touched;
+    material.opacity = touched ? 0.45 : 1;
+    material.depthWrite = !touched;
   });
   showHits(answer.contacts);
   requestRender();
@@ -366,8 +372,9 @@ function showAnswer(asked, answer, roundTrip) {
   requestRaster(answer.valid ? null : asked);
 }
 
-/** Red triangles (drawn over everything, so a triangle inside a link still shows) and a red dot at
-    each contact point. A self-contact's triangle belongs to the other component, in its link frame. */
+/** Red hit triangles on the surfaces they belong to (pulled towards the camera, so that they win
+    over the coplanar face they cover), and a red dot at each contact point, drawn over everything.
+    A self-contact's triangle belongs to the other component, in its link frame. */
 function showHits(contacts) {
   for (const child of hitGroup.children.slice()) {
     child.geometry.dispose();
@@ -394,22 +401,24 @@ function showHits(contacts) {
       positions.push(corner.x, corner.y, corner.z);
     }
   }
-  const overlay = { depthTest: false, transparent: true };
   if (positions.length) {
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.Float32BufferAttribute(positions, 3));
     const faces = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
-      color: COLOURS.hit, side: THREE.DoubleSide, opacity: 0.75, ...overlay,
+      color: COLOURS.hit, side: THREE.DoubleSide, polygonOffset: true, polygonOffsetFactor: -2,
+      polygonOffsetUnits: -8,
     }));
     const edges = new THREE.LineSegments(new THREE.WireframeGeometry(geometry),
-                                         new THREE.LineBasicMaterial({ color: 0x800000, ...overlay }));
+                                         new THREE.LineBasicMaterial({ color: 0x700000 }));
     faces.renderOrder = edges.renderOrder = 10;
     hitGroup.add(faces, edges);
   }
   const dotGeometry = new THREE.SphereBufferGeometry(sceneRadius * 0.006, 12, 8);
   for (const contact of contacts) {
     if (!contact.point) continue;
-    const dot = new THREE.Mesh(dotGeometry, new THREE.MeshBasicMaterial({ color: COLOURS.hit, ...overlay }));
+    const dot = new THREE.Mesh(dotGeometry, new THREE.MeshBasicMaterial({
+      color: COLOURS.hit, depthTest: false, transparent: true,
+    }));
     dot.position.fromArray(contact.point);
     dot.renderOrder = 11;
     hitGroup.add(dot);
