@@ -1,8 +1,8 @@
 // Browser test of `rastercheck view`: headless Chromium (Debian's chromium, driven by puppeteer-core)
 // loads the page for the crane in the plant, types a luff angle that swings the boom into the pipe
 // rack, and checks that the page reports the collision (status, contacts, raster image) and draws it
-// (the view is not blank and has red in it); Ctrl+Z must bring back the free state, and the Redo and
-// Undo buttons must go back and forth.
+// (the view is not blank and has red in it); Ctrl+Z must bring back the free state, the Redo and
+// Undo buttons must go back and forth, and the request's path must play back to its goal.
 //
 // Usage: node tests/browser/view_page.mjs RASTERCHECK_CLI SOURCE_DIR [SCREENSHOT.png]
 // Exit status: 0 passed, 1 failed, 77 skipped (only when Chromium is not installed or cannot start).
@@ -21,6 +21,8 @@ const FREE = [0, 0, 0, 1.570796326795, 0.834431313317, 5, 1];
 const LUFF = 4;
 const LUFF_INTO_RACK = 0.3;
 const COLLIDING = FREE.map((value, i) => (i === LUFF ? LUFF_INTO_RACK : value));
+// robots/sites/plant_lift.yaml's goal, where the playback of its straight line ends.
+const GOAL = [0, 0, 0, 1.570796326795, 0.71942438464, 8.5, 20.933726302844];
 
 function fail(message) {
   console.error(`FAIL: ${message}`);
@@ -192,6 +194,20 @@ async function main() {
     await page.click('#undo');
     status = await answerFor(page, FREE);
     expect(status.state === 'valid', 'the Undo button returns to the free state');
+
+    // Playback of the request's straight line from start to goal: the path's two states are free,
+    // it ends at the goal, and undo returns to where it started.
+    const pathInfo = await page.$eval('#path-info', (info) => info.textContent);
+    expect(pathInfo === '2 path states, 0 colliding', `the timeline shows the path's verdicts (${pathInfo})`);
+    await page.click('#play');
+    await page.waitForFunction(() => document.getElementById('play').textContent === 'Play', { timeout: TIMEOUT_MS });
+    status = await answerFor(page, GOAL);
+    expect(status.state === 'valid', 'playback ends at the goal, free');
+    await page.keyboard.down('Control');
+    await page.keyboard.press('z');
+    await page.keyboard.up('Control');
+    status = await answerFor(page, FREE);
+    expect(status.state === 'valid', 'Ctrl+Z after the playback returns to the state it started from');
     expect(pageErrors.length === 0, `no script errors on the page (${pageErrors.join('; ')})`);
     return 0;
   } finally {

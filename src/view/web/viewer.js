@@ -241,25 +241,18 @@ function jumpTo(configuration) {
   stateChanged();
 }
 
-function undo() {
-  if (!undoStack.length) return;
-  redoStack.push(q.slice());
-  q = undoStack.pop();
+/** One edit back (undo) or forward (redo): the state shown goes onto the other stack. */
+function stepHistory(from, to) {
+  if (!from.length) return;
+  to.push(q.slice());
+  q = from.pop();
   editStart = null;
   updateUndoButtons();
   showConfiguration();
   stateChanged();
 }
-
-function redo() {
-  if (!redoStack.length) return;
-  undoStack.push(q.slice());
-  q = redoStack.pop();
-  editStart = null;
-  updateUndoButtons();
-  showConfiguration();
-  stateChanged();
-}
+const undo = () => stepHistory(undoStack, redoStack);
+const redo = () => stepHistory(redoStack, undoStack);
 
 function updateUndoButtons() {
   $('undo').disabled = undoStack.length === 0;
@@ -278,8 +271,15 @@ window.addEventListener('keydown', (event) => {
 // ---- checking ----------------------------------------------------------------------------------
 function stateChanged() {
   document.body.dataset.busy = 'true';
-  history.replaceState(null, '', `#q=${q.map(formatValue).join(',')}`);
   requestCheck();
+}
+
+// The address bar holds the state once it settles: browsers throttle an address that changes at
+// every frame of a drag or a playback.
+let addressTimer = null;
+function updateAddressSoon() {
+  clearTimeout(addressTimer);
+  addressTimer = setTimeout(() => history.replaceState(null, '', `#q=${q.map(formatValue).join(',')}`), 300);
 }
 
 async function requestCheck() {
@@ -304,8 +304,12 @@ async function requestCheck() {
     status.textContent = `Error: ${error.message}`;
   } finally {
     checkInFlight = false;
-    if (checkWanted) requestCheck();
-    else document.body.dataset.busy = 'false';
+    if (checkWanted) {
+      requestCheck();
+    } else {
+      document.body.dataset.busy = 'false';
+      updateAddressSoon();
+    }
   }
 }
 
