@@ -424,3 +424,41 @@ TEST(ViewFiles, PageAndThreeJsAreFoundOrTheErrorNamesWhereTheyWereLookedFor)
     }
     ::unsetenv("RASTERCHECK_THREE_DIR");
 }
+
+TEST(ViewCommand, TakesAStatesFileAndPrintsTheUrlOfTheFreePortItPicked)
+{
+    const std::string dir = rastercheck::test::makeTempDir("view-cli");
+    const std::string path = rastercheck::test::writeFile(
+        dir + "/path.csv",
+        "base_x,base_y,base_yaw,slew,luff,telescope_1,hoist\n0,0,0,1.570796326795,0.834431313317,5,1\n"
+        "0,0,0,1.570796326795,0.3,5,1\n");
+    const std::string problem = "--robot " + rastercheck::test::sourcePath("robots/crane/crane.urdf") + " --srdf " +
+                                rastercheck::test::sourcePath("robots/crane/crane.srdf") + " --scene " +
+                                rastercheck::test::sourcePath("robots/sites/plant.yaml");
+    // The server runs until stopped: stop it as soon as it has printed its URL (30 s at most).
+    const std::string output = dir + "/output.txt";
+    const rastercheck::test::CommandRun run = rastercheck::test::runCommand(
+        std::string(RASTERCHECK_CLI) + " view " + problem + " --path " + path + " --port 0 > " + output +
+        " 2>&1 & server=$!; for i in $(seq 300); do grep -q '^open http' " + output +
+        " && break; sleep 0.1; done; kill $server && echo 'was serving'; cat " + output);
+    EXPECT_NE(run.output.find("was serving"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("rastercheck view: crawler_crane, 7 coordinates, 101 scene objects"), std::string::npos)
+        << run.output;
+    EXPECT_NE(run.output.find("open http://127.0.0.1:"), std::string::npos) << run.output;
+    EXPECT_EQ(run.output.find("open http://127.0.0.1:0/"), std::string::npos) << run.output;
+}
+
+TEST(ViewCommand, BadArgumentsAreErrorsThatSayWhy)
+{
+    const std::string problem = "--robot " + rastercheck::test::sourcePath("robots/crane/crane.urdf") + " --scene " +
+                                rastercheck::test::sourcePath("robots/sites/plant.yaml");
+    rastercheck::test::CommandRun run = rastercheck::test::runCli("view " + problem + " --path /nonexistent/path.csv");
+    EXPECT_EQ(run.status, 1) << run.output;
+    EXPECT_NE(run.output.find("/nonexistent/path.csv"), std::string::npos) << run.output;
+    run = rastercheck::test::runCli("view " + problem + " --port 70000");
+    EXPECT_NE(run.status, 0) << run.output;
+    EXPECT_NE(run.output.find("--port"), std::string::npos) << run.output;
+    run = rastercheck::test::runCli("view " + problem + " --path a.csv --request b.yaml");
+    EXPECT_NE(run.status, 0) << run.output;
+    EXPECT_NE(run.output.find("excludes"), std::string::npos) << run.output;
+}
