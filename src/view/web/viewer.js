@@ -1,6 +1,6 @@
 // rastercheck view: the page. Draws the robot and the scene with three.js, puts every coordinate on
 // a slider, asks the server (POST api/check) whether the current state collides and shows every
-// contact: colliding components in red, the triangles they hit in red on top of everything.
+// contact: colliding components in red, the triangles they hit in red on their objects.
 // At most one check is in flight: while one runs, moves only remember the latest state, which is
 // checked when the answer comes back, so a dragged slider never queues up stale requests.
 import * as THREE from '/vendor/three/build/three.module.js';
@@ -36,7 +36,9 @@ const camera = new THREE.PerspectiveCamera(40, 1, 0.01, 1e5);
 camera.up.set(0, 0, 1);  // robotics frames: z up
 const controls = new OrbitControls(camera, renderer.domElement);
 controls.screenSpacePanning = true;
-scene.add(new THREE.HemisphereLight(0xffffff, 0x8d8d8d, 0.75));
+const sky = new THREE.HemisphereLight(0xffffff, 0x8d8d8d, 0.75);
+sky.position.set(0, 0, 1);  // the sky above, along z
+scene.add(sky);
 const sun = new THREE.DirectionalLight(0xffffff, 0.55);
 sun.position.set(0.4, -0.6, 1.0);
 scene.add(sun);
@@ -350,8 +352,13 @@ function showAnswer(asked, answer, roundTrip) {
   status.dataset.state = answer.valid ? 'valid' : (outOfBounds ? 'out_of_bounds' : 'colliding');
   status.dataset.q = JSON.stringify(asked);
   status.dataset.contacts = String(answer.contacts.length);
-  status.textContent = answer.valid ? 'Collision-free'
-    : (outOfBounds ? 'Out of bounds' : `Collision: ${answer.contacts.length} contact${answer.contacts.length === 1 ? '' : 's'}`);
+  const count = answer.contacts.length;
+  if (answer.valid) status.textContent = 'Collision-free';
+  else if (outOfBounds) status.textContent = 'Out of bounds';
+  // Conservative mode calls a pair its proofs cannot separate a collision; the exact phase may
+  // still find the solids apart.
+  else if (!count) status.textContent = `Invalid in ${model.mode} mode, no exact contact`;
+  else status.textContent = `Collision: ${count} contact${count === 1 ? '' : 's'}`;
   $('timing').textContent = `check ${answer.milliseconds.toFixed(2)} ms on the server, ${roundTrip.toFixed(0)} ms round trip`;
 
   const list = $('contacts');
