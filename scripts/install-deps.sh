@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Installs every build and test dependency of rastercheck from Debian 12 packages.
+# Installs every build and test dependency of rastercheck from Debian 12 packages, and the browser
+# test's npm packages (package-lock.json: puppeteer-core) into ./node_modules.
 # Idempotent and non-interactive; runs as root or through sudo. CUDA is optional and not installed here.
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 packages=(
     build-essential cmake ninja-build pkg-config git ca-certificates
@@ -14,7 +16,28 @@ packages=(
     # scripts/sanitize.sh: ThreadSanitizer with clang, its runtime, LLVM's OpenMP (with the Archer
     # tool) and llvm-symbolizer for the reports (GCC's own sanitizers come with build-essential)
     clang libclang-rt-dev libomp-dev llvm
+    # rastercheck view: its HTTP server and JSON, three.js for the page (served by the viewer: no
+    # CDN), and the browser its test drives headless
+    libcpp-httplib-dev nlohmann-json3-dev libjs-three chromium
 )
+# Node.js and npm for the browser test: Debian's, unless a node with npm is already installed (a
+# NodeSource nodejs, which carries its own npm, conflicts with Debian's npm package).
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+    packages+=(nodejs npm)
+fi
+
+# puppeteer-core at the version package-lock.json pins; the copy of the lock file beside it says
+# the installed tree is current.
+install_npm_packages() {
+    local stamp=node_modules/.rastercheck-package-lock.json
+    if cmp -s package-lock.json "$stamp"; then
+        echo "install-deps: npm packages current"
+        return
+    fi
+    echo "install-deps: npm ci (puppeteer-core for the browser test)"
+    npm ci --no-audit --no-fund --loglevel=error
+    cp package-lock.json "$stamp"
+}
 
 missing=()
 for p in "${packages[@]}"; do
@@ -22,6 +45,7 @@ for p in "${packages[@]}"; do
 done
 if ((${#missing[@]} == 0)); then
     echo "install-deps: all ${#packages[@]} packages present"
+    install_npm_packages
     exit 0
 fi
 
@@ -34,3 +58,4 @@ echo "install-deps: installing ${missing[*]}"
 $sudo env DEBIAN_FRONTEND=noninteractive apt-get update -qq
 $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 echo "install-deps: done"
+install_npm_packages

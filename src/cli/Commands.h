@@ -41,4 +41,7 @@ void addPlanCommand(CLI::App &app);
 /** \brief `rastercheck render PROBLEM (--states IN.csv | --request R.yaml) --out-dir DIR`: top and side
     views of the scene and the path, and the raster image of the first colliding state. */
 void addRenderCommand(CLI::App &app);
+/** \brief `rastercheck view PROBLEM [--path STATES.csv | --request R.yaml] [--port N] [--host H]`: a
+    local HTTP server with a live 3D viewer of the problem (src/view). */
+void addViewCommand(CLI::App &app);
 }  // namespace rastercheck::cli

@@ -15,6 +15,7 @@ int main(int argc, char **argv)
     rastercheck::cli::addCheckCommand(app);
     rastercheck::cli::addPlanCommand(app);
     rastercheck::cli::addRenderCommand(app);
+    rastercheck::cli::addViewCommand(app);
     try
     {
         app.parse(argc, argv);

@@ -38,6 +38,21 @@ void Canvas::writePng(const std::string &path) const
         throw InputError(path, "", std::string("cannot write the PNG: ") + cairo_status_to_string(status));
 }
 
+std::string Canvas::pngBytes() const
+{
+    cairo_surface_flush(surface_);
+    std::string bytes;
+    const cairo_write_func_t append = [](void *closure, const unsigned char *data, unsigned int length)
+    {
+        static_cast<std::string *>(closure)->append(reinterpret_cast<const char *>(data), length);
+        return CAIRO_STATUS_SUCCESS;
+    };
+    const cairo_status_t status = cairo_surface_write_to_png_stream(surface_, append, &bytes);
+    if (status != CAIRO_STATUS_SUCCESS)
+        throw ConfigurationError(std::string("cannot encode the PNG: ") + cairo_status_to_string(status));
+    return bytes;
+}
+
 void setColour(cairo_t *cr, const Colour &colour, double alpha)
 {
     cairo_set_source_rgba(cr, colour.r, colour.g, colour.b, alpha);

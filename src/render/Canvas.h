@@ -32,6 +32,8 @@ public:
 
     /** \brief Writes the image as PNG; throws InputError naming \a path when Cairo cannot. */
     void writePng(const std::string &path) const;
+    /** \brief The image as the bytes of a PNG file. */
+    std::string pngBytes() const;
 
 private:
     int width_;

@@ -48,16 +48,25 @@ RasterPictureLayout rasterPictureLayout(const device::RasterGrid &grid, const Ra
     return layout;
 }
 
-RasterPictureLayout writeRasterPicture(const std::string &pngPath, const RasterImage &image,
-                                       const RasterPictureOptions &options)
+namespace
+{
+/** \brief The layout of \a image's picture; throws ConfigurationError when its arrays do not match
+    its grid. */
+RasterPictureLayout checkedLayout(const RasterImage &image, const RasterPictureOptions &options)
 {
     const device::RasterGrid &grid = image.grid;
     const std::size_t pixels = static_cast<std::size_t>(std::max(0, grid.width)) * std::max(0, grid.height);
     if (pixels == 0 || image.coverage.size() != pixels || image.hits.size() != pixels || !(grid.pixel > 0))
         throw ConfigurationError("raster picture: the image's coverage and hits do not match its " +
                                  std::to_string(grid.width) + " x " + std::to_string(grid.height) + " grid");
-    const RasterPictureLayout layout = rasterPictureLayout(grid, options);
-    detail::Canvas canvas(layout.width, layout.height);
+    return rasterPictureLayout(grid, options);
+}
+
+/** \brief Paints the picture of \a image onto \a canvas, made layout.width x layout.height. */
+void paintRasterPicture(detail::Canvas &canvas, const RasterImage &image, const RasterPictureLayout &layout,
+                        const RasterPictureOptions &options)
+{
+    const device::RasterGrid &grid = image.grid;
     cairo_t *cr = canvas.context();
     const int cell = layout.cell;
     const double gridW = grid.width * cell, gridH = grid.height * cell;
@@ -164,8 +173,24 @@ RasterPictureLayout writeRasterPicture(const std::string &pngPath, const RasterI
     detail::drawText(cr,
                      "Coverage of the candidate triangles after culling (Cai et al., Alg. 1); hit pixels as in Fig. 6.",
                      kLeftMargin, y + 22, 11);
+}
+}  // namespace
 
+RasterPictureLayout writeRasterPicture(const std::string &pngPath, const RasterImage &image,
+                                       const RasterPictureOptions &options)
+{
+    const RasterPictureLayout layout = checkedLayout(image, options);
+    detail::Canvas canvas(layout.width, layout.height);
+    paintRasterPicture(canvas, image, layout, options);
     canvas.writePng(pngPath);
     return layout;
+}
+
+std::string rasterPicturePng(const RasterImage &image, const RasterPictureOptions &options)
+{
+    const RasterPictureLayout layout = checkedLayout(image, options);
+    detail::Canvas canvas(layout.width, layout.height);
+    paintRasterPicture(canvas, image, layout, options);
+    return canvas.pngBytes();
 }
 }  // namespace rastercheck::render

@@ -50,4 +50,7 @@ RasterPictureLayout rasterPictureLayout(const device::RasterGrid &grid, const Ra
     cannot be written. */
 RasterPictureLayout writeRasterPicture(const std::string &pngPath, const RasterImage &image,
                                        const RasterPictureOptions &options = {});
+
+/** \brief The same picture as writeRasterPicture(), as the bytes of a PNG file (for a server). */
+std::string rasterPicturePng(const RasterImage &image, const RasterPictureOptions &options = {});
 }  // namespace rastercheck::render

@@ -153,6 +153,42 @@ bool Checker::isValid(const std::vector<double> &q, const CollisionRequest &requ
     return isValid(q.data(), request, contact);
 }
 
+std::vector<Contact> Checker::contacts(const double *q, const CollisionRequest &request) const
+{
+    validateRequest(request);
+    warnOnceIfNotFinite(q, 1);
+    const CollisionModel &model = *model_;
+    if (!model.configurationAdmissible(q))
+    {
+        Contact outOfBounds;
+        outOfBounds.kind = Contact::Kind::OutOfBounds;
+        return {outOfBounds};
+    }
+    std::unique_ptr<CpuWorkspace> workspace = reference_.borrow();
+    reference_.refitState(q, *workspace);
+    CollisionRequest exact = request;
+    exact.mode = CollisionMode::Exact;
+    const PairPadding *extra = request.pairPadding.get();
+    const std::size_t environmentPairs = model.numObjects() * model.numComponents();
+    std::vector<Contact> found;
+    for (std::uint32_t pair = 0; pair < model.numPairs(); ++pair)
+    {
+        const bool environment = pair < environmentPairs;
+        if (environment ? !request.checkEnvironment : !request.checkSelfCollision)
+            continue;
+        Contact contact;
+        model.nameParties(pair, contact);
+        if (extra)
+            exact.padding =
+                request.padding + (environment ? extra->environment[static_cast<std::size_t>(contact.component)]
+                                               : extra->self[pair - environmentPairs]);
+        if (reference_.decideOpenPair(pair, exact, *workspace, contact))
+            found.push_back(contact);
+    }
+    reference_.giveBack(std::move(workspace));
+    return found;
+}
+
 bool Checker::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
                           RasterImage &image) const
 {

@@ -1,0 +1,542 @@
+#include "view/ViewServer.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <mutex>
+#include <sstream>
+#include <utility>
+
+#include <nlohmann/json.hpp>
+
+#include "rastercheck/collision/Checker.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/model/Kinematics.h"
+#include "render/RasterPicture.h"
+// After Eigen: httplib.h brings in <resolv.h>, whose `_res` macro breaks Eigen's headers.
+#include <httplib.h>
+
+namespace rastercheck::view
+{
+using nlohmann::json;
+
+namespace
+{
+namespace fs = std::filesystem;
+
+/** \brief A request the server cannot answer as asked (malformed, too large, or asking for what
+    does not exist): answered with \a status and {"error": message}. */
+struct RequestError
+{
+    int status;
+    std::string message;
+};
+
+void sendJson(httplib::Response &response, const json &body, int status = 200)
+{
+    response.status = status;
+    response.set_header("Cache-Control", "no-store");
+    // Invalid UTF-8 in a name from a file is replaced rather than thrown on.
+    response.set_content(body.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
+}
+
+void sendError(httplib::Response &response, int status, const std::string &message)
+{
+    sendJson(response, json{{"error", message}}, status);
+}
+
+std::string coordinateList(const RobotModel &robot)
+{
+    std::string names;
+    for (const std::string &name : robot.coordinateNames)
+        names += (names.empty() ? "" : ", ") + name;
+    return names;
+}
+
+/** \brief A configuration from a JSON array: dof finite numbers, else RequestError. */
+std::vector<double> configurationFromJson(const json &value, const RobotModel &robot, const std::string &what)
+{
+    if (!value.is_array())
+        throw RequestError{400, what + " must be an array of " + std::to_string(robot.numCoordinates()) + " numbers"};
+    if (value.size() != robot.numCoordinates())
+        throw RequestError{400, what + " has " + std::to_string(value.size()) + " values; robot '" + robot.name +
+                                    "' has " + std::to_string(robot.numCoordinates()) + " coordinates (" +
+                                    coordinateList(robot) + ")"};
+    std::vector<double> q(value.size());
+    for (std::size_t i = 0; i < q.size(); ++i)
+    {
+        if (!value[i].is_number())
+            throw RequestError{
+                400, what + "[" + std::to_string(i) + "] ('" + robot.coordinateNames[i] + "') is not a number"};
+        q[i] = value[i].get<double>();
+        // JSON has neither NaN nor infinity, but a query string ("q=nan,...") has both.
+        if (!std::isfinite(q[i]))
+            throw RequestError{400,
+                               what + "[" + std::to_string(i) + "] ('" + robot.coordinateNames[i] + "') is not finite"};
+    }
+    return q;
+}
+
+/** \brief A configuration from "v1,v2,..." (a query parameter), else RequestError. */
+std::vector<double> configurationFromText(const std::string &text, const RobotModel &robot)
+{
+    json values = json::array();
+    std::size_t begin = 0;
+    while (begin <= text.size())
+    {
+        const std::size_t end = std::min(text.find(',', begin), text.size());
+        const std::string item = text.substr(begin, end - begin);
+        char *stop = nullptr;
+        const double value = std::strtod(item.c_str(), &stop);
+        if (item.empty() || *stop != '\0')
+            throw RequestError{400, "q: '" + item + "' is not a number (expected q=v1,v2,...)"};
+        values.push_back(value);
+        begin = end + 1;
+    }
+    return configurationFromJson(values, robot, "q");
+}
+
+json vectorJson(const Eigen::Vector3d &v)
+{
+    return json::array({v.x(), v.y(), v.z()});
+}
+
+/** \brief Flat arrays of a mesh for the page: vertices as float (what WebGL draws; 7 digits
+    instead of 17 keep the model a third of the size), triangles as vertex indices. */
+json meshJson(const Mesh &mesh)
+{
+    std::vector<float> vertices;
+    vertices.reserve(mesh.numVertices() * 3);
+    for (const Eigen::Vector3d &v : mesh.vertices)
+        for (int k = 0; k < 3; ++k)
+            vertices.push_back(static_cast<float>(v[k]));
+    std::vector<std::uint32_t> triangles;
+    triangles.reserve(mesh.numTriangles() * 3);
+    for (const Mesh::Triangle &t : mesh.triangles)
+        triangles.insert(triangles.end(), t.begin(), t.end());
+    return json{{"vertices", vertices}, {"triangles", triangles}};
+}
+
+/** \brief The unit of each coordinate ("m", "rad", or "" for quaternion parts), from its joint. */
+std::vector<std::string> coordinateUnits(const RobotModel &robot)
+{
+    std::vector<std::string> units(robot.numCoordinates());
+    for (const Joint &joint : robot.joints)
+        for (std::size_t k = 0; joint.firstCoordinate >= 0 && k < joint.coordinateNames.size(); ++k)
+        {
+            std::string unit = "m";
+            if (joint.kind == JointKind::Revolute || (joint.kind == JointKind::Planar && k == 2))
+                unit = "rad";
+            else if (joint.kind == JointKind::Floating && k >= 3)
+                unit = "";
+            units[static_cast<std::size_t>(joint.firstCoordinate) + k] = unit;
+        }
+    return units;
+}
+
+json rowsJson(const std::vector<double> &values, std::size_t dof)
+{
+    json rows = json::array();
+    for (std::size_t r = 0; dof > 0 && r + dof <= values.size(); r += dof)
+        rows.push_back(std::vector<double>(values.begin() + static_cast<std::ptrdiff_t>(r),
+                                           values.begin() + static_cast<std::ptrdiff_t>(r + dof)));
+    return rows;
+}
+
+std::string contactKind(Contact::Kind kind)
+{
+    switch (kind)
+    {
+        case Contact::Kind::None:
+            return "none";
+        case Contact::Kind::OutOfBounds:
+            return "out_of_bounds";
+        case Contact::Kind::Environment:
+            return "environment";
+        case Contact::Kind::SelfCollision:
+            return "self";
+    }
+    return "none";
+}
+
+double millisecondsSince(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+/** \brief The first path among \a candidates that holds \a marker, else ConfigurationError naming
+    them all and \a hint. */
+std::string firstHolding(const std::vector<fs::path> &candidates, const std::string &marker, const std::string &what,
+                         const std::string &hint)
+{
+    std::string tried;
+    for (const fs::path &candidate : candidates)
+    {
+        if (candidate.empty())
+            continue;
+        std::error_code error;
+        if (fs::is_regular_file(candidate / marker, error))
+            return fs::absolute(candidate).lexically_normal().string();
+        tried += "\n  " + (candidate / marker).string();
+    }
+    throw ConfigurationError(what + " not found; tried:" + tried + "\n" + hint);
+}
+
+fs::path environmentPath(const char *variable)
+{
+    const char *value = std::getenv(variable);
+    return value && *value ? fs::path(value) : fs::path();
+}
+}  // namespace
+
+std::string findWebDir(const std::string &executable)
+{
+    const fs::path chosen = environmentPath("RASTERCHECK_WEB_DIR");
+    std::error_code error;
+    fs::path installed;
+    const fs::path binary = fs::canonical(executable, error);
+    if (!error)
+        installed = binary.parent_path() / RASTERCHECK_VIEW_WEB_FROM_BINDIR;
+    return firstHolding(chosen.empty() ? std::vector<fs::path>{installed, RASTERCHECK_VIEW_SOURCE_WEB_DIR}
+                                       : std::vector<fs::path>{chosen},
+                        "index.html", "the viewer's page (index.html)",
+                        "set RASTERCHECK_WEB_DIR to the folder that holds it (src/view/web in the source tree)");
+}
+
+std::string findThreeDir()
+{
+    const fs::path chosen = environmentPath("RASTERCHECK_THREE_DIR");
+    return firstHolding(
+        chosen.empty() ? std::vector<fs::path>{RASTERCHECK_VIEW_THREE_DIR} : std::vector<fs::path>{chosen},
+        "build/three.module.js", "three.js",
+        "install Debian's libjs-three (scripts/install-deps.sh) or set RASTERCHECK_THREE_DIR to "
+        "the folder that holds build/three.module.js");
+}
+
+struct ViewServer::Impl
+{
+    Impl(Problem problemIn, ViewContent contentIn, ViewServerOptions optionsIn)
+        : problem(std::move(problemIn)),
+          content(std::move(contentIn)),
+          options(std::move(optionsIn)),
+          checker(problem.robot, problem.scene)
+    {
+        const std::size_t dof = robot().numCoordinates();
+        const auto checkSize = [&](const std::vector<double> &values, const std::string &what)
+        {
+            if (!values.empty() && values.size() != dof)
+                throw ConfigurationError("viewer: the " + what + " has " + std::to_string(values.size()) +
+                                         " values; robot '" + robot().name + "' has " + std::to_string(dof) +
+                                         " coordinates");
+        };
+        checkSize(content.start, "start");
+        checkSize(content.goal, "goal");
+        if (dof > 0 ? content.path.size() % dof != 0 : !content.path.empty())
+            throw ConfigurationError("viewer: the path's " + std::to_string(content.path.size()) +
+                                     " values are not rows of the robot's " + std::to_string(dof) + " coordinates");
+        validate(options.request);
+        modelJson = makeModelJson().dump(-1, ' ', false, json::error_handler_t::replace);
+        addRoutes();
+    }
+
+    const RobotModel &robot() const { return *problem.robot; }
+    const Scene &scene() const { return *problem.scene; }
+
+    json makeModelJson() const
+    {
+        json components = json::array();
+        for (const Component &component : robot().components)
+        {
+            json entry = meshJson(component.mesh);
+            entry["name"] = component.name;
+            entry["link"] = robot().links[static_cast<std::size_t>(component.link)].name;
+            entry["closed"] = component.topology.closed;
+            components.push_back(std::move(entry));
+        }
+        json objects = json::array();
+        for (const SceneObject &object : scene().objects)
+        {
+            json entry = meshJson(object.mesh);
+            entry["name"] = object.name;
+            entry["closed"] = object.topology.closed;
+            objects.push_back(std::move(entry));
+        }
+        json coordinates = json::array();
+        const std::vector<std::string> units = coordinateUnits(robot());
+        for (std::size_t i = 0; i < robot().numCoordinates(); ++i)
+            coordinates.push_back({{"name", robot().coordinateNames[i]},
+                                   {"lower", robot().lowerBounds[i]},
+                                   {"upper", robot().upperBounds[i]},
+                                   {"unit", units[i]}});
+        const std::size_t dof = robot().numCoordinates();
+        return json{{"title", content.title},
+                    {"robot", robot().name},
+                    {"backend", checker.backendName()},
+                    {"mode", toString(options.request.mode)},
+                    {"padding", options.request.padding},
+                    {"coordinates", std::move(coordinates)},
+                    {"neutral", robot().neutralConfiguration()},
+                    {"start", content.start.empty() ? json(nullptr) : json(content.start)},
+                    {"goal", content.goal.empty() ? json(nullptr) : json(content.goal)},
+                    {"path", rowsJson(content.path, dof)},
+                    {"components", std::move(components)},
+                    {"objects", std::move(objects)}};
+    }
+
+    json contactJson(const Contact &contact) const
+    {
+        json entry{{"kind", contactKind(contact.kind)}, {"description", checker.describe(contact)}};
+        if (contact.kind != Contact::Kind::Environment && contact.kind != Contact::Kind::SelfCollision)
+            return entry;
+        entry["component"] = robot().components[static_cast<std::size_t>(contact.component)].name;
+        entry["object"] = contact.kind == Contact::Kind::Environment
+                              ? scene().objects[static_cast<std::size_t>(contact.object)].name
+                              : robot().components[static_cast<std::size_t>(contact.otherComponent)].name;
+        entry["triangle"] = contact.triangle;
+        entry["point"] = vectorJson(contact.position);
+        return entry;
+    }
+
+    /** \brief Pose of every component (world frame) at \a q: position and quaternion x y z w. */
+    json componentPoses(const std::vector<double> &q) const
+    {
+        RobotData data(robot());
+        forwardKinematics(robot(), data, q);
+        json poses = json::array();
+        for (const Component &component : robot().components)
+        {
+            const Eigen::Isometry3d &pose = data.oMl[static_cast<std::size_t>(component.link)];
+            const Eigen::Quaterniond rotation(pose.rotation());
+            poses.push_back({{"position", vectorJson(pose.translation())},
+                             {"quaternion", json::array({rotation.x(), rotation.y(), rotation.z(), rotation.w()})}});
+        }
+        return poses;
+    }
+
+    json checkOne(const std::vector<double> &q) const
+    {
+        const auto start = std::chrono::steady_clock::now();
+        // The checker's verdict first (culls and proofs: fast for a free state); every contact only
+        // for a state that collides.
+        const bool valid = checker.isValid(q, options.request);
+        std::vector<Contact> contacts;
+        if (!valid)
+            contacts = checker.contacts(q.data(), options.request);
+        const double milliseconds = millisecondsSince(start);
+        json contactList = json::array();
+        for (const Contact &contact : contacts)
+            contactList.push_back(contactJson(contact));
+        return json{{"valid", valid},
+                    {"contacts", std::move(contactList)},
+                    {"links", componentPoses(q)},
+                    {"milliseconds", milliseconds}};
+    }
+
+    json checkBatch(const json &states) const
+    {
+        if (!states.is_array())
+            throw RequestError{400, "states must be an array of configurations"};
+        if (states.size() > options.maxBatchStates)
+            throw RequestError{413, "states has " + std::to_string(states.size()) + " configurations; at most " +
+                                        std::to_string(options.maxBatchStates) + " per request"};
+        const std::size_t dof = robot().numCoordinates(), n = states.size();
+        std::vector<double> q;
+        q.reserve(n * dof);
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            const std::vector<double> row =
+                configurationFromJson(states[i], robot(), "states[" + std::to_string(i) + "]");
+            q.insert(q.end(), row.begin(), row.end());
+        }
+        const auto start = std::chrono::steady_clock::now();
+        std::vector<std::uint8_t> valid(n);
+        std::vector<Contact> contacts(n);
+        checker.check(q.data(), n, valid.data(), options.request, contacts.data());
+        const double milliseconds = millisecondsSince(start);
+        json verdicts = json::array(), firstContacts = json::array();
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            verdicts.push_back(valid[i] != 0);
+            firstContacts.push_back(valid[i] ? json(nullptr) : contactJson(contacts[i]));
+        }
+        return json{
+            {"valid", std::move(verdicts)}, {"contacts", std::move(firstContacts)}, {"milliseconds", milliseconds}};
+    }
+
+    void handleCheck(const httplib::Request &request, httplib::Response &response) const
+    {
+        json body;
+        try
+        {
+            body = json::parse(request.body);
+        }
+        catch (const json::exception &e)  // a syntax error, or a number too large for a double
+        {
+            throw RequestError{400, std::string("malformed JSON: ") + e.what()};
+        }
+        if (!body.is_object() || body.contains("q") == body.contains("states"))
+            throw RequestError{400,
+                               "expected an object with either \"q\": [one configuration] or \"states\": "
+                               "[[configuration], ...]"};
+        sendJson(response, body.contains("q") ? checkOne(configurationFromJson(body["q"], robot(), "q"))
+                                              : checkBatch(body["states"]));
+    }
+
+    void handleRaster(const httplib::Request &request, httplib::Response &response) const
+    {
+        if (!request.has_param("q"))
+            throw RequestError{400, "expected ?q=v1,v2,... (" + coordinateList(robot()) + ")"};
+        const std::vector<double> q = configurationFromText(request.get_param_value("q"), robot());
+        Contact contact;
+        if (checker.isValid(q, options.request, &contact))
+            throw RequestError{404, "the state is collision-free: no colliding pair to draw"};
+        RasterImage image;
+        if (contact.kind == Contact::Kind::OutOfBounds ||
+            !checker.rasterImage(q.data(), contact, options.request, image))
+            throw RequestError{
+                404, "the state is invalid (" + checker.describe(contact) + ") but names no pair of solids to draw"};
+        render::RasterPictureOptions picture;
+        picture.subtitle = checker.describe(contact);
+        picture.componentLabel = robot().components[static_cast<std::size_t>(contact.component)].name;
+        picture.objectLabel = contact.kind == Contact::Kind::Environment
+                                  ? scene().objects[static_cast<std::size_t>(contact.object)].name
+                                  : robot().components[static_cast<std::size_t>(contact.otherComponent)].name;
+        std::string png;
+        {
+            // Cairo's surfaces are independent, but its text goes through fontconfig and FreeType,
+            // whose caches older releases do not guard: one picture at a time.
+            std::lock_guard<std::mutex> lock(cairoMutex);
+            png = render::rasterPicturePng(image, picture);
+        }
+        response.set_header("Cache-Control", "no-store");
+        response.set_content(png, "image/png");
+    }
+
+    /** \brief Runs \a handler, answering a RequestError with its status and any other exception with
+        500, both as {"error": message}: no request stops the server. */
+    httplib::Server::Handler guarded(void (Impl::*handler)(const httplib::Request &, httplib::Response &) const) const
+    {
+        return [this, handler](const httplib::Request &request, httplib::Response &response)
+        {
+            try
+            {
+                (this->*handler)(request, response);
+            }
+            catch (const RequestError &bad)
+            {
+                sendError(response, bad.status, bad.message);
+            }
+            catch (const std::exception &e)
+            {
+                sendError(response, 500, std::string("internal error: ") + e.what());
+            }
+        };
+    }
+
+    void addRoutes()
+    {
+        // httplib's default sets SO_REUSEPORT, with which a second server binds a port in use and
+        // silently takes part of its connections. SO_REUSEADDR alone still lets a stopped viewer
+        // be restarted on its port at once.
+        server.set_socket_options(
+            [](socket_t socket)
+            {
+                const int yes = 1;
+                setsockopt(socket, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+            });
+        // An answer goes out in two writes (head, body); with Nagle's algorithm the second waits for
+        // the client's delayed ACK, and every check took 40 ms more in Chromium.
+        server.set_tcp_nodelay(true);
+        server.set_payload_max_length(options.maxBodyBytes);
+        // Module scripts load only with a JavaScript type.
+        server.set_file_extension_and_mimetype_mapping("js", "text/javascript");
+        server.set_mount_point("/vendor/three", options.threeDir);
+        server.set_mount_point("/", options.webDir);
+        server.Get("/api/model",
+                   [this](const httplib::Request &, httplib::Response &response)
+                   {
+                       response.set_header("Cache-Control", "no-store");
+                       response.set_content(modelJson, "application/json");
+                   });
+        server.Post("/api/check", guarded(&Impl::handleCheck));
+        server.Get("/api/raster", guarded(&Impl::handleRaster));
+        // Every other failure (no such route or file, a body over the limit, a request httplib
+        // cannot parse) gets a message too; answers the handlers wrote are left as they are.
+        const std::size_t maxBody = options.maxBodyBytes;
+        server.set_error_handler(
+            [maxBody](const httplib::Request &request, httplib::Response &response)
+            {
+                if (!response.body.empty())
+                    return;
+                std::string message;
+                if (response.status == 404)
+                    message = "no route " + request.method + " " + request.path +
+                              " (routes: GET /api/model, POST /api/check, GET /api/raster?q=..., and the page)";
+                else if (response.status == 413)
+                    message = "request body over the limit of " + std::to_string(maxBody) + " bytes";
+                else
+                    message = "request refused (HTTP " + std::to_string(response.status) + ")";
+                sendError(response, response.status, message);
+            });
+    }
+
+    Problem problem;
+    ViewContent content;
+    ViewServerOptions options;
+    Checker checker;
+    std::string modelJson;
+    httplib::Server server;
+    mutable std::mutex cairoMutex;
+    int port = -1;
+};
+
+ViewServer::ViewServer(Problem problem, ViewContent content, ViewServerOptions options)
+    : impl_(std::make_unique<Impl>(std::move(problem), std::move(content), std::move(options)))
+{
+}
+
+ViewServer::~ViewServer()
+{
+    stop();
+}
+
+int ViewServer::bind()
+{
+    const ViewServerOptions &options = impl_->options;
+    if (options.port < 0 || options.port > 65535)
+        throw ConfigurationError("viewer: port " + std::to_string(options.port) + " is not in 0..65535");
+    if (options.port == 0)
+        impl_->port = impl_->server.bind_to_any_port(options.host);
+    else if (impl_->server.bind_to_port(options.host, options.port))
+        impl_->port = options.port;
+    if (impl_->port <= 0)
+        throw ConfigurationError("viewer: cannot listen on " + options.host + ":" + std::to_string(options.port) +
+                                 " (address not available, or the port is in use: try --port 0)");
+    return impl_->port;
+}
+
+bool ViewServer::serve()
+{
+    return impl_->server.listen_after_bind();
+}
+
+void ViewServer::stop()
+{
+    impl_->server.stop();
+}
+
+std::string ViewServer::url() const
+{
+    const std::string &host = impl_->options.host;
+    // An IPv6 literal goes in brackets in a URL.
+    const std::string shown = host.find(':') != std::string::npos ? "[" + host + "]" : host;
+    return "http://" + shown + ":" + std::to_string(impl_->port) + "/";
+}
+
+std::string ViewServer::backendName() const
+{
+    return impl_->checker.backendName();
+}
+}  // namespace rastercheck::view
