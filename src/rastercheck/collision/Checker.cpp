@@ -155,7 +155,7 @@ bool Checker::isValid(const std::vector<double> &q, const CollisionRequest &requ
 
 std::vector<Contact> Checker::contacts(const double *q, const CollisionRequest &request) const
 {
-    validateRequest(request);
+    validateRequest(request, 1);
     warnOnceIfNotFinite(q, 1);
     const CollisionModel &model = *model_;
     if (!model.configurationAdmissible(q))
