@@ -19,6 +19,7 @@
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/geometry/TriangleTests.h"
+#include "NonConvex.h"
 
 namespace rc = rastercheck;
 using Vec = Eigen::Vector3d;
@@ -511,6 +512,86 @@ TEST(PointInsideClosedMesh, SphereMatchesWindingNumber)
         inside += winding > 0.5;
     }
     EXPECT_GT(inside, 500);
+}
+
+TEST(PointInsideClosedMesh, InsideGridAgreesWithRays)
+{
+    // The grid answers only where no triangle comes near its cell, so every point, near the
+    // surface or not, must get the ray's answer; and far from the surface it must answer most.
+    const std::vector<std::pair<const char *, rc::Mesh>> meshes = {
+        {"box", boxMesh(Vec(1.0, 0.5, 0.25), 3)},
+        {"sphere", sphereMesh(1.0, 3)},
+        {"room with doorway", rc::test::roomWithDoorway()},
+        {"U", rc::test::uShape()},
+        {"maze of overlapping boxes", rc::test::mazeOnSlab()},
+        {"bookshelf", rc::test::bookshelf()}};
+    std::mt19937_64 rng(21);
+    for (const auto &[name, mesh] : meshes)
+    {
+        const rc::MeshBvh rays(mesh), grid(mesh, 1, true);
+        ASSERT_FALSE(rays.hasInsideGrid());
+        ASSERT_TRUE(grid.hasInsideGrid());
+        Vec lower = mesh.vertices[0], upper = lower;
+        for (const Vec &v : mesh.vertices)
+        {
+            lower = lower.cwiseMin(v);
+            upper = upper.cwiseMax(v);
+        }
+        const Vec pad = 0.2 * (upper - lower);
+        std::uniform_real_distribution<double> unit(0.0, 1.0);
+        int known = 0, inside = 0;
+        const int trials = 20000;
+        for (int trial = 0; trial < trials; ++trial)
+        {
+            Vec p;
+            if (trial % 4 == 0)  // near a vertex: within 1e-7 .. 1e-2 of the surface
+                p = mesh.vertices[trial % mesh.numVertices()] +
+                    std::pow(10.0, -7.0 + 5.0 * unit(rng)) * Vec(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+            else
+                p = lower - pad + (upper - lower + 2 * pad).cwiseProduct(Vec(unit(rng), unit(rng), unit(rng)));
+            const bool expected = rc::pointInsideClosedMesh(rays, p);
+            ASSERT_EQ(rc::pointInsideClosedMesh(grid, p), expected) << name << ": " << p.transpose();
+            const int answer = grid.insideGridAnswer(p);
+            if (answer != 0)
+            {
+                ASSERT_EQ(answer == 2, expected) << name << ": " << p.transpose();
+            }
+            known += answer != 0 && trial % 4 != 0;
+            inside += expected;
+        }
+        EXPECT_GT(inside, trials / 50) << name;
+        EXPECT_GT(known, trials * 3 / 4 * 8 / 10)
+            << name << ": the grid should answer most points away from the surface";
+        EXPECT_LT(grid.bytes() - rays.bytes(), (std::size_t(1) << 21) + 1) << name;
+    }
+}
+
+TEST(SolidsOverlap, ContainmentByGridAndProbesMatchesRays)
+{
+    // A U and a bar at random poses: solidsOverlap with inside grids (the probes' first known
+    // answer) and without (one ray per shell) must agree on every pose, inside the notch, in the
+    // arms, and crossing.
+    const rc::Mesh u = rc::test::uShape(), bar = rc::test::lBar(0.3);
+    const rc::MeshBvh uRays(u), barRays(bar), uGrid(u, 1, true), barGrid(bar, 1, true);
+    std::mt19937_64 rng(22);
+    std::uniform_real_distribution<double> x(-0.3, 2.3), y(-0.3, 2.3), z(-0.3, 1.3), angle(-M_PI, M_PI);
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    int contained = 0, crossing = 0;
+    for (int trial = 0; trial < 4000; ++trial)
+    {
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.translation() = Vec(x(rng), y(rng), z(rng));
+        pose.linear() =
+            Eigen::AngleAxisd(angle(rng), Vec(x(rng), y(rng), z(rng) + 0.5).normalized()).toRotationMatrix();
+        const bool expected = rc::solidsOverlap(barRays, pose, true, uRays, identity, true, 0.0);
+        ASSERT_EQ(rc::solidsOverlap(barGrid, pose, true, uGrid, identity, true, 0.0), expected) << trial;
+        ASSERT_EQ(rc::solidsOverlap(uGrid, identity, true, barGrid, pose, true, 0.0), expected) << trial;
+        const bool surfaces = rc::surfacesWithin(barRays, pose, uRays, identity, 0.0);
+        contained += expected && !surfaces;
+        crossing += surfaces;
+    }
+    EXPECT_GT(contained, 100);
+    EXPECT_GT(crossing, 100);
 }
 
 TEST(SolidsOverlap, ContainmentNeedsAClosedContainer)
