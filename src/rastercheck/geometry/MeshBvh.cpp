@@ -29,34 +29,54 @@ struct NodePair
     std::int32_t a, b;
 };
 
-// Separating-axis test of box A (centre 0, axes the frame's, half extents ea) against box B (centre
-// d and half extents eb, its axes the columns of R, all in A's frame): the 3 + 3 face axes and the 9
-// edge-pair axes (Gottschalk's OBB test). True when some axis shows a gap wider than reach. The
-// cross-product axes are not normalised; their length is at most 1, so comparing their projected
-// gap against the full reach only keeps more pairs, never fewer.
-bool boxesSeparated(const Vec &ea, const Vec &eb, const Eigen::Matrix3d &R, const Vec &d, double reach)
+// Separating-axis test (Gottschalk's 15 axes) of a fixed-tree node's box against a moving-tree
+// node's box placed in the fixed frame (its axes the columns of P, its centre at `between` from the
+// fixed box's centre): false when some axis shows a gap wider than reach. Lazy: the fixed box's
+// face axes first, one row of the relative rotation at a time (on FCL's env/rob, 73 % of the
+// rejections come from those three axes), and a moving box whose centre lies in the fixed box
+// meets it without further test. The cross-product axes are not normalised; their length is at
+// most 1, so comparing their projected gap against the full reach only keeps more pairs.
+bool boxesMayMeet(const MeshBvh::Node &nf, const Eigen::Matrix3d &P, const MeshBvh::Node &nm, const Vec &between,
+                  double reach)
 {
-    const Eigen::Matrix3d absR = R.cwiseAbs();
+    const float *f = nf.axes;  // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
+    const double ea[3] = {nf.halfExtents[0], nf.halfExtents[1], nf.halfExtents[2]};
+    const double eb[3] = {nm.halfExtents[0], nm.halfExtents[1], nm.halfExtents[2]};
+    double d[3];
     for (int i = 0; i < 3; ++i)
-        if (std::abs(d[i]) > ea[i] + absR.row(i).dot(eb) + reach)
-            return true;
+        d[i] = f[i] * between[0] + f[3 + i] * between[1] + f[6 + i] * between[2];
+    if (std::abs(d[0]) <= ea[0] && std::abs(d[1]) <= ea[1] && std::abs(d[2]) <= ea[2])
+        return true;
+    const double *p = P.data();  // column-major: the moving box's axis j is p[3j .. 3j + 2]
+    double R[3][3], Q[3][3];     // R(i, j) = axis i of the fixed box . axis j of the moving box; Q = |R|
+    for (int i = 0; i < 3; ++i)
+    {
+        const double a0 = f[i], a1 = f[3 + i], a2 = f[6 + i];
+        for (int j = 0; j < 3; ++j)
+        {
+            R[i][j] = a0 * p[3 * j] + a1 * p[3 * j + 1] + a2 * p[3 * j + 2];
+            Q[i][j] = std::abs(R[i][j]);
+        }
+        if (std::abs(d[i]) > ea[i] + Q[i][0] * eb[0] + Q[i][1] * eb[1] + Q[i][2] * eb[2] + reach)
+            return false;
+    }
     for (int j = 0; j < 3; ++j)
-        if (std::abs(R.col(j).dot(d)) > absR.col(j).dot(ea) + eb[j] + reach)
-            return true;
+        if (std::abs(d[0] * R[0][j] + d[1] * R[1][j] + d[2] * R[2][j]) >
+            ea[0] * Q[0][j] + ea[1] * Q[1][j] + ea[2] * Q[2][j] + eb[j] + reach)
+            return false;
     for (int i = 0; i < 3; ++i)
     {
         const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
         for (int j = 0; j < 3; ++j)
         {
             const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-            const double gap = std::abs(d[i2] * R(i1, j) - d[i1] * R(i2, j));
-            const double radii =
-                ea[i1] * absR(i2, j) + ea[i2] * absR(i1, j) + eb[j1] * absR(i, j2) + eb[j2] * absR(i, j1);
+            const double gap = std::abs(d[i2] * R[i1][j] - d[i1] * R[i2][j]);
+            const double radii = ea[i1] * Q[i2][j] + ea[i2] * Q[i1][j] + eb[j1] * Q[i][j2] + eb[j2] * Q[i][j1];
             if (gap > radii + reach)
-                return true;
+                return false;
         }
     }
-    return false;
+    return true;
 }
 
 // Slab test of the ray origin + t * direction, t >= 0, against a node's box grown by margin, in
@@ -87,6 +107,10 @@ bool rayHitsNode(const Vec &origin, const Vec &direction, const MeshBvh::Node &n
 // sit that fraction of the node's size outside its stored box. Ten times that is the slack every
 // node test adds; it only keeps more pairs.
 constexpr double kNodeRounding = 1e-6;
+
+// Levels of the tree split at the mean (the rest at the median): 24 + log2(2^31) stays below
+// MeshBvh::kMaxDepth.
+constexpr int kMeanSplitLevels = 24;
 
 float roundedUp(double x)
 {
@@ -212,7 +236,7 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
     const unsigned leafSize = std::max(1u, maxLeafTriangles);
     nodes_.reserve(2 * (n / leafSize + 1));
     nodes_.emplace_back();
-    depth_ = build(0, static_cast<std::uint32_t>(n), 0, centroids, leafSize);
+    depth_ = build(0, static_cast<std::uint32_t>(n), 0, 0, centroids, leafSize);
     if (depth_ > kMaxDepth)  // cannot happen for a median split of fewer than 2^31 triangles
         throw ConfigurationError("MeshBvh: tree depth " + std::to_string(depth_) + " exceeds the query stacks");
     // Containment probes per connected shell: its first vertex, then its extreme vertices along
@@ -369,7 +393,7 @@ int MeshBvh::insideGridAnswer(const Eigen::Vector3d &point) const
     return gridCells_[(static_cast<std::size_t>(cell[2]) * gridSize_[1] + cell[1]) * gridSize_[0] + cell[0]];
 }
 
-int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Vec> &centroids,
+int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level, std::vector<Vec> &centroids,
                    unsigned maxLeafTriangles)
 {
     // The box: principal axes of the corners' covariance, rounded to float first, then the
@@ -427,17 +451,39 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, st
     int longest = 0;
     extents.maxCoeff(&longest);
     const Vec axis = axes.col(longest);
-    const std::uint32_t middle = begin + count / 2;
-    std::nth_element(triangleOrder_.begin() + begin, triangleOrder_.begin() + middle, triangleOrder_.begin() + end,
-                     [&centroids, &axis](std::uint32_t i, std::uint32_t j)
-                     { return axis.dot(centroids[i]) < axis.dot(centroids[j]); });
+    // Split at the mean of the centroids along that axis, as FCL does: the cut falls into the
+    // mesh's gaps more often than the median's, so the children's boxes are tighter (FCL's env/rob,
+    // 20 000 uniform poses: 131 -> 95 node pairs per query; FCL's own traversal tests 103). From
+    // level kMeanSplitLevels on, or when the mean leaves one side empty, the median: it halves the
+    // triangles, which keeps the depth within kMaxDepth whatever the mesh.
+    std::uint32_t middle = begin + count / 2;
+    bool split = false;
+    if (level < kMeanSplitLevels)
+    {
+        double sum = 0.0;
+        for (std::uint32_t slot = begin; slot < end; ++slot)
+            sum += axis.dot(centroids[triangleOrder_[slot]]);
+        const double mean = sum / count;
+        const auto cut = std::partition(triangleOrder_.begin() + begin, triangleOrder_.begin() + end,
+                                        [&](std::uint32_t i) { return axis.dot(centroids[i]) < mean; });
+        const auto at = static_cast<std::uint32_t>(cut - triangleOrder_.begin());
+        if (at > begin && at < end)
+        {
+            middle = at;
+            split = true;
+        }
+    }
+    if (!split)
+        std::nth_element(triangleOrder_.begin() + begin, triangleOrder_.begin() + middle, triangleOrder_.begin() + end,
+                         [&centroids, &axis](std::uint32_t i, std::uint32_t j)
+                         { return axis.dot(centroids[i]) < axis.dot(centroids[j]); });
     const auto child = static_cast<std::int32_t>(nodes_.size());
     nodes_.emplace_back();
     nodes_.emplace_back();
     nodes_[node].first = child;
     nodes_[node].count = 0;
-    const int left = build(begin, middle, child, centroids, maxLeafTriangles);
-    const int right = build(middle, end, child + 1, centroids, maxLeafTriangles);
+    const int left = build(begin, middle, child, level + 1, centroids, maxLeafTriangles);
+    const int right = build(middle, end, child + 1, level + 1, centroids, maxLeafTriangles);
     return 1 + std::max(left, right);
 }
 
@@ -513,8 +559,7 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
         const double spheres = static_cast<double>(nf.radius) + nm.radius + reach;
         if (between.squaredNorm() > spheres * spheres)
             continue;
-        const Eigen::Matrix3d axesF = nf.rotation();
-        if (boxesSeparated(nf.extents(), nm.extents(), axesF.transpose() * pm.axes, axesF.transpose() * between, reach))
+        if (!boxesMayMeet(nf, pm.axes, nm, between, reach))
             continue;
         if (nf.isLeaf() && nm.isLeaf())
         {

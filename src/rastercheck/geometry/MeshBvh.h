@@ -18,9 +18,10 @@ namespace rastercheck
     Each node's box is fitted to its triangles' corners along the principal axes of their
     covariance, as FCL's OBB nodes are: measured on OMPL.app's alpha-1.5 and Apartment (3 000
     uniform states), boxes along the mesh axes made the traversal visit 3x to 5x more node pairs
-    (docs/benchmarks.md). Built top-down by splitting at the median centroid along the box's
-    longest axis, so the tree is balanced: its depth is about log2(triangles / maxLeafTriangles),
-    which lets every query traverse it with a small fixed stack instead of allocating.
+    (docs/benchmarks.md). Built top-down by splitting at the mean centroid along the box's
+    longest axis (FCL's rule; tighter children than the median's) for the first 24 levels and at
+    the median below, so the depth stays bounded (at most 24 + log2(triangles)), which lets every
+    query traverse it with a small fixed stack instead of allocating.
 
     Nodes are stored in float (72 bytes each, two per triangle; with the triangle order and the
     corners in double, 220 bytes per triangle) and read into double: the axes are
@@ -91,8 +92,8 @@ public:
     const std::vector<std::vector<std::uint32_t>> &shellProbes() const { return shellProbes_; }
 
 private:
-    int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Eigen::Vector3d> &centroids,
-              unsigned maxLeafTriangles);
+    int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level,
+              std::vector<Eigen::Vector3d> &centroids, unsigned maxLeafTriangles);
     void buildInsideGrid();
 
     const Mesh *mesh_;
