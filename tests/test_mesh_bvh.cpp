@@ -284,9 +284,35 @@ TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
         }
         for (int count : seen)
             ASSERT_EQ(count, 1);
-        // Median splits keep the tree balanced.
-        EXPECT_LE(bvh.depth(), static_cast<int>(std::ceil(std::log2(double(mesh.numTriangles()) / leafSize))) + 1);
+        // The surface area heuristic's splits stay near balanced on an even mesh.
+        EXPECT_LE(bvh.depth(), 2 * static_cast<int>(std::ceil(std::log2(double(mesh.numTriangles()) / leafSize))));
     }
+}
+
+TEST(MeshBvh, DepthStaysBoundedWhenEverySplitPeelsOneTriangle)
+{
+    // Triangles at x = 2^-(i/40): equal bins of the centroids put all but the largest in the first bin,
+    // so each heuristic split peels one triangle off. The median below level 24 bounds the depth.
+    rc::Mesh mesh;
+    const int n = 4000;
+    for (int i = 0; i < n; ++i)
+    {
+        const double x = std::ldexp(1.0, -i / 40), size = 1e-3 * x;
+        const auto first = static_cast<std::uint32_t>(mesh.vertices.size());
+        mesh.vertices.push_back(Vec(x, 0.01 * (i % 4), 0));
+        mesh.vertices.push_back(Vec(x + size, 0.01 * (i % 4), 0));
+        mesh.vertices.push_back(Vec(x, 0.01 * (i % 4) + size, size));
+        mesh.triangles.push_back({first, first + 1, first + 2});
+    }
+    const rc::MeshBvh bvh(mesh);
+    EXPECT_GT(bvh.depth(), 20);  // the peeling happened
+    EXPECT_LE(bvh.depth(), 24 + static_cast<int>(std::ceil(std::log2(double(n)))) + 1);
+    EXPECT_LE(bvh.depth(), rc::MeshBvh::kMaxDepth);
+    // Queries walk it with their fixed stacks: a copy in place touches, one moved away does not.
+    EXPECT_TRUE(rc::surfacesWithin(bvh, Eigen::Isometry3d::Identity(), bvh, Eigen::Isometry3d::Identity(), 0.0));
+    Eigen::Isometry3d away = Eigen::Isometry3d::Identity();
+    away.translation() = Vec(0, 0, 1.0);
+    EXPECT_FALSE(rc::surfacesWithin(bvh, Eigen::Isometry3d::Identity(), bvh, away, 0.0));
 }
 
 TEST(MeshBvh, EmptyMeshesNeverTouch)
