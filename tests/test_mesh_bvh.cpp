@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <random>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -365,6 +366,65 @@ TEST(SurfacesWithin, MatchesBruteForceOverAllTrianglePairs)
         EXPECT_GT(hits[0], 20);
         EXPECT_LT(hits[0], 100);
     }
+}
+
+TEST(SurfacesWithin, LeafHintsBetweenNearbyPosesNeverChangeAVerdict)
+{
+    // Each thread remembers, per pair of trees, the leaf pair where its last query touched or came
+    // nearest, and tests it first next time. Walk poses through contact and back in small steps
+    // (what a motion validator asks), from several threads at once, each from its own starting
+    // point: every verdict must be the brute force's.
+    const Scenario s = scenarios()[0];
+    const rc::MeshBvh a(s.a), b(s.b);
+    std::mt19937_64 rng(31);
+    std::vector<Eigen::Isometry3d> poses;
+    for (int walk = 0; walk < 12; ++walk)
+    {
+        const Eigen::Isometry3d start = randomPose(rng, 3.0 * s.reach), through = randomPose(rng, 0.3 * s.reach);
+        const Eigen::Quaterniond q0(start.linear()), q1(through.linear());
+        for (int step = 0; step <= 60; ++step)
+        {
+            const double t = step / 60.0;
+            Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+            pose.linear() = q0.slerp(t, q1).toRotationMatrix();
+            pose.translation() = (1 - t) * start.translation() + t * through.translation();
+            poses.push_back(pose);
+        }
+    }
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    std::vector<std::array<bool, 2>> expected(poses.size());
+    int touching = 0;
+    for (std::size_t i = 0; i < poses.size(); ++i)
+    {
+        for (int p = 0; p < 2; ++p)
+            expected[i][p] = bruteForceWithin(s.a, poses[i], s.b, identity, p == 0 ? 0.0 : 0.05);
+        touching += expected[i][0];
+    }
+    ASSERT_GT(touching, 100);
+    ASSERT_LT(touching, static_cast<int>(poses.size()) - 100);
+    std::vector<int> mismatches(4, 0);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back(
+            [&, t]
+            {
+                for (int round = 0; round < 3; ++round)
+                    for (std::size_t k = 0; k < poses.size(); ++k)
+                    {
+                        // Forward from an offset, or backward: each thread's hints differ.
+                        const std::size_t i = t % 2 == 0 ? (k + 97 * t) % poses.size() : poses.size() - 1 - k;
+                        for (int p = 0; p < 2; ++p)
+                        {
+                            const double padding = p == 0 ? 0.0 : 0.05;
+                            mismatches[t] += rc::surfacesWithin(a, poses[i], b, identity, padding) != expected[i][p];
+                            mismatches[t] += rc::surfacesWithin(b, identity, a, poses[i], padding) != expected[i][p];
+                        }
+                    }
+            });
+    for (std::thread &thread : threads)
+        thread.join();
+    for (int t = 0; t < 4; ++t)
+        EXPECT_EQ(mismatches[t], 0) << "thread " << t;
 }
 
 TEST(SurfacesWithin, AgreesWithFclCollideAndDistance)

@@ -582,11 +582,49 @@ struct PlacedCache
     std::uint32_t query = 0;
 };
 
+// Per thread, for the last queries of each pair of trees: the leaf pair (triangle slots) where the
+// last query found its contact or, when it found none, the leaf pair whose bounding spheres came
+// nearest. The next query of the pair tests that triangle pair before traversing: nearby states
+// (the next state along a motion, the other end of a bisection step) often touch there first
+// (OMPL.app near-contact states, A/B in one build: safe / FCL Easy 2.7 -> 3.2, Twistycool 2.0-2.9
+// -> 3.2-3.4, alpha-1.5 2.6-3.3 -> 3.0-3.5; uniform states unchanged within the noise).
+// It only reorders work: a hit is a real contact of those two triangles, a miss goes on to the
+// traversal, so no verdict depends on it. Keyed by the trees' addresses; a stale entry (a tree
+// freed and another built at its address) names slots that are checked against the tree's size.
+struct LeafHint
+{
+    const MeshBvh *fixed = nullptr;
+    const MeshBvh *moving = nullptr;
+    std::uint32_t slotFixed = 0, slotMoving = 0;
+};
+constexpr std::size_t kLeafHints = 64;
+
+LeafHint &leafHint(const MeshBvh &fixed, const MeshBvh &moving)
+{
+    thread_local std::array<LeafHint, kLeafHints> hints;
+    const auto key = reinterpret_cast<std::uintptr_t>(&fixed) * 0x9E3779B97F4A7C15ull ^
+                     reinterpret_cast<std::uintptr_t>(&moving) * 0xC2B2AE3D27D4EB4Full;
+    return hints[(key >> 32) % kLeafHints];
+}
+
+// Do the triangles in slots sf (fixed tree, working frame) and sm (moving tree, placed by R, T)
+// come within padding? In the order (a, b) of the caller: `movingIsA` says which is A.
+bool leafPairMeets(const MeshBvh &fixed, std::uint32_t sf, const MeshBvh &moving, std::uint32_t sm,
+                   const Eigen::Matrix3d &R, const Vec &T, bool movingIsA, double padding, Vec *point)
+{
+    const std::array<Vec, 3> &tm = moving.slotTriangle(sm);
+    const std::array<Vec, 3> placedTriangle = {R * tm[0] + T, R * tm[1] + T, R * tm[2] + T};
+    const std::array<Vec, 3> &tf = fixed.slotTriangle(sf);
+    const std::array<Vec, 3> &ta = movingIsA ? placedTriangle : tf, &tb = movingIsA ? tf : placedTriangle;
+    return padding > 0.0 ? trianglesWithin(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], padding, point)
+                         : trianglesIntersect(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], point);
+}
+
 // The traversal with `fixed`'s frame as the working frame and `moving` placed there by fMm.
 // Leaf pairs are tested with the triangles in the order (a, b) of the caller: `movingIsA` says
 // which tree is A.
 bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry3d &fMm, bool movingIsA, double padding,
-              double reach, Vec *point, std::uint32_t *slotFixed, std::uint32_t *slotMoving)
+              double reach, bool useHint, Vec *point, std::uint32_t *slotFixed, std::uint32_t *slotMoving)
 {
     const Eigen::Matrix3d R = fMm.linear();
     const Vec T = fMm.translation();
@@ -606,6 +644,23 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
             cache.query = 1;
         }
     }
+    LeafHint &hint = leafHint(fixed, moving);
+    if (useHint && hint.fixed == &fixed && hint.moving == &moving && hint.slotFixed < fixed.triangleOrder().size() &&
+        hint.slotMoving < moving.triangleOrder().size() &&
+        leafPairMeets(fixed, hint.slotFixed, moving, hint.slotMoving, R, T, movingIsA, padding, point))
+    {
+        *slotFixed = hint.slotFixed;
+        *slotMoving = hint.slotMoving;
+        return true;
+    }
+    double nearestGap = std::numeric_limits<double>::infinity();
+    const auto remember = [&](std::uint32_t sf, std::uint32_t sm)
+    {
+        hint.fixed = &fixed;
+        hint.moving = &moving;
+        hint.slotFixed = sf;
+        hint.slotMoving = sm;
+    };
     PlacedNode scratch;
     const auto placed = [&](std::int32_t index) -> const PlacedNode &
     {
@@ -651,11 +706,18 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
                                          : trianglesIntersect(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], point);
                     if (hit)
                     {
+                        remember(sf, sm);
                         *slotFixed = sf;
                         *slotMoving = sm;
                         return true;
                     }
                 }
+            }
+            const double gap = std::sqrt(between.squaredNorm()) - (static_cast<double>(nf.radius) + nm.radius);
+            if (gap < nearestGap)
+            {
+                nearestGap = gap;
+                remember(nf.firstSlot(), nm.firstSlot());
             }
             continue;
         }
@@ -704,7 +766,10 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
     const double reach = padding + kNodeRounding * (fMm.translation().norm() + treeScale(a) + treeScale(b));
     Vec point;
     std::uint32_t slotFixed = 0, slotMoving = 0;
-    if (!traverse(fixed, moving, fMm, movingIsA, padding, reach, &point, &slotFixed, &slotMoving))
+    // A caller that asks for the contact gets the traversal's own first one, independent of what
+    // this thread asked before (the backends promise the same first contacts); the others may
+    // start from the remembered leaf pair.
+    if (!traverse(fixed, moving, fMm, movingIsA, padding, reach, contact == nullptr, &point, &slotFixed, &slotMoving))
         return false;
     if (contact)
     {

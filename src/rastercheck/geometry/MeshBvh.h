@@ -132,9 +132,12 @@ struct MeshContact
     trianglesWithin() (padding > 0) with the smaller tree's triangles expressed in the other's
     frame. So the answer is exact for the coordinates after that one rigid transform. Stops at the
     first contact found, which \a contact (when not null) receives: for padding > 0 the midpoint of
-    a close-enough pair. The smaller tree's nodes are placed in the other's frame once per query,
-    in a per-thread cache (grown on a thread's first queries, up to 13 MB for a tree of 2^17
-    nodes; larger trees are placed per visit); thread-safe. */
+    a close-enough pair. Without \a contact the query first tests the leaf pair where this thread's
+    last query of the same two trees touched or came nearest (nearby states often touch there
+    again); that may change which contact is found first, never the answer, so a query with
+    \a contact skips it and its first contact does not depend on earlier queries. The smaller tree's nodes are placed in
+   the other's frame once per query, in a per-thread cache (grown on a thread's first queries, up to 13 MB for a tree of
+   2^17 nodes; larger trees are placed per visit); thread-safe. */
 bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
                     double padding, MeshContact *contact = nullptr);
 
