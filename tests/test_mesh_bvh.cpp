@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <random>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/geometry/TriangleTests.h"
+#include "NonConvex.h"
 
 namespace rc = rastercheck;
 using Vec = Eigen::Vector3d;
@@ -283,9 +285,35 @@ TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
         }
         for (int count : seen)
             ASSERT_EQ(count, 1);
-        // Median splits keep the tree balanced.
-        EXPECT_LE(bvh.depth(), static_cast<int>(std::ceil(std::log2(double(mesh.numTriangles()) / leafSize))) + 1);
+        // The surface area heuristic's splits stay near balanced on an even mesh.
+        EXPECT_LE(bvh.depth(), 2 * static_cast<int>(std::ceil(std::log2(double(mesh.numTriangles()) / leafSize))));
     }
+}
+
+TEST(MeshBvh, DepthStaysBoundedWhenEverySplitPeelsOneTriangle)
+{
+    // Triangles at x = 2^-(i/40): equal bins of the centroids put all but the largest in the first bin,
+    // so each heuristic split peels one triangle off. The median below level 24 bounds the depth.
+    rc::Mesh mesh;
+    const int n = 4000;
+    for (int i = 0; i < n; ++i)
+    {
+        const double x = std::ldexp(1.0, -i / 40), size = 1e-3 * x;
+        const auto first = static_cast<std::uint32_t>(mesh.vertices.size());
+        mesh.vertices.push_back(Vec(x, 0.01 * (i % 4), 0));
+        mesh.vertices.push_back(Vec(x + size, 0.01 * (i % 4), 0));
+        mesh.vertices.push_back(Vec(x, 0.01 * (i % 4) + size, size));
+        mesh.triangles.push_back({first, first + 1, first + 2});
+    }
+    const rc::MeshBvh bvh(mesh);
+    EXPECT_GT(bvh.depth(), 20);  // the peeling happened
+    EXPECT_LE(bvh.depth(), 24 + static_cast<int>(std::ceil(std::log2(double(n)))) + 1);
+    EXPECT_LE(bvh.depth(), rc::MeshBvh::kMaxDepth);
+    // Queries walk it with their fixed stacks: a copy in place touches, one moved away does not.
+    EXPECT_TRUE(rc::surfacesWithin(bvh, Eigen::Isometry3d::Identity(), bvh, Eigen::Isometry3d::Identity(), 0.0));
+    Eigen::Isometry3d away = Eigen::Isometry3d::Identity();
+    away.translation() = Vec(0, 0, 1.0);
+    EXPECT_FALSE(rc::surfacesWithin(bvh, Eigen::Isometry3d::Identity(), bvh, away, 0.0));
 }
 
 TEST(MeshBvh, EmptyMeshesNeverTouch)
@@ -338,6 +366,65 @@ TEST(SurfacesWithin, MatchesBruteForceOverAllTrianglePairs)
         EXPECT_GT(hits[0], 20);
         EXPECT_LT(hits[0], 100);
     }
+}
+
+TEST(SurfacesWithin, LeafHintsBetweenNearbyPosesNeverChangeAVerdict)
+{
+    // Each thread remembers, per pair of trees, the leaf pair where its last query touched or came
+    // nearest, and tests it first next time. Walk poses through contact and back in small steps
+    // (what a motion validator asks), from several threads at once, each from its own starting
+    // point: every verdict must be the brute force's.
+    const Scenario s = scenarios()[0];
+    const rc::MeshBvh a(s.a), b(s.b);
+    std::mt19937_64 rng(31);
+    std::vector<Eigen::Isometry3d> poses;
+    for (int walk = 0; walk < 12; ++walk)
+    {
+        const Eigen::Isometry3d start = randomPose(rng, 3.0 * s.reach), through = randomPose(rng, 0.3 * s.reach);
+        const Eigen::Quaterniond q0(start.linear()), q1(through.linear());
+        for (int step = 0; step <= 60; ++step)
+        {
+            const double t = step / 60.0;
+            Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+            pose.linear() = q0.slerp(t, q1).toRotationMatrix();
+            pose.translation() = (1 - t) * start.translation() + t * through.translation();
+            poses.push_back(pose);
+        }
+    }
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    std::vector<std::array<bool, 2>> expected(poses.size());
+    int touching = 0;
+    for (std::size_t i = 0; i < poses.size(); ++i)
+    {
+        for (int p = 0; p < 2; ++p)
+            expected[i][p] = bruteForceWithin(s.a, poses[i], s.b, identity, p == 0 ? 0.0 : 0.05);
+        touching += expected[i][0];
+    }
+    ASSERT_GT(touching, 100);
+    ASSERT_LT(touching, static_cast<int>(poses.size()) - 100);
+    std::vector<int> mismatches(4, 0);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back(
+            [&, t]
+            {
+                for (int round = 0; round < 3; ++round)
+                    for (std::size_t k = 0; k < poses.size(); ++k)
+                    {
+                        // Forward from an offset, or backward: each thread's hints differ.
+                        const std::size_t i = t % 2 == 0 ? (k + 97 * t) % poses.size() : poses.size() - 1 - k;
+                        for (int p = 0; p < 2; ++p)
+                        {
+                            const double padding = p == 0 ? 0.0 : 0.05;
+                            mismatches[t] += rc::surfacesWithin(a, poses[i], b, identity, padding) != expected[i][p];
+                            mismatches[t] += rc::surfacesWithin(b, identity, a, poses[i], padding) != expected[i][p];
+                        }
+                    }
+            });
+    for (std::thread &thread : threads)
+        thread.join();
+    for (int t = 0; t < 4; ++t)
+        EXPECT_EQ(mismatches[t], 0) << "thread " << t;
 }
 
 TEST(SurfacesWithin, AgreesWithFclCollideAndDistance)
@@ -511,6 +598,86 @@ TEST(PointInsideClosedMesh, SphereMatchesWindingNumber)
         inside += winding > 0.5;
     }
     EXPECT_GT(inside, 500);
+}
+
+TEST(PointInsideClosedMesh, InsideGridAgreesWithRays)
+{
+    // The grid answers only where no triangle comes near its cell, so every point, near the
+    // surface or not, must get the ray's answer; and far from the surface it must answer most.
+    const std::vector<std::pair<const char *, rc::Mesh>> meshes = {
+        {"box", boxMesh(Vec(1.0, 0.5, 0.25), 3)},
+        {"sphere", sphereMesh(1.0, 3)},
+        {"room with doorway", rc::test::roomWithDoorway()},
+        {"U", rc::test::uShape()},
+        {"maze of overlapping boxes", rc::test::mazeOnSlab()},
+        {"bookshelf", rc::test::bookshelf()}};
+    std::mt19937_64 rng(21);
+    for (const auto &[name, mesh] : meshes)
+    {
+        const rc::MeshBvh rays(mesh), grid(mesh, 1, true);
+        ASSERT_FALSE(rays.hasInsideGrid());
+        ASSERT_TRUE(grid.hasInsideGrid());
+        Vec lower = mesh.vertices[0], upper = lower;
+        for (const Vec &v : mesh.vertices)
+        {
+            lower = lower.cwiseMin(v);
+            upper = upper.cwiseMax(v);
+        }
+        const Vec pad = 0.2 * (upper - lower);
+        std::uniform_real_distribution<double> unit(0.0, 1.0);
+        int known = 0, inside = 0;
+        const int trials = 20000;
+        for (int trial = 0; trial < trials; ++trial)
+        {
+            Vec p;
+            if (trial % 4 == 0)  // near a vertex: within 1e-7 .. 1e-2 of the surface
+                p = mesh.vertices[trial % mesh.numVertices()] +
+                    std::pow(10.0, -7.0 + 5.0 * unit(rng)) * Vec(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+            else
+                p = lower - pad + (upper - lower + 2 * pad).cwiseProduct(Vec(unit(rng), unit(rng), unit(rng)));
+            const bool expected = rc::pointInsideClosedMesh(rays, p);
+            ASSERT_EQ(rc::pointInsideClosedMesh(grid, p), expected) << name << ": " << p.transpose();
+            const int answer = grid.insideGridAnswer(p);
+            if (answer != 0)
+            {
+                ASSERT_EQ(answer == 2, expected) << name << ": " << p.transpose();
+            }
+            known += answer != 0 && trial % 4 != 0;
+            inside += expected;
+        }
+        EXPECT_GT(inside, trials / 50) << name;
+        EXPECT_GT(known, trials * 3 / 4 * 8 / 10)
+            << name << ": the grid should answer most points away from the surface";
+        EXPECT_LT(grid.bytes() - rays.bytes(), (std::size_t(1) << 21) + 1) << name;
+    }
+}
+
+TEST(SolidsOverlap, ContainmentByGridAndProbesMatchesRays)
+{
+    // A U and a bar at random poses: solidsOverlap with inside grids (the probes' first known
+    // answer) and without (one ray per shell) must agree on every pose, inside the notch, in the
+    // arms, and crossing.
+    const rc::Mesh u = rc::test::uShape(), bar = rc::test::lBar(0.3);
+    const rc::MeshBvh uRays(u), barRays(bar), uGrid(u, 1, true), barGrid(bar, 1, true);
+    std::mt19937_64 rng(22);
+    std::uniform_real_distribution<double> x(-0.3, 2.3), y(-0.3, 2.3), z(-0.3, 1.3), angle(-M_PI, M_PI);
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    int contained = 0, crossing = 0;
+    for (int trial = 0; trial < 4000; ++trial)
+    {
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.translation() = Vec(x(rng), y(rng), z(rng));
+        pose.linear() =
+            Eigen::AngleAxisd(angle(rng), Vec(x(rng), y(rng), z(rng) + 0.5).normalized()).toRotationMatrix();
+        const bool expected = rc::solidsOverlap(barRays, pose, true, uRays, identity, true, 0.0);
+        ASSERT_EQ(rc::solidsOverlap(barGrid, pose, true, uGrid, identity, true, 0.0), expected) << trial;
+        ASSERT_EQ(rc::solidsOverlap(uGrid, identity, true, barGrid, pose, true, 0.0), expected) << trial;
+        const bool surfaces = rc::surfacesWithin(barRays, pose, uRays, identity, 0.0);
+        contained += expected && !surfaces;
+        crossing += surfaces;
+    }
+    EXPECT_GT(contained, 100);
+    EXPECT_GT(crossing, 100);
 }
 
 TEST(SolidsOverlap, ContainmentNeedsAClosedContainer)

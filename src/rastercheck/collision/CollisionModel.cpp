@@ -432,7 +432,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         box.halfExtents.array() += 1e-5 * box.halfExtents.norm() + 1e-9;
         componentLocalBoxes.push_back(toDeviceBox(box));
         componentLink.push_back(component.link);
-        componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh));
+        componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh, 1, component.topology.closed));
         diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
         convex.add(component.mesh, component.topology.closed, kPatchFlatness * diagonals.back());
     }
@@ -464,7 +464,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         fitted.center -= origin;
         fitted.halfExtents.array() += 1e-5 * fitted.halfExtents.norm() + 1e-6 * distance + 1e-9;
         objectOrientedBoxes.push_back(toDeviceBox(fitted));
-        objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh));
+        objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh, 1, object.topology.closed));
         convex.add(object.mesh, object.topology.closed,
                    kPatchFlatness * (robotScale > 0.0 ? robotScale : (object.bounds.max - object.bounds.min).norm()));
     }

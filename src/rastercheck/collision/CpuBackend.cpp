@@ -153,12 +153,16 @@ device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding
                                 proveOverlap, warmStart, patchAgainstPatch);
 }
 
-/** \brief The exact narrow phase (the oracle): triangle pairs and containment. */
-bool exactOverlap(const Solid &a, const Solid &b, double padding, Contact &contact)
+/** \brief The exact narrow phase (the oracle): triangle pairs and containment. Without
+    \a wantContact the contact is left unset, and the traversal may start from the leaf pair its
+    thread last met for these two trees (surfacesWithin()), which changes which contact is found
+    first but never the verdict; with it, the first contact is the traversal's own, the same on
+    every backend and every chunking of a batch. */
+bool exactOverlap(const Solid &a, const Solid &b, double padding, bool wantContact, Contact &contact)
 {
     MeshContact meshContact;
     if (!solidsOverlap(*a.bvh, fromDevicePose(*a.pose64), a.slice->closed, *b.bvh, fromDevicePose(*b.pose64),
-                       b.slice->closed, padding, &meshContact))
+                       b.slice->closed, padding, wantContact ? &meshContact : nullptr))
         return false;
     contact.triangle = meshContact.triangleB;
     contact.position = meshContact.position;
@@ -233,7 +237,7 @@ bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, cons
     // pair exact, not just bounded: no false alarms among meshes (6 % of Abstract's free states
     // before), at safe mode's speed (alpha-1.5: 0.21x -> 1.7x FCL).
     if (isMeshObstacle(b) && request.mode != CollisionMode::Raster)
-        return exactOverlap(a, b, padding, contact);
+        return exactOverlap(a, b, padding, wantContact, contact);
     // Overlap proofs name no triangle, and would make raster mode's verdicts depend on whether
     // a contact is asked (stageSettings() draws the same line).
     // Conservative mode's verdicts are the proof's outcome, so the proof must not depend on what
@@ -248,7 +252,7 @@ bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, cons
         return unprovenCollides(window, origin, contact);
     if (request.mode != CollisionMode::Raster ||
         !device::rasterUsable(a.slice->closed, b.slice->closed, window, static_cast<float>(pixel)))
-        return exactOverlap(a, b, padding, contact);
+        return exactOverlap(a, b, padding, wantContact, contact);
     PreparedPair pair;
     if (!preparePair(a, b, request, padding, pixel, ws, pair))
         return false;
@@ -258,7 +262,7 @@ bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, cons
         return true;
     }
     // Padding is always honoured exactly: the raster sees overlaps, not distances.
-    return padding > 0 && exactOverlap(a, b, padding, contact);
+    return padding > 0 && exactOverlap(a, b, padding, wantContact, contact);
 }
 
 // Stages: forward kinematics and the hybrid BVH refit (component OBBs, layer AABBs).
@@ -362,7 +366,7 @@ bool CpuBackend::decideOpenPair(std::uint32_t pair, const CollisionRequest &requ
     if (request.mode == CollisionMode::Conservative && !isMeshObstacle(b))
         return unprovenCollides(device::pairWindow(a.bounds, b.bounds, device::floatPadding(request.padding)),
                                 model.origin, contact);
-    return exactOverlap(a, b, request.padding, contact);
+    return exactOverlap(a, b, request.padding, true, contact);
 }
 
 bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut,

@@ -18,9 +18,11 @@ namespace rastercheck
     Each node's box is fitted to its triangles' corners along the principal axes of their
     covariance, as FCL's OBB nodes are: measured on OMPL.app's alpha-1.5 and Apartment (3 000
     uniform states), boxes along the mesh axes made the traversal visit 3x to 5x more node pairs
-    (docs/benchmarks.md). Built top-down by splitting at the median centroid along the box's
-    longest axis, so the tree is balanced: its depth is about log2(triangles / maxLeafTriangles),
-    which lets every query traverse it with a small fixed stack instead of allocating.
+    (docs/benchmarks.md). Built top-down: for the first 24 levels each node is split where the
+    surface area heuristic says (its three axes, 15 cuts each; 2.6x fewer node pairs than the
+    median of the longest axis on FCL's env/rob), below that at the median along its longest axis,
+    so the depth stays bounded (at most 24 + log2(triangles)), which lets every query traverse it
+    with a small fixed stack instead of allocating.
 
     Nodes are stored in float (72 bytes each, two per triangle; with the triangle order and the
     corners in double, 220 bytes per triangle) and read into double: the axes are
@@ -59,8 +61,11 @@ public:
     static constexpr int kMaxDepth = 60;
 
     /** \brief Builds over \a mesh, which must outlive this object and not change. Empty meshes give
-        an empty tree. Throws rastercheck::Error if a triangle names a vertex that does not exist. */
-    explicit MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles = 1);
+        an empty tree. Throws rastercheck::Error if a triangle names a vertex that does not exist.
+        With \a insideGrid (meant for closed meshes, which containment is asked of), also builds
+        the grid of inside/outside facts that lets pointInsideClosedMesh() answer most points
+        without casting a ray. */
+    explicit MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles = 1, bool insideGrid = false);
 
     const Mesh &mesh() const { return *mesh_; }
     const std::vector<Node> &nodes() const { return nodes_; }
@@ -72,22 +77,43 @@ public:
     int depth() const { return depth_; }
     bool empty() const { return nodes_.empty(); }
 
-    /** \brief Bytes held by the nodes, the triangle order and the stored corners. */
+    /** \brief Bytes held by the nodes, the triangle order, the stored corners and the inside grid. */
     std::size_t bytes() const;
 
-    /** \brief One vertex index of every connected shell of the mesh (for containment tests). */
-    const std::vector<std::uint32_t> &shellSeeds() const { return shellSeeds_; }
+    /** \brief What the inside grid knows of \a point (mesh frame): 1 outside, 2 inside, 0 not known
+        (its cell is near the surface, or there is no grid). Every point of a cell that no triangle
+        comes near (the triangles' bounds grown by a margin far above rounding) lies in one region
+        of space the surface does not cross, whose answer one ray cast at build time gave. */
+    int insideGridAnswer(const Eigen::Vector3d &point) const;
+    bool hasInsideGrid() const { return !gridCells_.empty(); }
+
+    /** \brief Per connected shell of the mesh, a few of its vertex indices (its first vertex, then
+        its extreme vertices along the axes), for containment tests: when two surfaces do not meet,
+        any vertex of a shell is inside the other solid exactly when the whole shell is. */
+    const std::vector<std::vector<std::uint32_t>> &shellProbes() const { return shellProbes_; }
 
 private:
-    int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, std::vector<Eigen::Vector3d> &centroids,
-              unsigned maxLeafTriangles);
+    int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level,
+              std::vector<Eigen::Vector3d> &centroids, unsigned maxLeafTriangles);
+    /** \brief The surface area heuristic's split of slots begin..end: false when every centroid
+        projects alike on every axis of \a axes, else the cut (centroids below \a cut along
+        \a direction go left; both sides non-empty). */
+    bool sahSplit(std::uint32_t begin, std::uint32_t end, const Eigen::Matrix3d &axes,
+                  const std::vector<Eigen::Vector3d> &centroids, Eigen::Vector3d &direction, double &cut) const;
+    void buildInsideGrid();
 
     const Mesh *mesh_;
     std::vector<Node> nodes_;
     std::vector<std::uint32_t> triangleOrder_;
     std::vector<std::array<Eigen::Vector3d, 3>> corners_;
-    std::vector<std::uint32_t> shellSeeds_;
+    std::vector<std::vector<std::uint32_t>> shellProbes_;
     int depth_ = -1;
+    // Inside grid: a regular grid over the mesh's bounding box (mesh frame), one byte per cell
+    // (0 near the surface, 1 outside, 2 inside), x fastest.
+    Eigen::Vector3d gridLower_ = Eigen::Vector3d::Zero();
+    Eigen::Vector3d gridInverseCell_ = Eigen::Vector3d::Zero();
+    int gridSize_[3] = {0, 0, 0};
+    std::vector<std::uint8_t> gridCells_;
 };
 
 /** \brief Where two meshes touch: a point (world frame) and the triangle of each mesh. */
@@ -106,14 +132,18 @@ struct MeshContact
     trianglesWithin() (padding > 0) with the smaller tree's triangles expressed in the other's
     frame. So the answer is exact for the coordinates after that one rigid transform. Stops at the
     first contact found, which \a contact (when not null) receives: for padding > 0 the midpoint of
-    a close-enough pair. The smaller tree's nodes are placed in the other's frame once per query,
-    in a per-thread cache (grown on a thread's first queries, up to 13 MB for a tree of 2^17
-    nodes; larger trees are placed per visit); thread-safe. */
+    a close-enough pair. Without \a contact the query first tests the leaf pair where this thread's
+    last query of the same two trees touched or came nearest (nearby states often touch there
+    again); that may change which contact is found first, never the answer, so a query with
+    \a contact skips it and its first contact does not depend on earlier queries. The smaller tree's nodes are placed in
+   the other's frame once per query, in a per-thread cache (grown on a thread's first queries, up to 13 MB for a tree of
+   2^17 nodes; larger trees are placed per visit); thread-safe. */
 bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
                     double padding, MeshContact *contact = nullptr);
 
-/** \brief Is \a point (frame of the mesh) strictly inside the closed mesh of \a bvh? Parity of a
-    ray cast through the tree, retried along another of a fixed set of directions whenever the ray
+/** \brief Is \a point (frame of the mesh) strictly inside the closed mesh of \a bvh? The tree's
+    inside grid answers when it knows the point's cell; otherwise parity of a ray cast through the
+    tree, retried along another of a fixed set of directions whenever the ray
     comes within a small tolerance (1e-9 of the mesh's size) of an edge or vertex or lies in a
     face's plane. If every direction grazes, the generalized winding number over all triangles
     decides (> 1/2 is inside). A point on the surface may go either way. Meaningful only for
