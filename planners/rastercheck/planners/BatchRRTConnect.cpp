@@ -137,7 +137,8 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
     std::vector<std::size_t> owner;
     std::vector<ob::State *> points;  ///< ends of the steps of this round (not the targets)
     std::vector<std::uint8_t> valid;
-    for (bool live = !lines.empty(); live && !ptc;)
+    bool joined = false;
+    for (bool live = !lines.empty(); live && !ptc && !joined;)
     {
         edges.clear();
         owner.clear();
@@ -201,16 +202,14 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             if (shortcut_)
                 BatchShortcutter(si_, edges_).shortcut(*path, ptc);
             pdef_->addSolutionPath(path, false, 0.0, getName());
-            live = false;
+            joined = true;
             break;
         }
         for (ob::State *point : points)
             si_->freeState(point);
         points.clear();
-        if (connection_.first)
-            return true;
     }
-    return false;
+    return joined;
 }
 
 ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &ptc)
