@@ -192,22 +192,20 @@ function buildJointControls()
         const inputs = document.createElement('div');
         inputs.className = 'inputs';
         // step "any": the slider holds a typed value exactly instead of snapping it to a grid.
-        const slider = Object.assign(document.createElement('input'), {
-            type: 'range',
-            id: `joint-${i}-slider`,
-            min: coordinate.lower,
-            max: coordinate.upper,
-            step: 'any',
-        });
-        slider.dataset.coordinate = coordinate.name;
-        const number = Object.assign(document.createElement('input'), {
-            type: 'number',
-            id: `joint-${i}-number`,
-            min: coordinate.lower,
-            max: coordinate.upper,
-            step: 'any',
-        });
-        number.dataset.coordinate = coordinate.name;
+        const coordinateInput = (type, role) =>
+        {
+            const input = Object.assign(document.createElement('input'), {
+                type,
+                id: `joint-${i}-${role}`,
+                min: coordinate.lower,
+                max: coordinate.upper,
+                step: 'any',
+            });
+            input.dataset.coordinate = coordinate.name;
+            return input;
+        };
+        const slider = coordinateInput('range', 'slider');
+        const number = coordinateInput('number', 'number');
         // A drag is one edit: the configuration before it is remembered at its first move and
         // committed to the undo stack when the slider is released.
         slider.addEventListener('input', () => {
