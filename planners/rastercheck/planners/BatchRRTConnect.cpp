@@ -15,14 +15,6 @@ namespace og = ::ompl::geometric;
 
 namespace rastercheck::planners
 {
-namespace
-{
-/** \brief Most steps of one line decided in one round. A step past a blocked one is wasted work
-    (on the CPU, where a batch costs the sum of its checks, 1 wastes nothing); more steps per
-    round mean fewer rounds on long free lines (on the GPU, fewer passes). */
-constexpr unsigned int kMaxStepsPerRound = 1;
-}  // namespace
-
 BatchRRTConnect::BatchRRTConnect(const ob::SpaceInformationPtr &si) : ob::Planner(si, "BatchRRTConnect")
 {
     specs_.recognizedGoal = ob::GOAL_SAMPLEABLE_REGION;
@@ -116,7 +108,6 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
         Motion *last = nullptr;  ///< the other tree's state furthest along the line
         double step = 1.0;       ///< range as a fraction of the line
         unsigned int grown = 0;  ///< steps grown so far
-        unsigned int width = 1;  ///< steps decided in the next round
         bool alive = true;
     };
     std::vector<Line> lines;
@@ -131,8 +122,9 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
         line.step = d > range_ ? range_ / d : 1.0;
         lines.push_back(line);
     }
-    // Rounds: every live line's next steps (1, 2, 4, ... per round: few rounds on long free lines,
-    // little work past the first blocked step) decided in one call.
+    // Rounds: the next step of every live line, all decided in one call. One step per line and
+    // round: a step past a blocked one would be wasted work (on the CPU a batch costs the sum of its
+    // checks).
     std::vector<ompl::Edge> edges;
     std::vector<std::size_t> owner;
     std::vector<ob::State *> points;  ///< ends of the steps of this round (not the targets)
@@ -147,31 +139,22 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             Line &line = lines[l];
             if (!line.alive)
                 continue;
-            const ob::State *from = line.last->state;
-            for (unsigned int s = 1; s <= line.width; ++s)
+            const double f = (line.grown + 1) * line.step;
+            const ob::State *to = line.target->state;
+            if (f < 1.0)
             {
-                const double f = (line.grown + s) * line.step;
-                const ob::State *to = line.target->state;
-                if (f < 1.0)
-                {
-                    points.push_back(si_->allocState());
-                    si_->getStateSpace()->interpolate(line.origin, line.target->state, f, points.back());
-                    to = points.back();
-                }
-                edges.push_back({from, to});
-                owner.push_back(l);
-                from = to;
-                if (f >= 1.0)
-                    break;
+                points.push_back(si_->allocState());
+                si_->getStateSpace()->interpolate(line.origin, line.target->state, f, points.back());
+                to = points.back();
             }
+            edges.push_back({line.last->state, to});
+            owner.push_back(l);
         }
         edges_->check(edges, valid);
         live = false;
         for (std::size_t e = 0; e < edges.size(); ++e)
         {
             Line &line = lines[owner[e]];
-            if (!line.alive)
-                continue;  // an earlier step of this line was blocked
             if (!valid[e])
             {
                 line.alive = false;
@@ -181,12 +164,7 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             {
                 line.last = addMotion(*line.other, edges[e].to, line.last);
                 ++line.grown;
-                const bool lastOfRound = e + 1 == edges.size() || owner[e + 1] != owner[e];
-                if (lastOfRound)
-                {
-                    line.width = std::min(2 * line.width, kMaxStepsPerRound);
-                    live = true;
-                }
+                live = true;
                 continue;
             }
             // Joined: root of the start tree ... last state of one tree, first of the other ... goal.

@@ -19,8 +19,8 @@ namespace rastercheck::planners
     (BatchMotionValidator::checkMotions: one Checker::check per round of the edges' searches).
     Then every state just added pulls the other tree toward it, as RRT-Connect's connect step
     does: along the straight line from the other tree's nearest state, in steps of range, each
-    step an edge; the steps of all lines are decided together in rounds (1, 2, 4, ... steps of
-    each live line per round), the other tree grows by every valid step, a line ends at its first
+    step an edge; the steps of all lines are decided together in rounds (the next step of each
+    live line per round), the other tree grows by every valid step, a line ends at its first
     blocked step, and a line that reaches its state joins the trees. The first goal state pulls
     the start tree the same way (the straight line from start to goal first).
 
