@@ -22,6 +22,7 @@
 #include "BenchSupport.h"
 #include "Reference.h"
 #include "rastercheck/collision/Checker.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/io/OmplAppProblem.h"
 
 using namespace rastercheck;
@@ -29,11 +30,14 @@ using namespace rastercheck;
 namespace
 {
 /** \brief A smooth height field over 40 000 x 40 000 units tessellated into about \a triangles
-    triangles, written as an OBJ; returns its path. */
-std::string writeTerrain(std::size_t triangles)
+    triangles, written as an OBJ; returns its path. \a solid closes it into the ground below
+    (walls down to z = -1500 and a bottom), so that the raster, which needs one closed party, decides
+    its pairs. */
+std::string writeTerrain(std::size_t triangles, bool solid = false)
 {
     const int n = static_cast<int>(std::sqrt(static_cast<double>(triangles) / 2.0));
-    const std::string path = "/tmp/rastercheck_terrain_" + std::to_string(triangles) + ".obj";
+    const std::string path =
+        "/tmp/rastercheck_terrain_" + std::string(solid ? "solid_" : "") + std::to_string(triangles) + ".obj";
     std::ofstream out(path);
     const double size = 40000.0, step = size / n;
     for (int i = 0; i <= n; ++i)
@@ -50,6 +54,33 @@ std::string writeTerrain(std::size_t triangles)
             out << "f " << at(i, j) << ' ' << at(i + 1, j) << ' ' << at(i + 1, j + 1) << '\n';
             out << "f " << at(i, j) << ' ' << at(i + 1, j + 1) << ' ' << at(i, j + 1) << '\n';
         }
+    if (!solid)
+        return path;
+    // The boundary counter-clockwise seen from above, a vertex below each, and the bottom's centre.
+    std::vector<int> ring;
+    for (int i = 0; i < n; ++i)
+        ring.push_back(at(i, 0));
+    for (int j = 0; j < n; ++j)
+        ring.push_back(at(n, j));
+    for (int i = n; i > 0; --i)
+        ring.push_back(at(i, n));
+    for (int j = n; j > 0; --j)
+        ring.push_back(at(0, j));
+    const int firstBelow = (n + 1) * (n + 1) + 1, centre = firstBelow + static_cast<int>(ring.size());
+    const auto below = [&](std::size_t k) { return firstBelow + static_cast<int>(k % ring.size()); };
+    for (int top : ring)
+    {
+        const int i = (top - 1) / (n + 1), j = (top - 1) % (n + 1);
+        out << "v " << i * step - size / 2 << ' ' << j * step - size / 2 << " -1500\n";
+    }
+    out << "v 0 0 -1500\n";
+    for (std::size_t k = 0; k < ring.size(); ++k)
+    {
+        const int next = ring[(k + 1) % ring.size()];
+        out << "f " << ring[k] << ' ' << below(k) << ' ' << below(k + 1) << '\n';
+        out << "f " << ring[k] << ' ' << below(k + 1) << ' ' << next << '\n';
+        out << "f " << centre << ' ' << below(k + 1) << ' ' << below(k) << '\n';
+    }
     return path;
 }
 
@@ -211,6 +242,41 @@ Row measure(const std::string &scene, const Checker &checker, const std::vector<
     return row;
 }
 
+/** \brief The batched stages (the GPU's code path, here on the host executor), safe mode without
+    contacts: the stages rasterize every pair no proof settles, and the host decides what they
+    leave open. Counts from device::StageCounts. */
+struct StagesRow
+{
+    std::string scene;
+    double rate;     // states/s, one thread
+    double cpuRate;  // the CPU backend's, same states and request
+    double rasterizedPerState, candidatesPerPair;
+    std::size_t meshTriangles;  // robot + environment: what each rasterized pair's items were before the node culls
+    std::size_t disagreements;  // verdicts unlike the CPU backend's
+};
+
+StagesRow measureStages(const std::string &scene, const Checker &checker, const std::vector<double> &q)
+{
+    const std::size_t n = q.size() / 7;
+    const CollisionModelConstPtr model = checker.collisionModelPtr();
+    const StagedBackend staged(model, makeHostStageRunner(model));
+    std::vector<std::uint8_t> valid(n), cpuValid(n);
+    const CollisionRequest request;
+    const double rate = n / threadSeconds([&] { staged.check(q.data(), n, valid.data(), nullptr, request, 1); });
+    const double cpuRate = n / threadSeconds([&] { checker.check(q.data(), n, cpuValid.data(), request); });
+    const device::StageCounts counts = staged.stageCounts();
+    StagesRow row{scene,
+                  rate,
+                  cpuRate,
+                  double(counts.rasterizedPairs) / double(n),
+                  double(counts.candidateTriangles) / double(std::max(1ull, counts.rasterizedPairs)),
+                  (model->componentTriangles.size() + model->objectTriangles.size()) / 3,
+                  0};
+    for (std::size_t i = 0; i < n; ++i)
+        row.disagreements += valid[i] != cpuValid[i];
+    return row;
+}
+
 void printTable(const char *title, const std::vector<Row> &rows)
 {
     std::printf(
@@ -268,7 +334,20 @@ int main(int argc, char **argv)
                                                {-20000, -20000, -900, 20000, 20000, 1000}));
     }
 
+    // Closed terrains: only the batched stages' table (the raster needs a closed party; rob.obj is
+    // open), for their cost growth.
+    std::vector<std::pair<std::string, std::string>> stagesOnly;
+    for (std::size_t size : {10000, 100000, 1000000})
+    {
+        const std::string name = "terrain solid " + std::to_string(size);
+        if (wanted(name))
+            stagesOnly.emplace_back(
+                name, writeCfg("terrain_solid_" + std::to_string(size), fcl + "rob.obj", writeTerrain(size, true),
+                               {-20000, -20000, -900, 20000, 20000, 1000}));
+    }
+
     std::vector<Row> uniformRows, nearRows;
+    std::vector<StagesRow> stagesRows;
     for (const auto &[name, cfg] : scenes)
     {
         if (!wanted(name))
@@ -291,8 +370,15 @@ int main(int argc, char **argv)
         const std::vector<double> near = nearContact(*checker, uniform, valid, std::min<std::size_t>(states, 4000));
         if (!near.empty())
             nearRows.push_back(measure(name, *checker, near));
+        stagesRows.push_back(measureStages(name, *checker, uniform));
         std::fprintf(stderr, "%s: loaded and built in %.2f s; proof arrays %zu bytes\n", name.c_str(), loadSeconds,
                      checker->collisionModel().convex.bytes());
+    }
+    for (const auto &[name, cfg] : stagesOnly)
+    {
+        const OmplAppProblem problem = loadOmplAppProblem(cfg);
+        const Checker checker(problem.robot, problem.scene, CheckerOptions{BackendChoice::Cpu, 1});
+        stagesRows.push_back(measureStages(name, checker, uniformPoses(*problem.robot, states, 17)));
     }
     std::printf(
         "\nOne thread, CPU backend, best of %d rounds in CPU time; FCL 0.7 BVHModel<OBBRSS> (OMPL.app's "
@@ -301,5 +387,13 @@ int main(int argc, char **argv)
         kRepeats);
     printTable("Uniform states", uniformRows);
     printTable("Near-contact states (free and colliding ends of 12-step bisections)", nearRows);
+    std::printf(
+        "\nBatched stages (the GPU's code path) on the host, one thread, safe mode, uniform states, one round\n\n"
+        "| scene | states/s | CPU backend states/s | rasterized pairs per state | candidate triangles per rasterized "
+        "pair | triangles "
+        "of both meshes | verdicts unlike the CPU backend's |\n|---|---:|---:|---:|---:|---:|---:|\n");
+    for (const StagesRow &r : stagesRows)
+        std::printf("| %s | %.0f | %.0f | %.3f | %.1f | %zu | %zu |\n", r.scene.c_str(), r.rate, r.cpuRate,
+                    r.rasterizedPerState, r.candidatesPerPair, r.meshTriangles, r.disagreements);
     return 0;
 }

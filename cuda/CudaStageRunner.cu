@@ -293,6 +293,11 @@ public:
         model_.convex.solidPatchNodes = uploadOnce(model_memory_, host.convex.solidPatchNodes, m + o + 1);
         model_.convex.patchPieces = uploadOnce(model_memory_, host.convex.patchPieces, host.numPatches);
         model_.convex.patchTriangles = uploadOnce(model_memory_, host.convex.patchTriangles, host.numPatchTriangleIndices);
+        model_.componentTreeNodes = uploadOnce(model_memory_, host.componentTreeNodes, host.numComponentTreeNodes);
+        model_.componentTriangleOrder =
+            uploadOnce(model_memory_, host.componentTriangleOrder, host.numComponentTriangleIndices / 3);
+        model_.objectTreeNodes = uploadOnce(model_memory_, host.objectTreeNodes, host.numObjectTreeNodes);
+        model_.objectTriangleOrder = uploadOnce(model_memory_, host.objectTriangleOrder, host.numObjectTriangleIndices / 3);
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
         // non-blocking stream that does not wait for the legacy one: wait here.
@@ -325,7 +330,7 @@ public:
     void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
              std::vector<device::PairOutcome> &outcomes) override
     {
-        runStagesInChunks(executor_, model_, settings, budget_, q, admissible, n, outcomes);
+        runStagesInChunks(executor_, model_, settings, budget_, q, admissible, n, outcomes, counts_);
     }
 
 private:

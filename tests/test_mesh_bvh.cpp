@@ -17,6 +17,8 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
+#include "rastercheck/device/MeshTree.h"
+#include "rastercheck/device/Stages.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/geometry/TriangleTests.h"
@@ -245,11 +247,11 @@ TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
         const rc::Mesh mesh = sphereMesh(1.0, 3);  // 1280 triangles
         const rc::MeshBvh bvh(mesh, leafSize);
         std::vector<int> seen(mesh.numTriangles(), 0);
-        std::vector<int> parent(bvh.nodes().size(), -1);
-        for (std::size_t i = 0; i < bvh.nodes().size(); ++i)
+        std::vector<int> parent(bvh.numNodes(), -1);
+        for (std::size_t i = 0; i < bvh.numNodes(); ++i)
             if (!bvh.nodes()[i].isLeaf())
                 parent[bvh.nodes()[i].first] = parent[bvh.nodes()[i].first + 1] = static_cast<int>(i);
-        for (std::size_t i = 0; i < bvh.nodes().size(); ++i)
+        for (std::size_t i = 0; i < bvh.numNodes(); ++i)
         {
             const rc::MeshBvh::Node &node = bvh.nodes()[i];
             if (!node.isLeaf())
@@ -258,7 +260,7 @@ TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
                 for (int child : {node.first, node.first + 1})
                 {
                     ASSERT_GT(child, static_cast<int>(i));
-                    ASSERT_LT(child, static_cast<int>(bvh.nodes().size()));
+                    ASSERT_LT(child, static_cast<int>(bvh.numNodes()));
                 }
                 continue;
             }
@@ -277,8 +279,8 @@ TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
                     for (int up = static_cast<int>(i); up >= 0; up = parent[up])
                     {
                         const rc::MeshBvh::Node &holder = bvh.nodes()[up];
-                        EXPECT_TRUE(holder.contains(corner, 1e-6)) << "node " << up;
-                        EXPECT_LE((corner - holder.centreVector()).norm(), holder.radius + 1e-6);
+                        EXPECT_TRUE(rc::nodeContains(holder, corner, 1e-6)) << "node " << up;
+                        EXPECT_LE((corner - rc::nodeCentre(holder)).norm(), holder.radius + 1e-6);
                     }
                 }
             }
@@ -314,6 +316,98 @@ TEST(MeshBvh, DepthStaysBoundedWhenEverySplitPeelsOneTriangle)
     Eigen::Isometry3d away = Eigen::Isometry3d::Identity();
     away.translation() = Vec(0, 0, 1.0);
     EXPECT_FALSE(rc::surfacesWithin(bvh, Eigen::Isometry3d::Identity(), bvh, away, 0.0));
+}
+
+TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
+{
+    // The batched stages pick a pair's triangles by walking the tree (device::forEachTriangleNearImage)
+    // instead of testing every triangle (triangleMeetsImage): the walk must keep every triangle the
+    // scan keeps, for components (vertices placed by a float pose) and for objects (vertices stored
+    // relative to a far origin), and read a small part of the mesh when the image is small.
+    const rc::Mesh meshes[] = {rc::test::mazeOnSlab(0.1), sphereMesh(1.0, 5)};
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    for (const rc::Mesh &mesh : meshes)
+    {
+        const rc::MeshBvh bvh(mesh);
+        const rc::Aabb bounds = mesh.bounds();
+        const Vec size = bounds.max - bounds.min;
+        std::size_t kept = 0, walked = 0, windows = 0, walkedSmall = 0, smallWindows = 0;
+        for (int trial = 0; trial < 400; ++trial)
+        {
+            // Half the trials place the mesh as a component, half as an object far from its origin.
+            const bool component = trial % 2 == 0;
+            Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+            Vec origin = Vec::Zero();
+            if (component)
+            {
+                pose.linear() =
+                    Eigen::Quaterniond(unit(rng), unit(rng), unit(rng), unit(rng)).normalized().toRotationMatrix();
+                pose.translation() = Vec(unit(rng), unit(rng), unit(rng)) * 3.0;
+            }
+            else
+                origin = Vec(unit(rng), unit(rng), unit(rng)) * 1e5;
+            rc::device::Pose<float> placement = rc::device::Pose<float>::identity();
+            for (int r = 0; r < 3; ++r)
+            {
+                for (int c = 0; c < 3; ++c)
+                    placement.m[4 * r + c] = static_cast<float>(pose.linear()(r, c));
+                placement.m[4 * r + 3] = static_cast<float>(component ? pose.translation()[r] : -origin[r]);
+            }
+            std::vector<rc::device::Vec3<float>> placed(mesh.vertices.size());
+            for (std::size_t v = 0; v < placed.size(); ++v)
+            {
+                const Vec &p = mesh.vertices[v];
+                if (component)
+                    placed[v] = rc::device::transformPoint(
+                        placement, rc::device::Vec3<float>{float(p.x()), float(p.y()), float(p.z())});
+                else  // as CollisionModel stores object vertices: rounded after the shift
+                    placed[v] = {float(p.x() - origin.x()), float(p.y() - origin.y()), float(p.z() - origin.z())};
+            }
+            // A window somewhere over the placed mesh, from a tenth of its size to all of it.
+            const Vec centre =
+                pose * (bounds.min + 0.5 * (size + size.cwiseProduct(Vec(unit(rng), unit(rng), unit(rng))))) - origin;
+            const double side = size.norm() * (trial % 3 == 0 ? 1.0 : 0.1);
+            rc::device::Box window;
+            for (int k = 0; k < 3; ++k)
+            {
+                window.min[k] = static_cast<float>(centre[k] - 0.5 * side);
+                window.max[k] = static_cast<float>(centre[k] + 0.5 * side);
+            }
+            const rc::device::RasterGrid grid = rc::device::makeGrid(window, static_cast<float>(side / 64), 256);
+            const float margin = rc::device::pairMargin(window, grid, 0.0f);
+            std::vector<char> fromTree(mesh.triangles.size(), 0);
+            std::size_t treeCount = 0;
+            rc::device::forEachTriangleNearImage(bvh.view(), placement, grid, margin,
+                                                 [&](std::uint32_t t)
+                                                 {
+                                                     ASSERT_LT(t, mesh.triangles.size());
+                                                     EXPECT_EQ(fromTree[t], 0) << "triangle " << t << " visited twice";
+                                                     fromTree[t] = 1;
+                                                     ++treeCount;
+                                                 });
+            for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+            {
+                const rc::Mesh::Triangle &tri = mesh.triangles[t];
+                if (rc::device::triangleMeetsImage(placed[tri[0]], placed[tri[1]], placed[tri[2]], grid, margin))
+                {
+                    ++kept;
+                    ASSERT_TRUE(fromTree[t])
+                        << "trial " << trial << ": triangle " << t << " meets the image but the walk skipped it";
+                }
+            }
+            walked += treeCount;
+            ++windows;
+            if (trial % 3 != 0)
+            {
+                walkedSmall += treeCount;
+                ++smallWindows;
+            }
+        }
+        // The walk reads about what the scan keeps, not the whole mesh.
+        EXPECT_LT(walked, 2 * kept + windows * 16) << mesh.triangles.size() << " triangles";
+        EXPECT_LT(walkedSmall, smallWindows * mesh.triangles.size() / 4);
+    }
 }
 
 TEST(MeshBvh, EmptyMeshesNeverTouch)
@@ -766,8 +860,8 @@ TEST(SurfacesWithin, TreesTooLargeForThePlacedNodeCacheGiveTheSameAnswers)
     // crossing ones do, distant ones do not, and the padding reaches across a 0.05 gap.
     const rc::Mesh a = sphereMesh(1.0, 6), b = sphereMesh(0.8, 6);
     const rc::MeshBvh bvhA(a), bvhB(b);
-    ASSERT_GT(bvhA.nodes().size(), std::size_t(1) << 17);
-    ASSERT_GT(bvhB.nodes().size(), std::size_t(1) << 17);
+    ASSERT_GT(bvhA.numNodes(), std::size_t(1) << 17);
+    ASSERT_GT(bvhB.numNodes(), std::size_t(1) << 17);
     const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
     const auto at = [](double x)
     {

@@ -742,5 +742,30 @@ TEST_P(NonConvexScene, StagedPipelineDecidesAsTheCpuBackend)
         }
 }
 
+TEST_P(NonConvexScene, TheStagesRasterizeOnlyTheTrianglesNearAPair)
+{
+    // The batched stages take a pair's candidate triangles from both trees' node culls: a pair's
+    // image covers a robot-sized window, so only the part of the scene mesh under it is read (the
+    // stages read both meshes whole before). Raster mode's verdicts stay the CPU backend's.
+    const Scenario &s = *scenario_;
+    const rc::CpuBackend cpu(s.model);
+    const rc::StagedBackend staged(s.model, rc::makeHostStageRunner(s.model, {}, rc::HostScratch::Poisoned));
+    rc::CollisionRequest request;
+    request.mode = rc::CollisionMode::Raster;
+    rc::test::expectSameDecisions(staged, cpu, *s.model, s.states, request, s.name + " (raster)");
+    const rc::device::StageCounts counts = staged.stageCounts();
+    const std::size_t meshTriangles = (s.model->componentTriangles.size() + s.model->objectTriangles.size()) / 3;
+    std::printf("%s: %llu pairs rasterized, %.1f candidate triangles each of %zu in the two meshes\n", s.name.c_str(),
+                counts.rasterizedPairs,
+                double(counts.candidateTriangles) / double(std::max(1ull, counts.rasterizedPairs)), meshTriangles);
+    if (s.model->objects[0].closed || s.model->components[0].closed)
+    {
+        ASSERT_GT(counts.rasterizedPairs, 50u) << s.name;
+        EXPECT_LT(counts.candidateTriangles, counts.rasterizedPairs * meshTriangles / 4) << s.name;
+    }
+    else
+        EXPECT_EQ(counts.rasterizedPairs, 0u) << s.name << ": two open meshes are decided exactly";
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, NonConvexScene, ::testing::ValuesIn(kScenarios),
                          [](const ::testing::TestParamInfo<const char *> &info) { return std::string(info.param); });

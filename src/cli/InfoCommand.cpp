@@ -180,8 +180,8 @@ void printProofArrays(const CollisionModel &model, std::ostream &out)
     for (const auto *trees : {&model.componentBvhs, &model.objectBvhs})
         for (const std::unique_ptr<MeshBvh> &bvh : *trees)
             treeBytes += bvh->bytes();
-    out << "exact phase: oriented-box trees " << treeBytes << " bytes (" << (triangles > 0 ? treeBytes / triangles : 0)
-        << " per triangle)\n";
+    out << "triangle trees (exact phase and raster stages): " << treeBytes << " bytes ("
+        << (triangles > 0 ? treeBytes / triangles : 0) << " per triangle)\n";
 }
 
 void runInfo(const InfoOptions &options)

@@ -70,6 +70,8 @@ public:
     /** \brief The backend batches of at least minDeviceBatch states run on. */
     const Backend &backend() const { return *backend_; }
     const CollisionModel &collisionModel() const { return *model_; }
+    /** \brief The same model, shared (to build another backend over it without rebuilding it). */
+    CollisionModelConstPtr collisionModelPtr() const { return model_; }
     const RobotModel &robot() const { return *model_->robot; }
     const Scene &scene() const { return *model_->scene; }
     std::size_t dof() const { return model_->robot->numCoordinates(); }

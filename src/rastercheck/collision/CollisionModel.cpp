@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/geometry/MeshTopology.h"
@@ -15,15 +16,46 @@ namespace
 CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, const Eigen::Vector3d &origin,
                                      std::vector<float> &vertices, std::vector<std::uint32_t> &triangles)
 {
-    CollisionModel::MeshSlice slice{
-        static_cast<std::uint32_t>(vertices.size() / 3), static_cast<std::uint32_t>(mesh.numVertices()),
-        static_cast<std::uint32_t>(triangles.size() / 3), static_cast<std::uint32_t>(mesh.numTriangles()), closed};
+    CollisionModel::MeshSlice slice{static_cast<std::uint32_t>(vertices.size() / 3),
+                                    static_cast<std::uint32_t>(mesh.numVertices()),
+                                    static_cast<std::uint32_t>(triangles.size() / 3),
+                                    static_cast<std::uint32_t>(mesh.numTriangles()),
+                                    closed,
+                                    0,
+                                    0};
     for (const Eigen::Vector3d &v : mesh.vertices)
         for (int k = 0; k < 3; ++k)
             vertices.push_back(static_cast<float>(v[k] - origin[k]));
     for (const Mesh::Triangle &t : mesh.triangles)
         triangles.insert(triangles.end(), t.begin(), t.end());
     return slice;
+}
+
+/** \brief Moves the trees' nodes and triangle orders into one flat pair of arrays (the slices say
+    where each mesh's part starts) and points every tree at its part, so each node is stored once. */
+void shareTrees(const std::vector<std::unique_ptr<MeshBvh>> &trees, std::vector<CollisionModel::MeshSlice> &slices,
+                std::vector<device::TreeNode> &nodes, std::vector<std::uint32_t> &order)
+{
+    std::size_t numNodes = 0, numTriangles = 0;
+    for (const std::unique_ptr<MeshBvh> &tree : trees)
+    {
+        numNodes += tree->numNodes();
+        numTriangles += tree->mesh().triangles.size();
+    }
+    nodes.reserve(numNodes);
+    order.reserve(numTriangles);
+    for (std::size_t k = 0; k < trees.size(); ++k)
+    {
+        const MeshBvh &tree = *trees[k];
+        slices[k].firstNode = static_cast<std::uint32_t>(nodes.size());
+        slices[k].numNodes = static_cast<std::uint32_t>(tree.numNodes());
+        if (order.size() != slices[k].firstTriangle)
+            throw std::logic_error("shareTrees: the triangle orders do not follow the triangle slices");
+        nodes.insert(nodes.end(), tree.nodes(), tree.nodes() + tree.numNodes());
+        order.insert(order.end(), tree.triangleOrder(), tree.triangleOrder() + tree.mesh().triangles.size());
+    }
+    for (std::size_t k = 0; k < trees.size(); ++k)
+        trees[k]->useSharedArrays(nodes.data() + slices[k].firstNode, order.data() + slices[k].firstTriangle);
 }
 
 /** \brief Largest vertices x triangles product a piece's convexity is measured over: a finer
@@ -468,6 +500,11 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         convex.add(object.mesh, object.topology.closed,
                    kPatchFlatness * (robotScale > 0.0 ? robotScale : (object.bounds.max - object.bounds.min).norm()));
     }
+
+    shareTrees(componentBvhs, components, componentTreeNodes, componentTriangleOrder);
+    shareTrees(objectBvhs, objects, objectTreeNodes, objectTriangleOrder);
+    for (int k = 0; k < 3; ++k)
+        objectTreePlacement.m[4 * k + 3] = static_cast<float>(-origin[k]);
 
     for (std::size_t a = 0; a < components.size(); ++a)
         for (std::size_t b = a + 1; b < components.size(); ++b)

@@ -146,6 +146,16 @@ public:
     std::vector<std::unique_ptr<MeshBvh>> componentBvhs;  // n_components, link frame
     std::vector<std::unique_ptr<MeshBvh>> objectBvhs;     // n_objects, world frame
 
+    /** \brief The trees' nodes and triangle orders, stored here once (each MeshBvh reads its
+        slice) as flat arrays that the batched stages and the GPU read too: nodes per party
+        concatenated (MeshSlice::firstNode), triangle order per mesh at MeshSlice::firstTriangle. */
+    std::vector<device::TreeNode> componentTreeNodes;   // link frame
+    std::vector<std::uint32_t> componentTriangleOrder;  // n_component_triangles
+    std::vector<device::TreeNode> objectTreeNodes;      // world frame
+    std::vector<std::uint32_t> objectTriangleOrder;     // n_object_triangles
+    /** \brief The objects' trees are in the world frame, the stages' floats relative to origin. */
+    device::Pose<float> objectTreePlacement = device::Pose<float>::identity();
+
     /** \brief The convex separation cull's view of every solid: components first, then objects. */
     ConvexSolids convex;
 

@@ -8,6 +8,7 @@
 
 #include "rastercheck/device/Raster.h"
 #include "rastercheck/device/Kinematics.h"
+#include "rastercheck/device/MeshTree.h"
 #include "rastercheck/device/Stages.h"
 #include "rastercheck/model/Kinematics.h"
 
@@ -27,9 +28,10 @@ struct Solid
     int component;                    // index for the per-state vertex cache; -1 for objects
     device::Box bounds;               // world
     const MeshBvh *bvh;
-    device::ConvexArrays convex;         // the separation cull's arrays
-    std::uint32_t convexSolid;           // this solid's number there
-    const device::Pose<double> *pose64;  // the double pose of the hull test and the exact phase
+    device::ConvexArrays convex;               // the separation cull's arrays
+    std::uint32_t convexSolid;                 // this solid's number there
+    const device::Pose<double> *pose64;        // the double pose of the hull test and the exact phase
+    const device::Pose<float> *treePlacement;  // bvh's frame -> the float frame (relative to the model's origin)
 };
 
 const device::Pose<double> &identityDevicePose()
@@ -39,7 +41,8 @@ const device::Pose<double> &identityDevicePose()
 }
 
 // Stage: vertices of a solid in the world frame, and its triangles whose projection meets the
-// image rectangle grown by `margin` (every triangle a ray of the image can cross: parity stays exact).
+// image rectangle grown by `margin` (every triangle a ray of the image can cross: parity stays
+// exact), found through its tree as the batched stages find them.
 const Vec3<float> *worldVertices(const Solid &solid, CpuWorkspace &ws)
 {
     const Vec3<float> *local = reinterpret_cast<const Vec3<float> *>(solid.vertices);
@@ -60,12 +63,14 @@ void cullToImage(const Solid &solid, const Vec3<float> *world, const device::Ras
                  std::vector<std::uint32_t> &candidates)
 {
     candidates.clear();
-    for (std::uint32_t t = 0; t < solid.slice->numTriangles; ++t)
-    {
-        const std::uint32_t *tri = solid.triangles + 3 * t;
-        if (device::triangleMeetsImage(world[tri[0]], world[tri[1]], world[tri[2]], grid, margin))
-            candidates.push_back(t);
-    }
+    device::forEachTriangleNearImage(
+        solid.bvh->view(), *solid.treePlacement, grid, margin,
+        [&](std::uint32_t t)
+        {
+            const std::uint32_t *tri = solid.triangles + 3 * t;
+            if (device::triangleMeetsImage(world[tri[0]], world[tri[1]], world[tri[2]], grid, margin))
+                candidates.push_back(t);
+        });
 }
 
 // Stages: pre-rasterization count, scan, rasterization, per-pixel sort, Sort_Search_Pair. With an
@@ -294,7 +299,8 @@ Solid componentSolid(const CollisionModel &model, CpuWorkspace &ws, std::size_t 
                  model.componentBvhs[c].get(),
                  model.convex.arrays(),
                  static_cast<std::uint32_t>(c),
-                 &ws.linkPoses[model.componentLink[c]]};
+                 &ws.linkPoses[model.componentLink[c]],
+                 &ws.componentPose[c]};
 }
 
 Solid objectSolid(const CollisionModel &model, std::size_t o)
@@ -308,7 +314,8 @@ Solid objectSolid(const CollisionModel &model, std::size_t o)
                  model.objectBvhs[o].get(),
                  model.convex.arrays(),
                  static_cast<std::uint32_t>(model.numComponents() + o),
-                 &identityDevicePose()};
+                 &identityDevicePose(),
+                 &model.objectTreePlacement};
 }
 }  // namespace
 

@@ -33,9 +33,9 @@ inline std::size_t scratchRoom(std::size_t limit, std::size_t heldByOthers)
 inline StageMemoryExhausted scratchExhausted(const std::string &buffer, std::size_t need, std::size_t room,
                                              std::size_t limit)
 {
-    return StageMemoryExhausted(buffer + ": no room for " + std::to_string(need) + " bytes" +
-                                (need > room ? " within the scratch limit of " + std::to_string(limit) + " bytes"
-                                             : " on the device"));
+    return StageMemoryExhausted(
+        buffer + ": no room for " + std::to_string(need) + " bytes" +
+        (need > room ? " within the scratch limit of " + std::to_string(limit) + " bytes" : " on the device"));
 }
 
 /** \brief runStageChunk, with an executor out of scratch memory counted as a chunk over budget. */
@@ -43,11 +43,11 @@ template <class Exec>
 bool runStageChunkWithin(Exec &ex, const device::ModelArrays &model, const device::StageSettings &settings,
                          const device::StageBudget &budget, const double *q, const std::uint8_t *admissible,
                          std::uint32_t count, const device::PairOutcome *&outcomes, std::uint32_t &numOutcomes,
-                         std::string &why)
+                         std::string &why, device::StageCounts *counts)
 {
     try
     {
-        return device::runStageChunk(ex, model, settings, budget, q, admissible, count, outcomes, numOutcomes);
+        return device::runStageChunk(ex, model, settings, budget, q, admissible, count, outcomes, numOutcomes, counts);
     }
     catch (const StageMemoryExhausted &e)
     {
@@ -60,11 +60,12 @@ bool runStageChunkWithin(Exec &ex, const device::ModelArrays &model, const devic
     halved and run again, so a batch of any size gets the verdicts it would get in one pass. A
     single state that still overflows is run without rasterizing: its pairs go to the exact phase,
     slower and never wrong (in raster mode that state gets the exact answer, which may find
-    collisions the raster would miss). Shared by the host and CUDA runners. */
+    collisions the raster would miss). Shared by the host and CUDA runners. The chunks that ran add
+    to \a counts. */
 template <class Exec>
 void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device::StageSettings &settings,
                        const device::StageBudget &budget, const double *q, const std::uint8_t *admissible,
-                       std::size_t n, std::vector<device::PairOutcome> &outcomes)
+                       std::size_t n, std::vector<device::PairOutcome> &outcomes, device::StageCounts &counts)
 {
     const std::size_t dof = static_cast<std::size_t>(model.numCoordinates);
     const std::size_t pairs = std::max<std::size_t>(1, model.numPairs());
@@ -80,7 +81,7 @@ void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device:
         std::uint32_t numOutcomes = 0;
         std::string why = "over the stage budget";
         if (!runStageChunkWithin(ex, model, settings, budget, q + start * dof, admissible + start,
-                                 static_cast<std::uint32_t>(count), chunkOutcomes, numOutcomes, why))
+                                 static_cast<std::uint32_t>(count), chunkOutcomes, numOutcomes, why, &counts))
         {
             if (count > 1)
             {
@@ -90,9 +91,9 @@ void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device:
             device::StageSettings unrasterized = settings;
             unrasterized.rasterize = false;
             if (!runStageChunkWithin(ex, model, unrasterized, budget, q + start * dof, admissible + start, 1,
-                                     chunkOutcomes, numOutcomes, why))
-                throw std::length_error("the stages cannot hold one state's pairs, even without rasterizing (" +
-                                        why + ")");
+                                     chunkOutcomes, numOutcomes, why, &counts))
+                throw std::length_error("the stages cannot hold one state's pairs, even without rasterizing (" + why +
+                                        ")");
         }
         part.resize(numOutcomes);
         ex.download(part.data(), chunkOutcomes, numOutcomes);

@@ -22,5 +22,10 @@ public:
         (state, pair), with state indices of this batch. Not thread-safe (StagedBackend locks). */
     virtual void run(const double *q, const std::uint8_t *admissible, std::size_t n,
                      const device::StageSettings &settings, std::vector<device::PairOutcome> &outcomes) = 0;
+    /** \brief What the stages did in every run so far. */
+    const device::StageCounts &counts() const { return counts_; }
+
+protected:
+    device::StageCounts counts_;
 };
 }  // namespace rastercheck

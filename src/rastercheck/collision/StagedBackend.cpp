@@ -47,7 +47,14 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.convex.numHullGroups(),
                                model.convex.numPatchNodes(),
                                model.convex.numPatches(),
-                               model.convex.numPatchTriangleIndices()};
+                               model.convex.numPatchTriangleIndices(),
+                               model.componentTreeNodes.data(),
+                               model.componentTreeNodes.size(),
+                               model.componentTriangleOrder.data(),
+                               model.objectTreeNodes.data(),
+                               model.objectTreeNodes.size(),
+                               model.objectTriangleOrder.data(),
+                               model.objectTreePlacement};
 }
 
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)
@@ -61,7 +68,8 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
     settings.checkSelfCollision = request.checkSelfCollision;
     // Safe mode reports the CPU's first contact when asked for contacts, which takes the exact
     // phase on every pair; without contacts a raster hit is proof enough.
-    settings.rasterize = request.mode == CollisionMode::Raster || (request.mode == CollisionMode::Safe && !contactsAsked);
+    settings.rasterize =
+        request.mode == CollisionMode::Raster || (request.mode == CollisionMode::Safe && !contactsAsked);
     settings.confirmMisses = request.mode == CollisionMode::Safe;
     // An overlap the hulls prove names no triangle: only when no contact is asked. Not in raster
     // mode, whose verdicts (misses included) must not depend on whether contacts are asked.
@@ -75,7 +83,8 @@ namespace
 class HostExecutor
 {
 public:
-    HostExecutor(HostScratch scratch, std::size_t maxScratchBytes) : scratch_(scratch), maxScratchBytes_(maxScratchBytes)
+    HostExecutor(HostScratch scratch, std::size_t maxScratchBytes)
+        : scratch_(scratch), maxScratchBytes_(maxScratchBytes)
     {
     }
 
@@ -186,7 +195,10 @@ class HostStageRunner : public StageRunner
 {
 public:
     HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch)
-      : model_(std::move(model)), arrays_(hostModelArrays(*model_)), budget_(budget), executor_(scratch, budget.maxScratchBytes)
+        : model_(std::move(model)),
+          arrays_(hostModelArrays(*model_)),
+          budget_(budget),
+          executor_(scratch, budget.maxScratchBytes)
     {
     }
 
@@ -195,7 +207,7 @@ public:
     void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
              std::vector<device::PairOutcome> &outcomes) override
     {
-        runStagesInChunks(executor_, arrays_, settings, budget_, q, admissible, n, outcomes);
+        runStagesInChunks(executor_, arrays_, settings, budget_, q, admissible, n, outcomes, counts_);
     }
 
 private:
@@ -213,11 +225,17 @@ std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, c
 }
 
 StagedBackend::StagedBackend(CollisionModelConstPtr model, std::unique_ptr<StageRunner> runner)
-  : model_(std::move(model)), exact_(model_), runner_(std::move(runner))
+    : model_(std::move(model)), exact_(model_), runner_(std::move(runner))
 {
 }
 
 StagedBackend::~StagedBackend() = default;
+
+device::StageCounts StagedBackend::stageCounts() const
+{
+    std::lock_guard<std::mutex> lock(runnerMutex_);
+    return runner_->counts();
+}
 
 void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
                           const CollisionRequest &request, int threads) const
@@ -249,7 +267,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     for (std::size_t i = n; i-- > 0;)
         firstOutcome[i] = std::min(firstOutcome[i], firstOutcome[i + 1]);
 
-    // Per-state reduction: the first pair (in the CPU's order) that collides.
+        // Per-state reduction: the first pair (in the CPU's order) that collides.
 #pragma omp parallel num_threads(workers)
     {
         std::unique_ptr<CpuWorkspace> ws = exact_.borrow();
@@ -267,7 +285,8 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
             const device::PairOutcome *begin = outcomes.data() + firstOutcome[i];
             const device::PairOutcome *end = outcomes.data() + firstOutcome[i + 1];
             if (!collides && !contacts)
-                collides = std::any_of(begin, end, [](const device::PairOutcome &o) { return o.status == device::PairOverlaps; });
+                collides = std::any_of(begin, end,
+                                       [](const device::PairOutcome &o) { return o.status == device::PairOverlaps; });
             bool refitted = false;
             for (const device::PairOutcome *o = begin; !collides && o != end; ++o)
             {

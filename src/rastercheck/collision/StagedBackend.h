@@ -45,8 +45,10 @@ public:
     ~StagedBackend() override;
 
     std::string name() const override { return runner_->name(); }
-    void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
-               const CollisionRequest &request, int threads) const override;
+    void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts, const CollisionRequest &request,
+               int threads) const override;
+    /** \brief What the stages did in every pass so far (device::StageCounts). */
+    device::StageCounts stageCounts() const;
 
 private:
     CollisionModelConstPtr model_;

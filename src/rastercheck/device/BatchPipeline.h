@@ -11,8 +11,10 @@
 //   1. forward kinematics (one element per state), component poses, OBBs and AABBs (per state x
 //      component), layer boxes and the robot's bounding sphere (per state);
 //   2. culls per (state, pair): distance filter, layer AABBs, OBB tests; compaction of survivors;
-//   3. per surviving pair: image window, the convex separation proof, and the grid; per (pair, triangle): the per-triangle cull and
-//      the pre-rasterization fragment count; scan;
+//   3. per surviving pair: image window, the convex separation proof, the grid, and the candidate
+//      triangles (both meshes' trees walked with the node culls, counted, scanned, written); per
+//      (pair, candidate triangle): the per-triangle cull and the pre-rasterization fragment count;
+//      scan;
 //   4. rasterization into the counted slots; segmented sort by (pixel, depth) per pair;
 //   5. Sort_Search_Pair per pixel run; per pair the first hit pixel (atomic minimum); outcomes.
 // The per-state reduction (the first colliding pair in pair order) runs on the host, which also
@@ -24,6 +26,7 @@
 #include "rastercheck/device/Boxes.h"
 #include "rastercheck/device/HostDevice.h"
 #include "rastercheck/device/Kinematics.h"
+#include "rastercheck/device/MeshTree.h"
 #include "rastercheck/device/Raster.h"
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
@@ -74,6 +77,17 @@ struct ModelArrays
     std::size_t numPatchNodes;
     std::size_t numPatches;
     std::size_t numPatchTriangleIndices;
+    // Every mesh's triangle hierarchy (MeshBvh's nodes, stored once): nodes per party concatenated
+    // (MeshSlice::firstNode), triangle order per party (MeshSlice::firstTriangle).
+    const TreeNode *componentTreeNodes;
+    std::size_t numComponentTreeNodes;
+    const std::uint32_t *componentTriangleOrder;
+    const TreeNode *objectTreeNodes;
+    std::size_t numObjectTreeNodes;
+    const std::uint32_t *objectTriangleOrder;
+    /** \brief Places the objects' trees (world frame) in the stages' float frame (relative to
+        origin). */
+    Pose<float> objectTreePlacement;
 
     RC_HD std::uint32_t numPairs() const
     {
@@ -133,6 +147,17 @@ struct StageBudget
     std::size_t maxScratchBytes = 0;
 };
 
+/** \brief What the stages did, summed over the chunks of a runner's passes: how much work the
+    culls left (benchmarks, tuning). */
+struct StageCounts
+{
+    unsigned long long states = 0;
+    unsigned long long survivingPairs = 0;      ///< (state, pair) elements past the box culls
+    unsigned long long rasterizedPairs = 0;     ///< of those, pairs neither proof settled that went to the raster
+    unsigned long long candidateTriangles = 0;  ///< triangles of rasterized pairs the node culls kept
+    unsigned long long fragments = 0;
+};
+
 /** \brief The executor's scratch buffers, one per stage output; sized per chunk, reused. */
 enum StageBuffer : int
 {
@@ -153,6 +178,9 @@ enum StageBuffer : int
     BufferStatus,
     BufferTriangleCount,
     BufferItemStart,
+    BufferItemTriangles,
+    BufferRasterized,
+    BufferRasterizedList,
     BufferFragmentCount,
     BufferFragmentStart,
     BufferKeys,
@@ -172,6 +200,8 @@ struct StageSolid
     const std::uint32_t *triangles;  // slice's triangles
     const Pose<float> *pose;         // null for objects (world frame already)
     Box bounds;
+    TreeView tree;
+    Pose<float> treePlacement;  // the tree's frame -> the stages' float frame
 };
 
 RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<float> *poses, const Box *bounds,
@@ -182,7 +212,10 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
     auto component = [&](int c) {
         const MeshSlice &slice = model.components[c];
         return StageSolid{slice, model.componentVertices + 3 * slice.firstVertex,
-                          model.componentTriangles + 3 * slice.firstTriangle, poses + c, bounds[c]};
+                          model.componentTriangles + 3 * slice.firstTriangle, poses + c, bounds[c],
+                          TreeView{model.componentTreeNodes + slice.firstNode,
+                                   model.componentTriangleOrder + slice.firstTriangle, slice.numNodes},
+                          poses[c]};
     };
     if (pair < environmentPairs)
     {
@@ -190,7 +223,10 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
         const int o = static_cast<int>(pair / model.numComponents);
         const MeshSlice &slice = model.objects[o];
         b = StageSolid{slice, model.objectVertices + 3 * slice.firstVertex,
-                       model.objectTriangles + 3 * slice.firstTriangle, nullptr, model.objectBoxes[o]};
+                       model.objectTriangles + 3 * slice.firstTriangle, nullptr, model.objectBoxes[o],
+                       TreeView{model.objectTreeNodes + slice.firstNode, model.objectTriangleOrder + slice.firstTriangle,
+                                slice.numNodes},
+                       model.objectTreePlacement};
         return;
     }
     const int *self = model.selfPairs + 2 * (pair - environmentPairs);
@@ -244,11 +280,11 @@ RC_HD int rasterizePairTriangle(const StageSolid &a, const StageSolid &b, std::u
     \a hostAdmissible 1 per state that passed the bounds check). On return \a outcomes points at
     the surviving pairs' outcomes in the executor's memory (\a numOutcomes of them, in (state,
     pair) order). Returns false, having decided nothing, when the chunk exceeds \a budget (the
-    caller splits it). */
+    caller splits it); else adds to \a counts (when not null) what the chunk did. */
 template <class Exec>
 bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &settings, const StageBudget &budget,
                    const double *hostStates, const std::uint8_t *hostAdmissible, std::uint32_t numStates,
-                   const PairOutcome *&outcomes, std::uint32_t &numOutcomes)
+                   const PairOutcome *&outcomes, std::uint32_t &numOutcomes, StageCounts *counts = nullptr)
 {
     const int dof = model.numCoordinates, m = model.numComponents, numLinks = model.numLinks;
     const std::uint32_t pairs = model.numPairs();
@@ -332,8 +368,10 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     float *margins = ex.template buffer<float>(BufferMargins, numCandidates + 1);
     std::int32_t *status = ex.template buffer<std::int32_t>(BufferStatus, numCandidates + 1);
     unsigned long long *triangleCount = ex.template buffer<unsigned long long>(BufferTriangleCount, numCandidates + 1);
+    std::uint8_t *rasterized = ex.template buffer<std::uint8_t>(BufferRasterized, numCandidates + 1);
     ex.forEach(numCandidates + 1, [=] RC_LAMBDA(std::size_t c) {
         triangleCount[c] = 0;
+        rasterized[c] = 0;
         if (c == numCandidates)
             return;  // the scan's trailing zero: its output is the total
         const std::size_t s = candidates[c] / pairs;
@@ -355,12 +393,33 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
             return;  // the exact phase decides
         grids[c] = makeGrid(window, st.pixel, st.maxImageSide);
         margins[c] = pairMargin(window, grids[c], st.padding);
-        triangleCount[c] = a.slice.numTriangles + b.slice.numTriangles;
+        rasterized[c] = 1;
+        // Candidate triangles from the node culls: the leaves of both trees near the image.
+        unsigned long long count = 0;
+        forEachTriangleNearImage(a.tree, a.treePlacement, grids[c], margins[c], [&](std::uint32_t) { ++count; });
+        forEachTriangleNearImage(b.tree, b.treePlacement, grids[c], margins[c], [&](std::uint32_t) { ++count; });
+        triangleCount[c] = count;
     });
     unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, numCandidates + 1);
     const std::size_t numItems = ex.exclusiveSum(triangleCount, itemStart, numCandidates + 1);
     if (numItems > budget.maxItems)
         return false;
+    // The candidates themselves, the same walk again: item i of pair c is triangle itemTriangles[i]
+    // of the pair (A's numbers first, then B's after A's count, as rasterizePairTriangle reads them).
+    std::uint32_t *itemTriangles = ex.template buffer<std::uint32_t>(BufferItemTriangles, numItems + 1);
+    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
+        if (triangleCount[c] == 0)
+            return;
+        const std::size_t s = candidates[c] / pairs;
+        StageSolid a, b;
+        pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
+        unsigned long long slot = itemStart[c];
+        forEachTriangleNearImage(a.tree, a.treePlacement, grids[c], margins[c],
+                                 [&](std::uint32_t t) { itemTriangles[slot++] = t; });
+        const std::uint32_t partyB = a.slice.numTriangles;
+        forEachTriangleNearImage(b.tree, b.treePlacement, grids[c], margins[c],
+                                 [&](std::uint32_t t) { itemTriangles[slot++] = partyB + t; });
+    });
 
     // Pre-rasterization count per (pair, triangle): the per-triangle cull, then the pixels covered.
     unsigned long long *fragmentCount = ex.template buffer<unsigned long long>(BufferFragmentCount, numItems + 1);
@@ -374,8 +433,8 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         const std::size_t s = candidates[c] / pairs;
         StageSolid a, b;
         pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
-        fragmentCount[i] = static_cast<unsigned long long>(rasterizePairTriangle(
-            a, b, static_cast<std::uint32_t>(i - itemStart[c]), grids[c], margins[c], [](int, float, std::uint32_t) {}));
+        fragmentCount[i] = static_cast<unsigned long long>(
+            rasterizePairTriangle(a, b, itemTriangles[i], grids[c], margins[c], [](int, float, std::uint32_t) {}));
     });
     unsigned long long *fragmentStart = ex.template buffer<unsigned long long>(BufferFragmentStart, numItems + 1);
     const std::size_t numFragments = ex.exclusiveSum(fragmentCount, fragmentStart, numItems + 1);
@@ -391,7 +450,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         StageSolid a, b;
         pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
         std::size_t slot = fragmentStart[i];
-        rasterizePairTriangle(a, b, static_cast<std::uint32_t>(i - itemStart[c]), grids[c], margins[c],
+        rasterizePairTriangle(a, b, itemTriangles[i], grids[c], margins[c],
                               [&](int pixel, float depth, std::uint32_t code) {
                                   keys[slot] = (static_cast<unsigned long long>(pixel) << 32) | depthKey(depth);
                                   values[slot] = code;
@@ -436,7 +495,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
         PairOutcome out{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs, status[c], -1,
                         {0.0f, 0.0f, 0.0f}};
-        if (out.status == PairOpen && triangleCount[c] > 0)
+        if (out.status == PairOpen && rasterized[c])
         {
             if (hit[c] != ~0ull)
             {
@@ -459,6 +518,15 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     });
     outcomes = decided;
     numOutcomes = numCandidates;
+    if (counts)
+    {
+        counts->states += numStates;
+        counts->survivingPairs += numCandidates;
+        std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, numCandidates + 1);
+        counts->rasterizedPairs += ex.selectFlagged(rasterized, numCandidates, list);
+        counts->candidateTriangles += numItems;
+        counts->fragments += numFragments;
+    }
     return true;
 }
 }  // namespace rastercheck::device

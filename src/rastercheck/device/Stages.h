@@ -10,7 +10,8 @@
 
 namespace rastercheck::device
 {
-/** \brief A mesh's slice of the flat vertex and triangle buffers. */
+/** \brief A mesh's slice of the flat vertex, triangle and tree buffers (its triangle order, one
+    entry per triangle, starts at firstTriangle too). */
 struct MeshSlice
 {
     std::uint32_t firstVertex;
@@ -18,6 +19,8 @@ struct MeshSlice
     std::uint32_t firstTriangle;
     std::uint32_t numTriangles;
     bool closed;
+    std::uint32_t firstNode;
+    std::uint32_t numNodes;
 };
 
 /** \brief Bounding sphere of a box: its centre and half diagonal. */
@@ -129,8 +132,8 @@ RC_HD float pairMargin(const Box &window, const RasterGrid &grid, float padding)
 
 /** \brief Per-triangle cull: whether the triangle's projection meets the image rectangle grown by
     \a margin. Every triangle a ray of the image can cross is kept, so the parity stays exact. */
-RC_HD bool triangleMeetsImage(const Vec3<float> &a, const Vec3<float> &b, const Vec3<float> &c,
-                              const RasterGrid &grid, float margin)
+RC_HD bool triangleMeetsImage(const Vec3<float> &a, const Vec3<float> &b, const Vec3<float> &c, const RasterGrid &grid,
+                              float margin)
 {
     const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
     const float uLo = grid.origin[0] - margin, uHi = grid.origin[0] + grid.width * grid.pixel + margin;

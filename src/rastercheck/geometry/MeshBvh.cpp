@@ -83,8 +83,8 @@ bool boxesMayMeet(const MeshBvh::Node &nf, const Eigen::Matrix3d &P, const MeshB
 // the box's own frame.
 bool rayHitsNode(const Vec &origin, const Vec &direction, const MeshBvh::Node &node, double margin)
 {
-    const Eigen::Matrix3d axes = node.rotation();
-    const Vec o = axes.transpose() * (origin - node.centreVector()), d = axes.transpose() * direction;
+    const Eigen::Matrix3d axes = nodeAxes(node);
+    const Vec o = axes.transpose() * (origin - nodeCentre(node)), d = axes.transpose() * direction;
     double near = 0.0, far = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k)
     {
@@ -127,7 +127,7 @@ float roundedUp(double x)
 double windingNumber(const MeshBvh &bvh, const Vec &point)
 {
     double total = 0.0;
-    for (std::uint32_t slot = 0; slot < bvh.triangleOrder().size(); ++slot)
+    for (std::uint32_t slot = 0; slot < bvh.mesh().triangles.size(); ++slot)
     {
         const std::array<Vec, 3> &t = bvh.slotTriangle(slot);
         const Vec a = t[0] - point, b = t[1] - point, c = t[2] - point;
@@ -143,7 +143,7 @@ double windingNumber(const MeshBvh &bvh, const Vec &point)
 double treeScale(const MeshBvh &bvh)
 {
     const MeshBvh::Node &root = bvh.nodes()[0];
-    return root.radius + root.centreVector().norm();
+    return root.radius + nodeCentre(root).norm();
 }
 // pointInsideClosedMesh() without the inside grid: rays through the tree, the winding number when
 // every ray grazes.
@@ -154,12 +154,12 @@ bool insideByRays(const MeshBvh &bvh, const Vec &point)
     const MeshBvh::Node &root = bvh.nodes()[0];
     // Large against the rounding of the ray/triangle arithmetic (1e-16 of these magnitudes), small
     // against any feature a mesh is meant to resolve.
-    const double tolerance = 1e-9 * (2.0 * root.radius + (point - root.centreVector()).norm());
+    const double tolerance = 1e-9 * (2.0 * root.radius + (point - nodeCentre(root)).norm());
     const double margin = tolerance + kNodeRounding * (treeScale(bvh) + point.norm());
-    if (!root.contains(point, margin))
+    if (!nodeContains(root, point, margin))
         return false;
 
-    const std::vector<MeshBvh::Node> &nodes = bvh.nodes();
+    const MeshBvh::Node *nodes = bvh.nodes();
     for (int k = 0; k < device::kRayDirections; ++k)
     {
         const device::Vec3<double> d = device::rayDirection(k);
@@ -204,15 +204,41 @@ bool insideByRays(const MeshBvh &bvh, const Vec &point)
 }
 }  // namespace
 
-bool MeshBvh::Node::contains(const Eigen::Vector3d &p, double margin) const
+Eigen::Matrix3d nodeAxes(const MeshBvh::Node &node)
 {
-    const Vec local = rotation().transpose() * (p - centreVector());
-    return (local.array().abs() <= extents().array() + margin).all();
+    const float *a = node.axes;
+    Eigen::Matrix3d m;
+    m << a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8];
+    return m;
+}
+
+Eigen::Vector3d nodeCentre(const MeshBvh::Node &node)
+{
+    return {node.centre[0], node.centre[1], node.centre[2]};
+}
+
+Eigen::Vector3d nodeExtents(const MeshBvh::Node &node)
+{
+    return {node.halfExtents[0], node.halfExtents[1], node.halfExtents[2]};
+}
+
+bool nodeContains(const MeshBvh::Node &node, const Eigen::Vector3d &p, double margin)
+{
+    const Vec local = nodeAxes(node).transpose() * (p - nodeCentre(node));
+    return (local.array().abs() <= nodeExtents(node).array() + margin).all();
+}
+
+void MeshBvh::useSharedArrays(const Node *nodes, const std::uint32_t *triangleOrder)
+{
+    nodes_ = nodes;
+    triangleOrder_ = triangleOrder;
+    ownNodes_ = {};
+    ownTriangleOrder_ = {};
 }
 
 std::size_t MeshBvh::bytes() const
 {
-    return nodes_.size() * sizeof(Node) + triangleOrder_.size() * sizeof(std::uint32_t) +
+    return numNodes_ * sizeof(Node) + mesh_->triangles.size() * sizeof(std::uint32_t) +
            corners_.size() * sizeof(corners_[0]) + gridCells_.size();
 }
 
@@ -233,12 +259,16 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
         const Mesh::Triangle &t = mesh.triangles[i];
         centroids[i] = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
     }
-    triangleOrder_.resize(n);
-    std::iota(triangleOrder_.begin(), triangleOrder_.end(), 0u);
+    ownTriangleOrder_.resize(n);
+    std::iota(ownTriangleOrder_.begin(), ownTriangleOrder_.end(), 0u);
     const unsigned leafSize = std::max(1u, maxLeafTriangles);
-    nodes_.reserve(2 * (n / leafSize + 1));
-    nodes_.emplace_back();
+    ownNodes_.reserve(2 * (n / leafSize + 1));
+    ownNodes_.emplace_back();
     depth_ = build(0, static_cast<std::uint32_t>(n), 0, 0, centroids, leafSize);
+    ownNodes_.shrink_to_fit();
+    nodes_ = ownNodes_.data();
+    numNodes_ = ownNodes_.size();
+    triangleOrder_ = ownTriangleOrder_.data();
     if (depth_ > kMaxDepth)  // cannot happen for a median split of fewer than 2^31 triangles
         throw ConfigurationError("MeshBvh: tree depth " + std::to_string(depth_) + " exceeds the query stacks");
     // Containment probes per connected shell: its first vertex, then its extreme vertices along
@@ -272,7 +302,7 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
     corners_.resize(n);
     for (std::size_t slot = 0; slot < n; ++slot)
     {
-        const Mesh::Triangle &t = mesh.triangles[triangleOrder_[slot]];
+        const Mesh::Triangle &t = mesh.triangles[ownTriangleOrder_[slot]];
         corners_[slot] = {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
     }
     if (insideGrid)
@@ -422,7 +452,7 @@ bool MeshBvh::sahSplit(std::uint32_t begin, std::uint32_t end, const Eigen::Matr
         double low = std::numeric_limits<double>::infinity(), high = -low;
         for (std::uint32_t slot = begin; slot < end; ++slot)
         {
-            const double c = along.dot(centroids[triangleOrder_[slot]]);
+            const double c = along.dot(centroids[ownTriangleOrder_[slot]]);
             low = std::min(low, c);
             high = std::max(high, c);
         }
@@ -433,10 +463,10 @@ bool MeshBvh::sahSplit(std::uint32_t begin, std::uint32_t end, const Eigen::Matr
         for (std::uint32_t slot = begin; slot < end; ++slot)
         {
             const int b =
-                std::min(kSahBins - 1, static_cast<int>((along.dot(centroids[triangleOrder_[slot]]) - low) * scale));
+                std::min(kSahBins - 1, static_cast<int>((along.dot(centroids[ownTriangleOrder_[slot]]) - low) * scale));
             Bin &bin = bins[b];
             bin.triangles += 1.0;
-            for (std::uint32_t v : mesh_->triangles[triangleOrder_[slot]])
+            for (std::uint32_t v : mesh_->triangles[ownTriangleOrder_[slot]])
             {
                 const Vec local = axes.transpose() * mesh_->vertices[v];
                 bin.lower = bin.lower.cwiseMin(local);
@@ -478,7 +508,7 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
     const auto forEachCorner = [&](auto &&visit)
     {
         for (std::uint32_t slot = begin; slot < end; ++slot)
-            for (std::uint32_t v : mesh_->triangles[triangleOrder_[slot]])
+            for (std::uint32_t v : mesh_->triangles[ownTriangleOrder_[slot]])
                 visit(mesh_->vertices[v]);
     };
     Vec mean = Vec::Zero();
@@ -488,12 +518,12 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
     forEachCorner([&](const Vec &p) { covariance += (p - mean) * (p - mean).transpose(); });
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
-    Node &box = nodes_[node];
+    Node &box = ownNodes_[node];
     Eigen::Matrix3d axes = solver.info() == Eigen::Success ? solver.eigenvectors() : Eigen::Matrix3d::Identity();
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
             box.axes[3 * r + c] = static_cast<float>(axes(r, c));
-    axes = box.rotation();
+    axes = nodeAxes(box);
     Vec lower = Vec::Constant(std::numeric_limits<double>::infinity()), upper = -lower;
     forEachCorner(
         [&](const Vec &p)
@@ -510,7 +540,7 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
     forEachCorner(
         [&](const Vec &p)
         {
-            const Vec offset = p - box.centreVector();
+            const Vec offset = p - nodeCentre(box);
             extents = extents.cwiseMax((axes.transpose() * offset).cwiseAbs());
             radius = std::max(radius, offset.norm());
         });
@@ -537,25 +567,26 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
     double cut = 0.0;
     std::uint32_t middle = begin;
     if (level < kSahLevels && sahSplit(begin, end, axes, centroids, axis, cut))
-        middle =
-            static_cast<std::uint32_t>(std::partition(triangleOrder_.begin() + begin, triangleOrder_.begin() + end,
-                                                      [&](std::uint32_t i) { return axis.dot(centroids[i]) < cut; }) -
-                                       triangleOrder_.begin());
+        middle = static_cast<std::uint32_t>(
+            std::partition(ownTriangleOrder_.begin() + begin, ownTriangleOrder_.begin() + end,
+                           [&](std::uint32_t i) { return axis.dot(centroids[i]) < cut; }) -
+            ownTriangleOrder_.begin());
     if (middle == begin || middle == end)  // no cut, or a centroid rounded across it
     {
         int longest = 0;
         extents.maxCoeff(&longest);
         axis = axes.col(longest);
         middle = begin + count / 2;
-        std::nth_element(triangleOrder_.begin() + begin, triangleOrder_.begin() + middle, triangleOrder_.begin() + end,
+        std::nth_element(ownTriangleOrder_.begin() + begin, ownTriangleOrder_.begin() + middle,
+                         ownTriangleOrder_.begin() + end,
                          [&centroids, &axis](std::uint32_t i, std::uint32_t j)
                          { return axis.dot(centroids[i]) < axis.dot(centroids[j]); });
     }
-    const auto child = static_cast<std::int32_t>(nodes_.size());
-    nodes_.emplace_back();
-    nodes_.emplace_back();
-    nodes_[node].first = child;
-    nodes_[node].count = 0;
+    const auto child = static_cast<std::int32_t>(ownNodes_.size());
+    ownNodes_.emplace_back();
+    ownNodes_.emplace_back();
+    ownNodes_[node].first = child;
+    ownNodes_[node].count = 0;
     const int left = build(begin, middle, child, level + 1, centroids, maxLeafTriangles);
     const int right = build(middle, end, child + 1, level + 1, centroids, maxLeafTriangles);
     return 1 + std::max(left, right);
@@ -628,15 +659,15 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
 {
     const Eigen::Matrix3d R = fMm.linear();
     const Vec T = fMm.translation();
-    const std::vector<MeshBvh::Node> &nodesF = fixed.nodes(), &nodesM = moving.nodes();
+    const MeshBvh::Node *nodesF = fixed.nodes(), *nodesM = moving.nodes();
     thread_local PlacedCache cache;
-    const bool cached = nodesM.size() <= kMaxPlacedNodes;
+    const bool cached = moving.numNodes() <= kMaxPlacedNodes;
     if (cached)
     {
-        if (cache.stamps.size() < nodesM.size())
+        if (cache.stamps.size() < moving.numNodes())
         {
-            cache.nodes.resize(nodesM.size());
-            cache.stamps.resize(nodesM.size(), 0);
+            cache.nodes.resize(moving.numNodes());
+            cache.stamps.resize(moving.numNodes(), 0);
         }
         if (++cache.query == 0)  // the stamps wrapped: forget them all
         {
@@ -645,8 +676,8 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
         }
     }
     LeafHint &hint = leafHint(fixed, moving);
-    if (useHint && hint.fixed == &fixed && hint.moving == &moving && hint.slotFixed < fixed.triangleOrder().size() &&
-        hint.slotMoving < moving.triangleOrder().size() &&
+    if (useHint && hint.fixed == &fixed && hint.moving == &moving && hint.slotFixed < fixed.mesh().triangles.size() &&
+        hint.slotMoving < moving.mesh().triangles.size() &&
         leafPairMeets(fixed, hint.slotFixed, moving, hint.slotMoving, R, T, movingIsA, padding, point))
     {
         *slotFixed = hint.slotFixed;
@@ -667,8 +698,8 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
         PlacedNode &slot = cached ? cache.nodes[index] : scratch;
         if (!cached || cache.stamps[index] != cache.query)
         {
-            slot.axes = R * nodesM[index].rotation();
-            slot.centre = R * nodesM[index].centreVector() + T;
+            slot.axes = R * nodeAxes(nodesM[index]);
+            slot.centre = R * nodeCentre(nodesM[index]) + T;
             if (cached)
                 cache.stamps[index] = cache.query;
         }
@@ -684,7 +715,7 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
         const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
         const PlacedNode &pm = placed(pair.b);
         // Bounding spheres first: they settle most pairs that are far apart for one dot product.
-        const Vec between = pm.centre - nf.centreVector();
+        const Vec between = pm.centre - nodeCentre(nf);
         const double spheres = static_cast<double>(nf.radius) + nm.radius + reach;
         if (between.squaredNorm() > spheres * spheres)
             continue;
@@ -728,8 +759,8 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
         if (splitFixed)
         {
             const std::int32_t c = nf.first;
-            const bool secondNearer = (nodesF[c + 1].centreVector() - pm.centre).squaredNorm() <
-                                      (nodesF[c].centreVector() - pm.centre).squaredNorm();
+            const bool secondNearer = (nodeCentre(nodesF[c + 1]) - pm.centre).squaredNorm() <
+                                      (nodeCentre(nodesF[c]) - pm.centre).squaredNorm();
             stack[top++] = {secondNearer ? c : c + 1, pair.b};
             stack[top++] = {secondNearer ? c + 1 : c, pair.b};
         }
@@ -737,7 +768,7 @@ bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry
         {
             const std::int32_t c = nm.first;
             // One at a time: placed() may hand back the same scratch node for both.
-            const Vec fixedCentre = nf.centreVector();
+            const Vec fixedCentre = nodeCentre(nf);
             const double second = (placed(c + 1).centre - fixedCentre).squaredNorm();
             const bool secondNearer = second < (placed(c).centre - fixedCentre).squaredNorm();
             stack[top++] = {pair.a, secondNearer ? c : c + 1};
@@ -757,7 +788,7 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
     // The tree with fewer nodes is the one moved (its nodes placed once per query); the other's
     // frame is the working frame, where the moved tree's triangles are placed by one transform
     // before the exact tests.
-    const bool movingIsA = a.nodes().size() <= b.nodes().size();
+    const bool movingIsA = a.numNodes() <= b.numNodes();
     const MeshBvh &fixed = movingIsA ? b : a, &moving = movingIsA ? a : b;
     const Eigen::Isometry3d &fixedPose = movingIsA ? poseB : poseA, &movingPose = movingIsA ? poseA : poseB;
     const Eigen::Isometry3d fMm = fixedPose.inverse(Eigen::Isometry) * movingPose;

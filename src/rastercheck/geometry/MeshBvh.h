@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "rastercheck/device/MeshTree.h"
 #include "rastercheck/geometry/Mesh.h"
 
 namespace rastercheck
@@ -13,7 +14,8 @@ namespace rastercheck
 /** \brief Bounding-volume hierarchy over a mesh's triangles, in the mesh's own frame: a flat array
     of nodes (oriented boxes with a bounding sphere) linked by index, one triangle per leaf by
     default. Immutable after build; share it between threads freely. This is the exact narrow
-    phase's acceleration structure (and the oracle's).
+    phase's acceleration structure (and the oracle's), and the batched stages pick a pair's triangles
+    through it (device::forEachTriangleNearImage).
 
     Each node's box is fitted to its triangles' corners along the principal axes of their
     covariance, as FCL's OBB nodes are: measured on OMPL.app's alpha-1.5 and Apartment (3 000
@@ -32,33 +34,13 @@ namespace rastercheck
 class MeshBvh
 {
 public:
-    struct Node
-    {
-        float axes[9];         ///< row-major 3x3 matrix whose columns are the box's axes (mesh frame)
-        float centre[3];       ///< box centre (mesh frame)
-        float halfExtents[3];  ///< along the three axes
-        float radius;          ///< bounding sphere about the centre
-        /** \brief Inner node: index of the first child (the second is first + 1), >= 0.
-            Leaf: -(1 + first triangle slot) into triangleOrder. */
-        std::int32_t first = 0;
-        std::uint32_t count = 0;  ///< leaf: number of triangles; inner: 0
-        bool isLeaf() const { return first < 0; }
-        std::uint32_t firstSlot() const { return static_cast<std::uint32_t>(-(first + 1)); }
-        Eigen::Matrix3d rotation() const
-        {
-            Eigen::Matrix3d m;
-            m << axes[0], axes[1], axes[2], axes[3], axes[4], axes[5], axes[6], axes[7], axes[8];
-            return m;
-        }
-        Eigen::Vector3d centreVector() const { return {centre[0], centre[1], centre[2]}; }
-        Eigen::Vector3d extents() const { return {halfExtents[0], halfExtents[1], halfExtents[2]}; }
-        /** \brief Is \a p (mesh frame) in the box grown by \a margin? */
-        bool contains(const Eigen::Vector3d &p, double margin = 0.0) const;
-    };
+    /** \brief The nodes are device::TreeNode, so the batched stages (and the GPU) read the very
+        arrays the exact phase walks (CollisionModel's flat tree arrays). */
+    using Node = device::TreeNode;
 
     /** \brief Deepest tree the queries' fixed stacks allow; a balanced build of any mesh that fits
         in memory stays far below it (the constructor checks). */
-    static constexpr int kMaxDepth = 60;
+    static constexpr int kMaxDepth = device::kMaxTreeDepth;
 
     /** \brief Builds over \a mesh, which must outlive this object and not change. Empty meshes give
         an empty tree. Throws rastercheck::Error if a triangle names a vertex that does not exist.
@@ -66,16 +48,33 @@ public:
         the grid of inside/outside facts that lets pointInsideClosedMesh() answer most points
         without casting a ray. */
     explicit MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles = 1, bool insideGrid = false);
+    // The node and order pointers may point into the own arrays: a move keeps them, a copy would not.
+    MeshBvh(const MeshBvh &) = delete;
+    MeshBvh &operator=(const MeshBvh &) = delete;
+    MeshBvh(MeshBvh &&) = default;
+    MeshBvh &operator=(MeshBvh &&) = default;
 
     const Mesh &mesh() const { return *mesh_; }
-    const std::vector<Node> &nodes() const { return nodes_; }
-    const std::vector<std::uint32_t> &triangleOrder() const { return triangleOrder_; }
+    /** \brief The nodes, root first (numNodes() of them). */
+    const Node *nodes() const { return nodes_; }
+    std::size_t numNodes() const { return numNodes_; }
+    /** \brief Triangle numbers of the mesh in slot order (one per triangle of the mesh). */
+    const std::uint32_t *triangleOrder() const { return triangleOrder_; }
+    /** \brief The tree as the device code reads it. */
+    device::TreeView view() const
+    {
+        return device::TreeView{nodes_, triangleOrder_, static_cast<std::uint32_t>(numNodes_)};
+    }
+    /** \brief Points this tree at a copy of its nodes and triangle order held elsewhere (the
+        model's flat arrays, which the batched stages and the GPU read) and frees its own, so the
+        nodes are stored once. The copy must equal nodes() and triangleOrder() and outlive the tree. */
+    void useSharedArrays(const Node *nodes, const std::uint32_t *triangleOrder);
     /** \brief Corners of the triangle in slot \a slot of triangleOrder (mesh frame), stored in
         traversal order so that leaves read contiguous memory. */
     const std::array<Eigen::Vector3d, 3> &slotTriangle(std::uint32_t slot) const { return corners_[slot]; }
     /** \brief Levels below the root (0 for a single leaf, -1 when empty). */
     int depth() const { return depth_; }
-    bool empty() const { return nodes_.empty(); }
+    bool empty() const { return numNodes_ == 0; }
 
     /** \brief Bytes held by the nodes, the triangle order, the stored corners and the inside grid. */
     std::size_t bytes() const;
@@ -103,8 +102,12 @@ private:
     void buildInsideGrid();
 
     const Mesh *mesh_;
-    std::vector<Node> nodes_;
-    std::vector<std::uint32_t> triangleOrder_;
+    // Built into the own arrays; read through the pointers (the own arrays, or shared copies).
+    std::vector<Node> ownNodes_;
+    std::vector<std::uint32_t> ownTriangleOrder_;
+    const Node *nodes_ = nullptr;
+    std::size_t numNodes_ = 0;
+    const std::uint32_t *triangleOrder_ = nullptr;
     std::vector<std::array<Eigen::Vector3d, 3>> corners_;
     std::vector<std::vector<std::uint32_t>> shellProbes_;
     int depth_ = -1;
@@ -140,6 +143,13 @@ struct MeshContact
    2^17 nodes; larger trees are placed per visit); thread-safe. */
 bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
                     double padding, MeshContact *contact = nullptr);
+
+/** \brief A node's axes (columns), centre and half extents, in double. */
+Eigen::Matrix3d nodeAxes(const MeshBvh::Node &node);
+Eigen::Vector3d nodeCentre(const MeshBvh::Node &node);
+Eigen::Vector3d nodeExtents(const MeshBvh::Node &node);
+/** \brief Is \a p (mesh frame) in the node's box grown by \a margin? */
+bool nodeContains(const MeshBvh::Node &node, const Eigen::Vector3d &p, double margin = 0.0);
 
 /** \brief Is \a point (frame of the mesh) strictly inside the closed mesh of \a bvh? The tree's
     inside grid answers when it knows the point's cell; otherwise parity of a ray cast through the

@@ -1,0 +1,103 @@
+#pragma once
+
+// Every mesh's triangle hierarchy as flat arrays that the CPU and the GPU read alike: the nodes
+// geometry/MeshBvh builds (oriented boxes in the mesh's own frame), and per mesh the order of its
+// triangles in the leaves. The exact phase walks them on the host (MeshBvh); the batched stages
+// walk them per surviving pair to pick the triangles a pair's image can see, so no stage scans a
+// whole large mesh.
+
+#include <cstdint>
+
+#include "rastercheck/device/HostDevice.h"
+#include "rastercheck/device/Pose.h"
+#include "rastercheck/device/Raster.h"
+
+namespace rastercheck::device
+{
+/** \brief One node of a mesh's triangle hierarchy: an oriented box with a bounding sphere, in the
+    mesh's frame, 72 bytes. Children and triangle slots are numbered within the mesh's own tree. */
+struct TreeNode
+{
+    float axes[9];         ///< row-major 3x3 matrix whose columns are the box's axes (mesh frame)
+    float centre[3];       ///< box centre (mesh frame)
+    float halfExtents[3];  ///< along the three axes
+    float radius;          ///< bounding sphere about the centre
+    /** \brief Inner node: index of the first child (the second is first + 1), >= 0.
+        Leaf: -(1 + first triangle slot) into the tree's triangle order. */
+    std::int32_t first;
+    std::uint32_t count;  ///< leaf: number of triangles; inner: 0
+
+    RC_HD bool isLeaf() const { return first < 0; }
+    RC_HD std::uint32_t firstSlot() const { return static_cast<std::uint32_t>(-(first + 1)); }
+};
+
+/** \brief Deepest tree the fixed traversal stacks allow (MeshBvh's build checks it): a walk that
+    pushes both children and pops one holds at most depth + 1 nodes. */
+constexpr int kMaxTreeDepth = 60;
+
+/** \brief One mesh's tree in the flat arrays: its nodes, root first, and the triangle numbers
+    (within the mesh) in slot order. */
+struct TreeView
+{
+    const TreeNode *nodes;
+    const std::uint32_t *triangleOrder;
+    std::uint32_t numNodes;
+};
+
+/** \brief Whether the node, placed by \a placement, may hold a triangle whose projection along the
+    grid's axis meets the image rectangle grown by \a margin (triangleMeetsImage's test): the box's
+    extent along the two image axes, grown by a slack that covers the float rounding of the node
+    and of the placement (a few 1e-7 of the coordinates in play; 4e-6 of them is kept, which only
+    keeps more nodes). */
+RC_HD bool nodeMeetsImage(const TreeNode &node, const Pose<float> &placement, const RasterGrid &grid, float margin)
+{
+    const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
+    const float *m = placement.m;
+    const float *a = node.axes;
+    const float magnitude = fabsf(node.centre[0]) + fabsf(node.centre[1]) + fabsf(node.centre[2]) + node.radius +
+                            fabsf(m[3]) + fabsf(m[7]) + fabsf(m[11]);
+    const float reach = margin + 4e-6f * magnitude;
+    const float lower[2] = {grid.origin[0], grid.origin[1]};
+    const float upper[2] = {grid.origin[0] + grid.width * grid.pixel, grid.origin[1] + grid.height * grid.pixel};
+    const int rows[2] = {u, v};
+    for (int k = 0; k < 2; ++k)
+    {
+        const float *r = m + 4 * rows[k];  // the placement's row for this image axis
+        const float centre = r[0] * node.centre[0] + r[1] * node.centre[1] + r[2] * node.centre[2] + r[3];
+        float half = 0;
+        for (int j = 0; j < 3; ++j)  // |row . axis j| * extent j
+            half += fabsf(r[0] * a[j] + r[1] * a[3 + j] + r[2] * a[6 + j]) * node.halfExtents[j];
+        if (centre + half < lower[k] - reach || centre - half > upper[k] + reach)
+            return false;
+    }
+    return true;
+}
+
+/** \brief Calls \a visit(triangle) for every triangle (number within the mesh) in a leaf whose box
+    nodeMeetsImage(): a superset of the triangles triangleMeetsImage() keeps, found without
+    reading the others. Leaves come in tree order. */
+template <class Visit>
+RC_HD void forEachTriangleNearImage(const TreeView &tree, const Pose<float> &placement, const RasterGrid &grid,
+                                    float margin, Visit &&visit)
+{
+    if (tree.numNodes == 0)
+        return;
+    std::int32_t stack[kMaxTreeDepth + 2];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0)
+    {
+        const TreeNode &node = tree.nodes[stack[--top]];
+        if (!nodeMeetsImage(node, placement, grid, margin))
+            continue;
+        if (!node.isLeaf())
+        {
+            stack[top++] = node.first + 1;
+            stack[top++] = node.first;
+            continue;
+        }
+        for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
+            visit(tree.triangleOrder[slot]);
+    }
+}
+}  // namespace rastercheck::device
