@@ -73,22 +73,21 @@ RC_HD bool nodeMeetsImage(const TreeNode &node, const Pose<float> &placement, co
     return true;
 }
 
-/** \brief Calls \a visit(triangle) for every triangle (number within the mesh) in a leaf whose box
-    nodeMeetsImage(): a superset of the triangles triangleMeetsImage() keeps, found without
-    reading the others. Leaves come in tree order. */
-template <class Visit>
-RC_HD void forEachTriangleNearImage(const TreeView &tree, const Pose<float> &placement, const RasterGrid &grid,
-                                    float margin, Visit &&visit)
+/** \brief Depth-first walk of a tree (\a numNodes nodes, root first): calls \a visit(slot) for
+    every triangle slot of every leaf whose node and ancestors all pass \a test(node); stops as soon
+    as \a visit returns false. */
+template <class NodeTest, class Visit>
+RC_HD void walkTree(const TreeNode *nodes, std::uint32_t numNodes, NodeTest &&test, Visit &&visit)
 {
-    if (tree.numNodes == 0)
+    if (numNodes == 0)
         return;
     std::int32_t stack[kMaxTreeDepth + 2];
     int top = 0;
     stack[top++] = 0;
     while (top > 0)
     {
-        const TreeNode &node = tree.nodes[stack[--top]];
-        if (!nodeMeetsImage(node, placement, grid, margin))
+        const TreeNode &node = nodes[stack[--top]];
+        if (!test(node))
             continue;
         if (!node.isLeaf())
         {
@@ -97,7 +96,24 @@ RC_HD void forEachTriangleNearImage(const TreeView &tree, const Pose<float> &pla
             continue;
         }
         for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
-            visit(tree.triangleOrder[slot]);
+            if (!visit(slot))
+                return;
     }
+}
+
+/** \brief Calls \a visit(triangle) for every triangle (number within the mesh) in a leaf whose box
+    nodeMeetsImage(): a superset of the triangles triangleMeetsImage() keeps, found without
+    reading the others. Leaves come in tree order. */
+template <class Visit>
+RC_HD void forEachTriangleNearImage(const TreeView &tree, const Pose<float> &placement, const RasterGrid &grid,
+                                    float margin, Visit &&visit)
+{
+    walkTree(
+        tree.nodes, tree.numNodes, [&](const TreeNode &node) { return nodeMeetsImage(node, placement, grid, margin); },
+        [&](std::uint32_t slot)
+        {
+            visit(tree.triangleOrder[slot]);
+            return true;
+        });
 }
 }  // namespace rastercheck::device

@@ -22,7 +22,6 @@ using Vec = Eigen::Vector3d;
 // A simultaneous traversal pushes two pairs per level descended in either tree, popping one, so
 // it never holds more than depthA + depthB + 1 pairs.
 constexpr int kPairStackSize = 2 * MeshBvh::kMaxDepth + 2;
-constexpr int kNodeStackSize = MeshBvh::kMaxDepth + 2;
 
 struct NodePair
 {
@@ -159,7 +158,6 @@ bool insideByRays(const MeshBvh &bvh, const Vec &point)
     if (!nodeContains(root, point, margin))
         return false;
 
-    const MeshBvh::Node *nodes = bvh.nodes();
     for (int k = 0; k < device::kRayDirections; ++k)
     {
         const device::Vec3<double> d = device::rayDirection(k);
@@ -169,21 +167,10 @@ bool insideByRays(const MeshBvh &bvh, const Vec &point)
         // the point when any shell does, which parity gets wrong inside an overlap.
         int winding = 0;
         bool grazed = false;
-        std::int32_t stack[kNodeStackSize];
-        int top = 0;
-        stack[top++] = 0;
-        while (top > 0 && !grazed)
-        {
-            const MeshBvh::Node &node = nodes[stack[--top]];
-            if (!rayHitsNode(point, direction, node, margin))
-                continue;
-            if (!node.isLeaf())
-            {
-                stack[top++] = node.first + 1;
-                stack[top++] = node.first;
-                continue;
-            }
-            for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
+        device::walkTree(
+            bvh.nodes(), static_cast<std::uint32_t>(bvh.numNodes()),
+            [&](const MeshBvh::Node &node) { return rayHitsNode(point, direction, node, margin); },
+            [&](std::uint32_t slot)
             {
                 const std::array<Vec, 3> &t = bvh.slotTriangle(slot);
                 double hitAt = 0.0;
@@ -191,12 +178,12 @@ bool insideByRays(const MeshBvh &bvh, const Vec &point)
                 if (crossing < 0)
                 {
                     grazed = true;
-                    break;
+                    return false;
                 }
                 if (crossing == 1)
                     winding += direction.dot((t[1] - t[0]).cross(t[2] - t[0])) > 0 ? 1 : -1;
-            }
-        }
+                return true;
+            });
         if (!grazed)
             return winding > 0;
     }
