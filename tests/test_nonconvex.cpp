@@ -760,7 +760,8 @@ TEST_P(NonConvexScene, TheStagesRasterizeOnlyTheTrianglesNearAPair)
                 double(counts.candidateTriangles) / double(std::max(1ull, counts.rasterizedPairs)), meshTriangles);
     if (s.model->objects[0].closed || s.model->components[0].closed)
     {
-        ASSERT_GT(counts.rasterizedPairs, 50u) << s.name;
+        ASSERT_GE(counts.rasterizedPairs, 20u)
+            << s.name;  // 262 to 868 at full scale, 50 to 218 at the sanitizers quarter
         EXPECT_LT(counts.candidateTriangles, counts.rasterizedPairs * meshTriangles / 4) << s.name;
     }
     else
