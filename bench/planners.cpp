@@ -9,7 +9,8 @@
 //
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
-// A robot "omplapp:NAME" plans OMPL.app's NAME.cfg (from $RASTERCHECK_OMPLAPP, a resources/3D
+// The robot "crane" plans robots/'s crane lift over the plant (examples/crane_lift's problem),
+// problems_per_scenario runs with different seeds. A robot "omplapp:NAME" plans OMPL.app's NAME.cfg (from $RASTERCHECK_OMPLAPP, a resources/3D
 // folder; never bundled), problems_per_scenario runs with different seeds.
 #include <algorithm>
 #include <chrono>
@@ -171,7 +172,25 @@ int main(int argc, char **argv)
             run(*ours, batch, true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
         };
 
-        if (robotName.rfind("omplapp:", 0) == 0)
+        if (robotName == "crane")
+        {
+            // The crane lifting a load over the plant (robots/, examples/crane_lift's problem).
+            const std::string robots = RASTERCHECK_ROBOTS_DIR;
+            ProblemSource source;
+            source.urdfPath = robots + "/crane/crane.urdf";
+            source.srdfPath = robots + "/crane/crane.srdf";
+            source.scenePath = robots + "/sites/plant.yaml";
+            const Problem problem = loadProblem(source);
+            const MotionPlanRequest lift = loadMoveItRequest(robots + "/sites/plant_lift.yaml");
+            for (int index = firstProblem; index < firstProblem + problemsPerScenario; ++index)
+            {
+                benchProblem(
+                    problem, [&](og::SimpleSetup &setup) { rastercheck::ompl::setStartAndGoal(setup, lift); },
+                    static_cast<std::uint_fast32_t>(1000 * index + 1));
+                std::fprintf(stderr, "crane run %d done\n", index);
+            }
+        }
+        else if (robotName.rfind("omplapp:", 0) == 0)
         {
             const char *folder = std::getenv("RASTERCHECK_OMPLAPP");
             if (!folder)
