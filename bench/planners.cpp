@@ -9,9 +9,11 @@
 //
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
+//                                   [planners=fcl,rrtconnect,batch]
+// (a subset of planners: for profiling one of them; the others' rows stay empty)
 // The robot "crane" plans robots/'s crane lift over the plant (examples/crane_lift's problem),
-// problems_per_scenario runs with different seeds. A robot "omplapp:NAME" plans OMPL.app's NAME.cfg (from $RASTERCHECK_OMPLAPP, a resources/3D
-// folder; never bundled), problems_per_scenario runs with different seeds.
+// problems_per_scenario runs with different seeds. A robot "omplapp:NAME" plans OMPL.app's NAME.cfg
+// (from $RASTERCHECK_OMPLAPP, a resources/3D folder; never bundled), as many runs.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -130,6 +132,8 @@ int main(int argc, char **argv)
     const double timeLimit = argc > 3 ? std::atof(argv[3]) : 2.0;
     const unsigned int batchSize = argc > 4 ? static_cast<unsigned int>(std::atoi(argv[4])) : 8u;
     const int firstProblem = argc > 5 ? std::atoi(argv[5]) : 1;
+    const std::vector<std::string> chosen = bench::splitList(argc > 6 ? argv[6] : "fcl,rrtconnect,batch");
+    auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
     const std::vector<std::string> labels{"FCL RRTConnect (discrete edges)", "RRTConnect (rastercheck, certified)",
@@ -163,13 +167,16 @@ int main(int argc, char **argv)
             fcl->setStateValidityChecker(std::make_shared<bench::FclStateValidityChecker>(
                 fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
 
-            run(*fcl, std::make_shared<og::RRTConnect>(fcl->getSpaceInformation()), false, timeLimit, *oracle, runSeed,
-                tallies[labels[0]]);
-            run(*ours, std::make_shared<og::RRTConnect>(ours->getSpaceInformation()), false, timeLimit, *oracle,
-                runSeed, tallies[labels[1]]);
+            if (runs("fcl"))
+                run(*fcl, std::make_shared<og::RRTConnect>(fcl->getSpaceInformation()), false, timeLimit, *oracle,
+                    runSeed, tallies[labels[0]]);
+            if (runs("rrtconnect"))
+                run(*ours, std::make_shared<og::RRTConnect>(ours->getSpaceInformation()), false, timeLimit, *oracle,
+                    runSeed, tallies[labels[1]]);
             auto batch = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
             batch->setBatchSize(batchSize);
-            run(*ours, batch, true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
+            if (runs("batch"))
+                run(*ours, batch, true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
         };
 
         if (robotName == "crane")
@@ -229,7 +236,11 @@ int main(int argc, char **argv)
                 }
         }
 
-        std::printf("### %s (%zu runs)\n\n", robotName.c_str(), tallies[labels[0]].times.size());
+        std::printf("### %s (%zu runs)\n\n", robotName.c_str(),
+                    tallies[labels[runs("fcl")          ? 0
+                                   : runs("rrtconnect") ? 1
+                                                        : 2]]
+                        .times.size());
         std::printf(
             "| planner | solved | colliding | median s | p95 s | median s, simplified | p95 s, simplified | "
             "median length raw -> simplified | median states checked |\n");

@@ -474,6 +474,40 @@ TEST(Separation, ProofsNeverContradictTheOracleOnThePandasLinks)
         << all.provenOverlapping << " of " << all.overlapping << " overlapping pairs proven";
 }
 
+TEST(Separation, ABoxsFacePlanesCullThePatchesOfTheOpenLink6WithoutContradictingTheOracle)
+{
+    const std::string root = rc::test::sharedData();
+    if (root.empty())
+        GTEST_SKIP() << "shared data not found (set RASTERCHECK_DATA): the Panda's meshes are needed";
+    const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
+    const rc::Component &link6 = problem.robot->components[6];
+    ASSERT_FALSE(link6.topology.closed);
+    Solids solids;
+    const std::size_t link = solids.add(link6.mesh, false);
+    // A table top, a shelf board and a small block, as the MotionBenchMaker scenes have them: the
+    // box's planes cull the link's patch tree (patchesApart) before any patch's hull test.
+    const std::size_t boxes[] = {solids.add(rc::makeBox(Vec(1.2, 0.8, 0.04))),
+                                 solids.add(rc::makeBox(Vec(0.6, 0.3, 0.02))),
+                                 solids.add(rc::makeBox(Vec(0.05, 0.05, 0.1)))};
+    OracleTally all;
+    for (std::size_t k = 0; k < 3; ++k)
+    {
+        // Both orders: relateSolids walks the link's patches either way.
+        for (const bool boxFirst : {true, false})
+        {
+            const OracleTally t = boxFirst ? checkAgainstTheOracle(solids, boxes[k], link, 0.3, 300, 17 + k)
+                                           : checkAgainstTheOracle(solids, link, boxes[k], 0.3, 300, 31 + k);
+            all.apart += t.apart;
+            all.provenApart += t.provenApart;
+            all.overlapping += t.overlapping;
+        }
+    }
+    std::printf("apart %d, proven %d; overlapping %d\n", all.apart, all.provenApart, all.overlapping);
+    ASSERT_GT(all.apart, 300);
+    ASSERT_GT(all.overlapping, 100);
+    EXPECT_GT(all.provenApart, all.apart * 3 / 4) << all.provenApart << " of " << all.apart << " apart pairs proven";
+}
+
 namespace
 {
 /** \brief Largest amount by which a vertex of \a piece sticks out of its hull points' hull along any

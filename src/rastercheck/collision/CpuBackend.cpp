@@ -247,10 +247,26 @@ bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, cons
     // a contact is asked (stageSettings() draws the same line).
     // Conservative mode's verdicts are the proof's outcome, so the proof must not depend on what
     // the workspace decided before (the warm start): it starts cold, as the stages' proof does.
+    // A self pair's direction is kept in A's frame: the joints above both links turn them together,
+    // and a direction that proved them apart still points between them after such a turn (an
+    // object stays put, so an environment pair's is kept in the world frame). Panda MBM problems
+    // (bench/edges, one A/B run): 2.78 -> 2.48 us per free state, 6.0 -> 5.6 per certified one.
+    device::Vec3<double> *warmStart = nullptr, selfDirection{};
+    const bool selfPair = b.component >= 0;
+    if (request.mode != CollisionMode::Conservative)
+    {
+        warmStart = &ws.proofDirection[pairNumber];
+        if (selfPair)
+        {
+            selfDirection = device::rotateVector(*a.pose64, *warmStart);
+            warmStart = &selfDirection;
+        }
+    }
     const device::HullRelation relation =
-        hullRelation(a, b, padding, !wantContact && request.mode != CollisionMode::Raster,
-                     request.mode == CollisionMode::Conservative ? nullptr : &ws.proofDirection[pairNumber],
+        hullRelation(a, b, padding, !wantContact && request.mode != CollisionMode::Raster, warmStart,
                      request.mode == CollisionMode::Conservative);
+    if (selfPair && warmStart && relation == device::HullRelation::Apart)
+        ws.proofDirection[pairNumber] = device::inverseRotate(*a.pose64, selfDirection);
     if (relation != device::HullRelation::Unknown)
         return relation == device::HullRelation::Overlapping;
     if (request.mode == CollisionMode::Conservative)
@@ -404,14 +420,22 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     const double *extraSelf = extra ? extra->self.data() + paddingRow * model.selfPairs.size() : nullptr;
     auto environmentPadding = [&](std::size_t k) { return request.padding + (extra ? extraEnvironment[k] : 0.0); };
     double reachPadding = request.padding;
-    for (std::size_t k = 0; k < m; ++k)
-    {
-        double largest = request.padding;
-        for (int c = static_cast<int>(k); extra && c < model.componentSubtreeEnd[k]; ++c)
-            largest = std::max(largest, environmentPadding(static_cast<std::size_t>(c)));
-        ws.layerPadding[k] = device::floatPadding(largest);
-        reachPadding = std::max(reachPadding, largest);
-    }
+    if (!extra)
+        std::fill(ws.layerPadding.begin(), ws.layerPadding.end(), device::floatPadding(request.padding));
+    else
+        // Children before parents, as computeLayerBounds: layer k's largest is its own component's
+        // and its children's layers' (max is exact: the same value as a scan of the whole subtree,
+        // for m components instead of m^2 / 2).
+        for (std::size_t k = m; k-- > 0;)
+        {
+            double largest = std::max(request.padding, environmentPadding(k));
+            for (int child = static_cast<int>(k) + 1; child < model.componentSubtreeEnd[k];
+                 child = model.componentSubtreeEnd[child])
+                largest = std::max(largest, ws.layerLargest[static_cast<std::size_t>(child)]);
+            ws.layerLargest[k] = largest;
+            ws.layerPadding[k] = device::floatPadding(largest);
+            reachPadding = std::max(reachPadding, largest);
+        }
     // Stage: distance set and the Alg. 1 box culls, then the pair pipeline.
     if (request.checkEnvironment && model.numObjects() > 0 && m > 0)
     {

@@ -24,6 +24,7 @@ struct CpuWorkspace
           componentBounds(model.numComponents()),
           layerBounds(model.numComponents()),
           layerPadding(model.numComponents()),
+          layerLargest(model.numComponents()),
           componentWorld(model.numComponents()),
           componentWorldState(model.numComponents(), 0),
           proofDirection(model.numPairs(), device::Vec3<double>{0.0, 0.0, 0.0})
@@ -37,6 +38,7 @@ struct CpuWorkspace
     std::vector<device::Box> componentBounds;        // n_components, world
     std::vector<device::Box> layerBounds;            // n_components: bounds of layer k's subtree
     std::vector<float> layerPadding;                 // n_components: largest padding in layer k's subtree
+    std::vector<double> layerLargest;                // n_components: the same in double
 
     // World vertices of each component, transformed once per state on first use (a component
     // meets several objects); componentWorldState says for which state they are current.

@@ -166,11 +166,24 @@ RC_HD void boundsInFrame(const ConvexProxy &piece, const Pose<double> &pose, con
     }
 }
 
+/** \brief Most face planes of a piece that patchesApart tries on the nodes of a patch tree, and the
+    most plane x vertex products it spends placing them (a box has 6 x 8). */
+constexpr std::uint32_t kMaxCullPlanes = 16;
+constexpr std::uint32_t kMaxCullPlaneReads = 1024;
+
 /** \brief True when every patch of \a solid's tree whose box comes within the padding of \a piece
     (placed by \a pose; the box read by boundsInFrame) is proven apart from it by relateHulls, or
     one is proven to overlap it (\a overlapping set). \a onUnknown(patchProxy) gets each patch
     neither settles and returns whether it settled it apart (and may set \a overlapping); the first
-    patch it cannot settle ends the walk with false. */
+    patch it cannot settle ends the walk with false.
+    A piece with a few face planes (a box, a primitive of a scene) also culls whole subtrees by
+    them: each plane, moved out to the piece's farthest vertex along its normal, bounds a half-space
+    that holds the piece, and a node box beyond it by more than the padding holds only patches that
+    are farther than that from the piece (a proof like relateHulls' own, without its search). A
+    table's box in a link's frame holds most of the link, so the box test above culls little there.
+    On the Panda MotionBenchMaker problems, where the open link6 (1308 triangles, in patches) meets
+    the scenes' boxes this way, the planes cut the time per certified edge by a fifth (bench/edges,
+    one A/B run: 152 -> 120 us; the same verdicts). */
 template <class OnUnknown>
 RC_HD bool patchesApart(const ConvexArrays &arrays, std::uint32_t solid, const Pose<double> &solidPose,
                         const ConvexProxy &piece, const Pose<double> &pose, double padding, double rounding,
@@ -178,6 +191,39 @@ RC_HD bool patchesApart(const ConvexArrays &arrays, std::uint32_t solid, const P
 {
     double lower[3], upper[3];
     boundsInFrame(piece, pose, solidPose, padding + rounding, lower, upper);
+    // The piece's planes in the solid's frame: normal and the offset a node's box must clear.
+    Vec3<double> cullNormal[kMaxCullPlanes];
+    double cullOffset[kMaxCullPlanes];
+    std::uint32_t cullPlanes = 0;
+    if (piece.numPlanes <= kMaxCullPlanes && piece.numPlanes * piece.numVertices <= kMaxCullPlaneReads)
+    {
+        const Pose<double> pieceInSolid = relativePose(solidPose, pose);
+        const Vec3<double> shift = translationOf(pieceInSolid);
+        for (std::uint32_t f = 0; f < piece.numPlanes; ++f)
+        {
+            const double *plane = piece.planes + 4 * f;
+            const Vec3<double> normal{plane[0], plane[1], plane[2]};
+            // The farthest vertex, not the face's own offset: a piece close to convex may have a
+            // vertex a little in front of a face plane.
+            const double reach = supportValue(piece.vertices, piece.numVertices, normal);
+            cullNormal[cullPlanes] = rotateVector(pieceInSolid, normal);
+            cullOffset[cullPlanes] = reach + dot(cullNormal[cullPlanes], shift) + padding + rounding;
+            ++cullPlanes;
+        }
+    }
+    const auto beyondAPlane = [&](const PatchNode &node)
+    {
+        for (std::uint32_t f = 0; f < cullPlanes; ++f)
+        {
+            const Vec3<double> &n = cullNormal[f];
+            const double nearest = n.x * (n.x > 0.0 ? node.min[0] : node.max[0]) +
+                                   n.y * (n.y > 0.0 ? node.min[1] : node.max[1]) +
+                                   n.z * (n.z > 0.0 ? node.min[2] : node.max[2]);
+            if (nearest > cullOffset[f])
+                return true;
+        }
+        return false;
+    };
     const PatchNode *nodes = arrays.patchNodes + arrays.solidPatchNodes[solid];
     std::int32_t stack[kMaxPatchDepth + 2];
     int top = 0;
@@ -186,7 +232,7 @@ RC_HD bool patchesApart(const ConvexArrays &arrays, std::uint32_t solid, const P
     {
         const PatchNode &node = nodes[stack[--top]];
         if (node.min[0] > upper[0] || node.min[1] > upper[1] || node.min[2] > upper[2] || node.max[0] < lower[0] ||
-            node.max[1] < lower[1] || node.max[2] < lower[2])
+            node.max[1] < lower[1] || node.max[2] < lower[2] || beyondAPlane(node))
             continue;
         if (node.first > 0)
         {

@@ -252,9 +252,9 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         if (open.empty())
             break;
 
-        // Every edge's midpoints in one batch, each in conservative mode with its own edge's pair
-        // paddings: what each pair can close in over half its interval (on top of any pair padding
-        // the request carries).
+        // Every edge's midpoints in one batch, in the request's own mode, each with its own edge's
+        // pair paddings: what each pair can close in over half its interval (on top of any pair
+        // padding the request carries).
         std::size_t count = 0;
         for (const EdgeSearch *search : open)
             count += search->batch.size();
@@ -274,7 +274,6 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
                         (base ? base->self[p] : 0.0) + 0.5 * search->pairSweeps[p] * search->length;
             }
         CollisionRequest margin = request_;
-        margin.mode = CollisionMode::Conservative;
         margin.pairPadding = std::move(extra);
         midpointRows(open, false, w.rows);
         w.verdicts.resize(count);
