@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <time.h>
+
 #include "rastercheck/io/DataPath.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/SrdfLoader.h"
@@ -15,6 +17,18 @@
 
 namespace rastercheck::bench
 {
+/** \brief CPU seconds this thread spent in \a work: the build machine is shared, and a loaded core
+    stretches wall time far more than the thread's own time. */
+template <class Work>
+double threadSeconds(Work &&work)
+{
+    timespec start{}, stop{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &start);
+    work();
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &stop);
+    return static_cast<double>(stop.tv_sec - start.tv_sec) + 1e-9 * static_cast<double>(stop.tv_nsec - start.tv_nsec);
+}
+
 /** \brief The seven MotionBenchMaker scenarios of the shared data. */
 inline const std::vector<std::string> &mbmScenarios()
 {

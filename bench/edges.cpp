@@ -40,18 +40,6 @@ struct Totals
     double edgeSeconds = 0.0, freeSeconds = 0.0;
 };
 
-/** \brief CPU seconds of \a work on this thread: the machine is shared, and a loaded core stretches
-    wall time far more than it does the thread's own time. */
-template <class Work>
-double cpuSeconds(Work &&work)
-{
-    timespec begin{}, end{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &begin);
-    work();
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &end);
-    return static_cast<double>(end.tv_sec - begin.tv_sec) + 1e-9 * static_cast<double>(end.tv_nsec - begin.tv_nsec);
-}
-
 std::uint64_t mix(std::uint64_t digest, std::uint64_t value)
 {
     return (digest ^ value) * 1099511628211ull;  // FNV-1a step
@@ -136,14 +124,14 @@ int main(int argc, char **argv)
             for (int repeat = 0; repeat < repeats; ++repeat)
             {
                 edges->resetStateCounter();
-                const double edgeTime = cpuSeconds(
+                const double edgeTime = bench::threadSeconds(
                     [&]
                     {
                         for (std::size_t i = 0; i < edgesPerProblem; i += batchSize)
                             edges->checkMotions(batch.data() + i, std::min(batchSize, edgesPerProblem - i),
                                                 verdicts.data() + i);
                     });
-                const double freeTime = cpuSeconds(
+                const double freeTime = bench::threadSeconds(
                     [&]
                     {
                         for (std::size_t i = 0; i < edgesPerProblem; ++i)

@@ -170,17 +170,6 @@ std::vector<double> nearContact(const Checker &checker, const std::vector<double
 
 constexpr int kRepeats = 3;
 
-/** \brief CPU seconds this thread spent in \a work (the checkers run single-threaded here). */
-template <class Work>
-double threadSeconds(Work &&work)
-{
-    timespec start{}, stop{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &start);
-    work();
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &stop);
-    return static_cast<double>(stop.tv_sec - start.tv_sec) + 1e-9 * static_cast<double>(stop.tv_nsec - start.tv_nsec);
-}
-
 struct Row
 {
     std::string scene;
@@ -210,7 +199,7 @@ Row measure(const std::string &scene, const Checker &checker, const std::vector<
     // moved the near-contact ratios by up to 40 % between runs.
     for (int round = 0; round < kRepeats; ++round)
     {
-        row.fcl = std::max(row.fcl, n / threadSeconds(
+        row.fcl = std::max(row.fcl, n / bench::threadSeconds(
                                             [&]
                                             {
                                                 for (std::size_t i = 0; i < n; ++i)
@@ -221,7 +210,7 @@ Row measure(const std::string &scene, const Checker &checker, const std::vector<
             CollisionRequest request;
             request.mode = mode;
             std::vector<std::uint8_t> &out = mode == CollisionMode::Exact ? exactValid : valid;
-            const double rate = n / threadSeconds([&] { checker.check(q.data(), n, out.data(), request); });
+            const double rate = n / bench::threadSeconds([&] { checker.check(q.data(), n, out.data(), request); });
             double &best = mode == CollisionMode::Exact  ? row.exact
                            : mode == CollisionMode::Safe ? row.safe
                                                          : row.conservative;
@@ -262,8 +251,8 @@ StagesRow measureStages(const std::string &scene, const Checker &checker, const 
     const StagedBackend staged(model, makeHostStageRunner(model));
     std::vector<std::uint8_t> valid(n), cpuValid(n);
     const CollisionRequest request;
-    const double rate = n / threadSeconds([&] { staged.check(q.data(), n, valid.data(), nullptr, request, 1); });
-    const double cpuRate = n / threadSeconds([&] { checker.check(q.data(), n, cpuValid.data(), request); });
+    const double rate = n / bench::threadSeconds([&] { staged.check(q.data(), n, valid.data(), nullptr, request, 1); });
+    const double cpuRate = n / bench::threadSeconds([&] { checker.check(q.data(), n, cpuValid.data(), request); });
     const device::StageCounts counts = staged.stageCounts();
     StagesRow row{scene,
                   rate,
