@@ -423,19 +423,18 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     if (!extra)
         std::fill(ws.layerPadding.begin(), ws.layerPadding.end(), device::floatPadding(request.padding));
     else
-        // Children before parents, as computeLayerBounds: layer k's largest is its own component's
-        // and its children's layers' (max is exact: the same value as a scan of the whole subtree,
-        // for m components instead of m^2 / 2).
-        for (std::size_t k = m; k-- > 0;)
+    {
+        // A layer's padding is the largest in its subtree (the layer boxes' own walk).
+        device::joinLayers(
+            model.componentSubtreeEnd.data(), static_cast<int>(m), ws.layerLargest.data(),
+            [&](int k) { return std::max(request.padding, environmentPadding(static_cast<std::size_t>(k))); },
+            [](double &layer, double child) { layer = std::max(layer, child); });
+        for (std::size_t k = 0; k < m; ++k)
         {
-            double largest = std::max(request.padding, environmentPadding(k));
-            for (int child = static_cast<int>(k) + 1; child < model.componentSubtreeEnd[k];
-                 child = model.componentSubtreeEnd[child])
-                largest = std::max(largest, ws.layerLargest[static_cast<std::size_t>(child)]);
-            ws.layerLargest[k] = largest;
-            ws.layerPadding[k] = device::floatPadding(largest);
-            reachPadding = std::max(reachPadding, largest);
+            ws.layerPadding[k] = device::floatPadding(ws.layerLargest[k]);
+            reachPadding = std::max(reachPadding, ws.layerLargest[k]);
         }
+    }
     // Stage: distance set and the Alg. 1 box culls, then the pair pipeline.
     if (request.checkEnvironment && model.numObjects() > 0 && m > 0)
     {

@@ -267,7 +267,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     for (std::size_t i = n; i-- > 0;)
         firstOutcome[i] = std::min(firstOutcome[i], firstOutcome[i + 1]);
 
-        // Per-state reduction: the first pair (in the CPU's order) that collides.
+    // Per-state reduction: the first pair (in the CPU's order) that collides.
 #pragma omp parallel num_threads(workers)
     {
         std::unique_ptr<CpuWorkspace> ws = exact_.borrow();

@@ -58,19 +58,28 @@ RC_HD bool objectWithinReach(const Sphere &robot, const Box &objectBox, float pa
     return !(sqrtf(distance2) > robot.radius + object.radius + padding);
 }
 
+/** \brief Layer values of the hybrid hierarchy: layers[k] = own(k) joined with every layer of a
+    child of k, so that it stands for component k's whole subtree. Children before parents; in
+    depth-first order k's children are k + 1, then each one's subtree end. With an exact join (min,
+    max) the result equals joining the values of the whole subtree, for m joins instead of m^2 / 2. */
+template <class T, class Own, class Join>
+RC_HD void joinLayers(const int *subtreeEnd, int numComponents, T *layers, Own &&own, Join &&join)
+{
+    for (int k = numComponents - 1; k >= 0; --k)
+    {
+        layers[k] = own(k);
+        for (int child = k + 1; child < subtreeEnd[k]; child = subtreeEnd[child])
+            join(layers[k], layers[child]);
+    }
+}
+
 /** \brief Layer boxes of the hybrid hierarchy: layer k bounds components [k, subtreeEnd[k]), the
     component's link and everything the chain carries beyond it. */
 RC_HD void computeLayerBounds(const Box *componentBounds, const int *subtreeEnd, int numComponents, Box *layers)
 {
-    // Children before parents; in depth-first order k's children are k + 1, then each one's
-    // subtree end, so each layer joins its own box and its children's layers (min and max are
-    // exact: the same boxes as joining every box of the subtree).
-    for (int k = numComponents - 1; k >= 0; --k)
-    {
-        layers[k] = componentBounds[k];
-        for (int child = k + 1; child < subtreeEnd[k]; child = subtreeEnd[child])
-            extend(layers[k], layers[child]);
-    }
+    joinLayers(
+        subtreeEnd, numComponents, layers, [&](int k) { return componentBounds[k]; },
+        [](Box &layer, const Box &child) { extend(layer, child); });
 }
 
 /** \brief Whether the descent through the layers reaches component k for an object: every layer
