@@ -9,8 +9,9 @@
 //
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
-//                                   [planners=fcl,rrtconnect,batch]
-// (a subset of planners: for profiling one of them; the others' rows stay empty)
+//                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
+// (a subset of planners: for profiling one of them; the others' rows stay empty; "eager" is
+// BatchRRTConnect with lazy 0, every new edge certified when it is grown)
 // The robot "crane" plans robots/'s crane lift over the plant (examples/crane_lift's problem),
 // problems_per_scenario runs with different seeds. A robot "omplapp:NAME" plans OMPL.app's NAME.cfg
 // (from $RASTERCHECK_OMPLAPP, a resources/3D folder; never bundled), as many runs.
@@ -44,6 +45,7 @@ namespace
 struct Tally
 {
     int attempts = 0, solved = 0, colliding = 0, simplifiedColliding = 0;
+    int solvedWithinOneSecond = 0;
     std::vector<double> times;            ///< every run's solve time (s), unsolved at the limit
     std::vector<double> simplifiedTimes;  ///< solve + simplification (s), unsolved at the limit
     std::vector<double> lengths, simplifiedLengths;
@@ -107,6 +109,7 @@ void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortc
         return;
     }
     ++tally.solved;
+    tally.solvedWithinOneSecond += seconds <= 1.0 ? 1 : 0;
     tally.times.push_back(seconds);
     og::PathGeometric &path = setup.getSolutionPath();
     tally.lengths.push_back(path.length());
@@ -132,17 +135,19 @@ int main(int argc, char **argv)
     const double timeLimit = argc > 3 ? std::atof(argv[3]) : 2.0;
     const unsigned int batchSize = argc > 4 ? static_cast<unsigned int>(std::atoi(argv[4])) : 8u;
     const int firstProblem = argc > 5 ? std::atoi(argv[5]) : 1;
-    const std::vector<std::string> chosen = bench::splitList(argc > 6 ? argv[6] : "fcl,rrtconnect,batch");
+    const std::vector<std::string> chosen = bench::splitList(argc > 6 ? argv[6] : "fcl,rrtconnect,batch,eager");
+    const unsigned int lazySamples = argc > 7 ? static_cast<unsigned int>(std::atoi(argv[7])) : 2u;
     auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
     const std::vector<std::string> labels{"FCL RRTConnect (discrete edges)", "RRTConnect (rastercheck, certified)",
-                                          "BatchRRTConnect (rastercheck, certified)"};
+                                          "BatchRRTConnect (rastercheck, certified, lazy)",
+                                          "BatchRRTConnect (rastercheck, certified, eager)"};
 
     std::printf(
         "Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
-        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u.\n",
-        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize);
+        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u, lazy_samples %u.\n",
+        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize, lazySamples);
     std::printf(
         "Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution. "
         "Times: median and p95 over all runs, unsolved ones at the limit (+1 s with simplification).\n\n");
@@ -175,8 +180,14 @@ int main(int argc, char **argv)
                     runSeed, tallies[labels[1]]);
             auto batch = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
             batch->setBatchSize(batchSize);
+            batch->setLazySamples(lazySamples);
             if (runs("batch"))
                 run(*ours, batch, true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
+            auto eager = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
+            eager->setBatchSize(batchSize);
+            eager->setLazy(false);
+            if (runs("eager"))
+                run(*ours, eager, true, timeLimit, *oracle, runSeed, tallies[labels[3]]);
         };
 
         if (robotName == "crane")
@@ -239,27 +250,31 @@ int main(int argc, char **argv)
         std::printf("### %s (%zu runs)\n\n", robotName.c_str(),
                     tallies[labels[runs("fcl")          ? 0
                                    : runs("rrtconnect") ? 1
-                                                        : 2]]
+                                   : runs("batch")      ? 2
+                                                        : 3]]
                         .times.size());
         std::printf(
-            "| planner | solved | colliding | median s | p95 s | median s, simplified | p95 s, simplified | "
+            "| planner | solved | within 1 s | colliding | median s | p95 s | median s, simplified | p95 s, simplified "
+            "| "
             "median length raw -> simplified | median states checked |\n");
-        std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+        std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
         for (const std::string &label : labels)
         {
             const Tally &t = tallies[label];
-            std::printf("| %s | %d/%d | %d (+%d simplified) | %.4f | %.4f | %.4f | %.4f | %.2f -> %.2f | %.0f |\n",
-                        label.c_str(), t.solved, t.attempts, t.colliding, t.simplifiedColliding, quantile(t.times, 0.5),
-                        quantile(t.times, 0.95), quantile(t.simplifiedTimes, 0.5), quantile(t.simplifiedTimes, 0.95),
-                        quantile(t.lengths, 0.5), quantile(t.simplifiedLengths, 0.5),
-                        label == labels[0] ? 0.0 : quantile(t.states, 0.5));
+            std::printf(
+                "| %s | %d/%d | %.1f %% | %d (+%d simplified) | %.4f | %.4f | %.4f | %.4f | %.2f -> %.2f | %.0f |\n",
+                label.c_str(), t.solved, t.attempts, t.attempts ? 100.0 * t.solvedWithinOneSecond / t.attempts : 0.0,
+                t.colliding, t.simplifiedColliding, quantile(t.times, 0.5), quantile(t.times, 0.95),
+                quantile(t.simplifiedTimes, 0.5), quantile(t.simplifiedTimes, 0.95), quantile(t.lengths, 0.5),
+                quantile(t.simplifiedLengths, 0.5), label == labels[0] ? 0.0 : quantile(t.states, 0.5));
         }
         const double rrt = quantile(tallies[labels[1]].times, 0.5),
                      batchMedian = quantile(tallies[labels[2]].times, 0.5);
         std::printf(
-            "\nMedian solve time: BatchRRTConnect %.2fx faster than RRTConnect on the same checker, "
-            "%.2fx faster than FCL RRTConnect.\n\n",
-            rrt / batchMedian, quantile(tallies[labels[0]].times, 0.5) / batchMedian);
+            "\nMedian solve time: BatchRRTConnect (lazy) %.2fx faster than RRTConnect on the same checker, "
+            "%.2fx faster than FCL RRTConnect, %.2fx faster than BatchRRTConnect eager.\n\n",
+            rrt / batchMedian, quantile(tallies[labels[0]].times, 0.5) / batchMedian,
+            quantile(tallies[labels[3]].times, 0.5) / batchMedian);
     }
     return 0;
 }

@@ -58,11 +58,12 @@ void seed(std::uint_fast32_t value)
 }
 
 /** \brief Solves with a new BatchRRTConnect; asserts an exact solution that the oracle accepts. */
-og::PathGeometric solveAndCheck(og::SimpleSetup &setup, double timeLimit, bool shortcut = false)
+og::PathGeometric solveAndCheck(og::SimpleSetup &setup, double timeLimit, bool shortcut = false, bool lazy = true)
 {
     setup.clear();
     auto planner = std::make_shared<rcp::BatchRRTConnect>(setup.getSpaceInformation());
     planner->setShortcut(shortcut);
+    planner->setLazy(lazy);
     setup.setPlanner(planner);
     const ob::PlannerStatus status = setup.solve(timeLimit);
     EXPECT_EQ(status, ob::PlannerStatus::EXACT_SOLUTION);
@@ -126,6 +127,83 @@ TEST(BatchRRTConnect, SolvesPandaProblemsWithPathsTheOracleAccepts)
         seed(7);
         const og::PathGeometric path = solveAndCheck(*setup, 60.0);
         EXPECT_GE(path.getStateCount(), 2u) << scenario;
+    }
+}
+
+/** \brief States the setup's rastercheck checker decided since the counters were reset (validity
+    checks and certified edges' states). */
+std::uint64_t statesChecked(const og::SimpleSetup &setup)
+{
+    const auto edges =
+        std::dynamic_pointer_cast<rco::CertifiedMotionValidator>(setup.getSpaceInformation()->getMotionValidator());
+    return edges->getCheckedStateCount() + rco::getStateValidityChecker(setup)->getCallCount();
+}
+
+void resetCounters(const og::SimpleSetup &setup)
+{
+    const auto edges =
+        std::dynamic_pointer_cast<rco::CertifiedMotionValidator>(setup.getSpaceInformation()->getMotionValidator());
+    ASSERT_TRUE(edges);
+    edges->resetStateCounter();
+    rco::getStateValidityChecker(setup)->resetCounters();
+}
+
+TEST(BatchRRTConnect, LazyAndEagerModesReturnCertifiedPathsAndLazyChecksFewerStates)
+{
+    // Both modes return paths whose every edge the certified validator accepts on its own; lazy
+    // mode decides only the candidate solutions' edges that way, so it checks fewer states.
+    RASTERCHECK_REQUIRE_DATA(root);
+    std::uint64_t states[2] = {0, 0};
+    for (const char *scenario : {"table_pick", "bookshelf_small", "box", "cage"})
+        for (const bool lazy : {false, true})
+        {
+            og::SimpleSetupPtr setup = pandaSetup(root, scenario);
+            setup->getSpaceInformation()->setup();
+            resetCounters(*setup);
+            seed(13);
+            const og::PathGeometric path = solveAndCheck(*setup, 60.0, false, lazy);
+            states[lazy] += statesChecked(*setup);
+            const ob::MotionValidatorPtr edges = setup->getSpaceInformation()->getMotionValidator();
+            for (std::size_t i = 0; i + 1 < path.getStateCount(); ++i)
+                EXPECT_TRUE(edges->checkMotion(path.getState(i), path.getState(i + 1)))
+                    << scenario << (lazy ? " lazy" : " eager") << " edge " << i;
+        }
+    EXPECT_LT(states[1], states[0] / 2) << "eager " << states[0] << ", lazy " << states[1];
+}
+
+TEST(BatchRRTConnect, LazyModeCutsARejectedCandidateAndPlansOn)
+{
+    // One state per new edge and a range as long as the space: the first candidate, the straight
+    // line from start to goal, passes the lazy check (both ends are free) but crosses the wall, so
+    // it is rejected; the planner goes on and finds the gap.
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    setAcrossTheWall(*setup);
+    auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
+    planner->setLazySamples(1);
+    planner->setRange(10.0);
+    setup->setPlanner(planner);
+    seed(4);
+    ASSERT_EQ(setup->solve(60.0), ob::PlannerStatus::EXACT_SOLUTION);
+    EXPECT_TRUE(collisionFree(*setup, setup->getSolutionPath()));
+    EXPECT_GE(planner->getRejectedCandidateCount(), 1u);
+    EXPECT_EQ(planner->getCandidateCount(), planner->getRejectedCandidateCount() + 1);
+    EXPECT_GE(planner->getCutStateCount(), 1u);  // seed 4: a later candidate's step through the wall
+    // What is left of the trees holds together: every state but the roots hangs from a parent that
+    // is itself in the tree (the start tree's edges point away from its root, the goal tree's
+    // toward it), so a cut took whole subtrees.
+    ob::PlannerData data(setup->getSpaceInformation());
+    planner->getPlannerData(data);
+    EXPECT_EQ(data.numStartVertices(), 1u);
+    EXPECT_EQ(data.numGoalVertices(), 1u);
+    std::vector<unsigned int> out, in;
+    for (unsigned int v = 0; v < data.numVertices(); ++v)
+    {
+        if (data.isStartVertex(v) || data.isGoalVertex(v))
+            continue;
+        const bool startTree = data.getVertex(v).getTag() == 1;
+        EXPECT_EQ(startTree ? data.getIncomingEdges(v, in) : data.getEdges(v, out), 1u) << v;
     }
 }
 
@@ -220,8 +298,12 @@ TEST(BatchRRTConnect, ParametersAndRegistry)
     const ob::PlannerPtr planner = rco::allocatePlanner("BatchRRTConnect", setup->getSpaceInformation());
     ASSERT_TRUE(std::dynamic_pointer_cast<rcp::BatchRRTConnect>(planner));
     EXPECT_EQ(planner->getName(), "BatchRRTConnect");
-    rco::setPlannerParameters(*planner, {{"batch_size", "16"}, {"range", "0.5"}, {"shortcut", "1"}});
+    rco::setPlannerParameters(
+        *planner, {{"batch_size", "16"}, {"range", "0.5"}, {"shortcut", "1"}, {"lazy", "0"}, {"lazy_samples", "3"}});
     auto batch = std::static_pointer_cast<rcp::BatchRRTConnect>(planner);
+    EXPECT_FALSE(batch->getLazy());
+    EXPECT_EQ(batch->getLazySamples(), 3u);
+    EXPECT_THROW(rco::setPlannerParameters(*planner, {{"lazy_samples", "0"}}), rc::ConfigurationError);
     EXPECT_EQ(batch->getBatchSize(), 16u);
     EXPECT_DOUBLE_EQ(batch->getRange(), 0.5);
     EXPECT_TRUE(batch->getShortcut());

@@ -23,6 +23,16 @@ BatchRRTConnect::BatchRRTConnect(const ob::SpaceInformationPtr &si) : ob::Planne
     declareParam<unsigned int>("batch_size", this, &BatchRRTConnect::setBatchSize, &BatchRRTConnect::getBatchSize,
                                "1:1:1024");
     declareParam<bool>("shortcut", this, &BatchRRTConnect::setShortcut, &BatchRRTConnect::getShortcut, "0,1");
+    declareParam<bool>("lazy", this, &BatchRRTConnect::setLazy, &BatchRRTConnect::getLazy, "0,1");
+    declareParam<unsigned int>("lazy_samples", this, &BatchRRTConnect::setLazySamples, &BatchRRTConnect::getLazySamples,
+                               "1:1:64");
+}
+
+void BatchRRTConnect::setLazySamples(unsigned int samples)
+{
+    if (samples == 0)
+        throw ConfigurationError(getName() + ": lazy_samples must be at least 1");
+    lazySamples_ = samples;
 }
 
 void BatchRRTConnect::setBatchSize(unsigned int samples)
@@ -76,14 +86,169 @@ void BatchRRTConnect::clear()
     connection_ = {nullptr, nullptr};
 }
 
-BatchRRTConnect::Motion *BatchRRTConnect::addMotion(const Tree &tree, const ob::State *state, Motion *parent)
+BatchRRTConnect::Motion *BatchRRTConnect::addMotion(const Tree &tree, const ob::State *state, Motion *parent,
+                                                    bool edgeDecided)
 {
     auto *motion = new Motion;
     motion->state = si_->cloneState(state);
     motion->parent = parent;
+    motion->tree = &tree;
+    motion->edgeDecided = edgeDecided;
+    if (parent)
+        parent->children.push_back(motion);
     motions_.push_back(motion);
     tree->add(motion);
     return motion;
+}
+
+void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid) const
+{
+    if (!lazy_)
+    {
+        edges_->check(edges, valid);
+        return;
+    }
+    // States at fractions 1/k, 2/k, ..., 1 of every edge (the start is a tree's state already).
+    const unsigned int k = lazySamples_;
+    std::vector<ob::State *> inner;
+    std::vector<const ob::State *> states;
+    states.reserve(edges.size() * k);
+    for (const ompl::Edge &edge : edges)
+    {
+        for (unsigned int j = 1; j < k; ++j)
+        {
+            inner.push_back(si_->allocState());
+            si_->getStateSpace()->interpolate(edge.from, edge.to, static_cast<double>(j) / k, inner.back());
+            states.push_back(inner.back());
+        }
+        states.push_back(edge.to);
+    }
+    std::vector<std::uint8_t> stateValid;
+    edges_->checkStates(states, stateValid);
+    valid.assign(edges.size(), 1);
+    for (std::size_t i = 0; i < states.size(); ++i)
+        valid[i / k] &= stateValid[i];
+    for (ob::State *state : inner)
+        si_->freeState(state);
+}
+
+void BatchRRTConnect::cutSubtree(Motion *motion)
+{
+    if (motion->parent)
+    {
+        std::vector<Motion *> &siblings = motion->parent->children;
+        siblings.erase(std::find(siblings.begin(), siblings.end(), motion));
+    }
+    std::vector<Motion *> stack{motion};
+    while (!stack.empty())
+    {
+        Motion *m = stack.back();
+        stack.pop_back();
+        (*m->tree)->remove(m);
+        m->cut = true;
+        ++cutMotions_;
+        stack.insert(stack.end(), m->children.begin(), m->children.end());
+    }
+}
+
+bool BatchRRTConnect::rakeEdges(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
+                                std::vector<std::uint8_t> &valid) const
+{
+    valid.assign(edges.size(), 1);
+    const double segment = si_->getStateSpace()->getLongestValidSegmentLength();
+    std::vector<double> length(edges.size());
+    for (std::size_t e = 0; e < edges.size(); ++e)
+        length[e] = si_->distance(edges[e].from, edges[e].to);
+    std::vector<ob::State *> points;
+    std::vector<const ob::State *> states;
+    std::vector<std::size_t> owner;
+    std::vector<std::uint8_t> stateValid;
+    bool passed = true;
+    // Level L checks the odd multiples of 2^-L of every edge still longer than 2^-L times the
+    // segment length and not yet clean at that level; a level with a rejected state ends the rake.
+    for (unsigned int level = 1; passed; ++level)
+    {
+        const double parts = std::ldexp(1.0, static_cast<int>(level));
+        states.clear();
+        owner.clear();
+        bool deeper = false;  // some edge still needs this level
+        for (std::size_t e = 0; e < edges.size(); ++e)
+        {
+            if (length[e] * 2.0 / parts <= segment)
+                continue;
+            deeper = true;
+            if (level <= levels[e])
+                continue;
+            for (double j = 1.0; j < parts; j += 2.0)
+            {
+                if (states.size() == points.size())
+                    points.push_back(si_->allocState());
+                ob::State *point = points[states.size()];
+                si_->getStateSpace()->interpolate(edges[e].from, edges[e].to, j / parts, point);
+                states.push_back(point);
+                owner.push_back(e);
+            }
+        }
+        if (!deeper)
+            break;
+        edges_->checkStates(states, stateValid);
+        for (std::size_t i = 0; i < states.size(); ++i)
+            if (!stateValid[i])
+            {
+                valid[owner[i]] = 0;
+                passed = false;
+            }
+        for (std::size_t e = 0; e < edges.size(); ++e)
+            if (valid[e] && levels[e] + 1 == level)
+                levels[e] = level;
+    }
+    for (ob::State *point : points)
+        si_->freeState(point);
+    return passed;
+}
+
+bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge)
+{
+    // The undecided edges of both branches (parent to child, as they were grown) and the bridge.
+    std::vector<ompl::Edge> edges;
+    std::vector<Motion *> below;  ///< the motion under each tree edge; null for the bridge
+    for (Motion *end : {startEnd, goalEnd})
+        for (Motion *m = end; m->parent; m = m->parent)
+            if (!m->edgeDecided)
+            {
+                edges.push_back({m->parent->state, m->state});
+                below.push_back(m);
+            }
+    edges.push_back(bridge);
+    below.push_back(nullptr);
+    ++candidates_;
+    // Most candidates cross an obstacle that the few states of their edges missed: states at
+    // rising density find that for a fraction of a certification's cost. Only a candidate that
+    // passes them at the space's resolution is certified.
+    std::vector<std::uint8_t> valid;
+    std::vector<unsigned int> levels;
+    for (const Motion *m : below)
+        levels.push_back(m ? m->rakedLevels : 0u);
+    const bool certify = rakeEdges(edges, levels, valid);
+    for (std::size_t e = 0; e < edges.size(); ++e)
+        if (below[e])
+            below[e]->rakedLevels = levels[e];
+    if (certify)
+        edges_->check(edges, valid);
+    bool accepted = true;
+    for (std::size_t e = 0; e < edges.size(); ++e)
+    {
+        accepted = accepted && valid[e];
+        // An edge the rake did not reject is still undecided: only the EdgeChecker decides.
+        if (certify && below[e] && valid[e])
+            below[e]->edgeDecided = true;
+    }
+    // Cut after the loop: a rejected edge's subtree may hold another rejected edge of the branch.
+    for (std::size_t e = 0; e < edges.size(); ++e)
+        if (below[e] && !valid[e] && !below[e]->cut)
+            cutSubtree(below[e]);
+    rejectedCandidates_ += accepted ? 0 : 1;
+    return accepted;
 }
 
 std::vector<const ob::State *> BatchRRTConnect::branch(const Motion *motion)
@@ -137,6 +302,7 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
         for (std::size_t l = 0; l < lines.size(); ++l)
         {
             Line &line = lines[l];
+            line.alive = line.alive && !line.last->cut && !line.target->cut;
             if (!line.alive)
                 continue;
             const double f = (line.grown + 1) * line.step;
@@ -150,27 +316,34 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             edges.push_back({line.last->state, to});
             owner.push_back(l);
         }
-        edges_->check(edges, valid);
+        checkNewEdges(edges, valid);
         live = false;
         for (std::size_t e = 0; e < edges.size(); ++e)
         {
             Line &line = lines[owner[e]];
-            if (!valid[e])
+            // A lazy candidate rejected earlier in this round may have cut either end of the line.
+            if (!valid[e] || line.last->cut || line.target->cut)
             {
                 line.alive = false;
                 continue;
             }
             if (edges[e].to != line.target->state)
             {
-                line.last = addMotion(*line.other, edges[e].to, line.last);
+                line.last = addMotion(*line.other, edges[e].to, line.last, !lazy_);
                 ++line.grown;
                 live = true;
                 continue;
             }
             // Joined: root of the start tree ... last state of one tree, first of the other ... goal.
             const bool fromStart = line.other == &goalTree_;
-            connection_ = fromStart ? std::pair<const Motion *, const Motion *>(line.target, line.last)
-                                    : std::pair<const Motion *, const Motion *>(line.last, line.target);
+            Motion *startEnd = fromStart ? line.target : line.last;
+            Motion *goalEnd = fromStart ? line.last : line.target;
+            if (lazy_ && !decideCandidate(startEnd, goalEnd, edges[e]))
+            {
+                line.alive = false;
+                continue;
+            }
+            connection_ = {startEnd, goalEnd};
             std::vector<const ob::State *> states = branch(connection_.first);
             const std::vector<const ob::State *> back = branch(connection_.second);
             states.insert(states.end(), back.rbegin(), back.rend());
@@ -200,7 +373,7 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
         return ob::PlannerStatus::UNRECOGNIZED_GOAL_TYPE;
     }
     while (const ob::State *start = pis_.nextStart())
-        addMotion(startTree_, start, nullptr);
+        addMotion(startTree_, start, nullptr, true);
     if (startTree_->size() == 0)
     {
         OMPL_LOG(ERROR, "%s: no valid start state", getName().c_str());
@@ -213,6 +386,7 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
     }
     if (!sampler_)
         sampler_ = si_->allocStateSampler();
+    candidates_ = rejectedCandidates_ = cutMotions_ = 0;
     OMPL_LOG(INFO, "%s: starting with %u states, %u samples per batch", getName().c_str(),
              static_cast<unsigned int>(startTree_->size() + goalTree_->size()), batchSize_);
 
@@ -235,7 +409,7 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
         if (goalTree_->size() == 0 || pis_.getSampledGoalsCount() < goalTree_->size() / 2)
         {
             if (const ob::State *state = goalTree_->size() == 0 ? pis_.nextGoal(ptc) : pis_.nextGoal())
-                fresh.emplace_back(addMotion(goalTree_, state, nullptr), &goalTree_);
+                fresh.emplace_back(addMotion(goalTree_, state, nullptr, true), &goalTree_);
             if (goalTree_->size() == 0)
             {
                 OMPL_LOG(ERROR, "%s: no valid goal state could be sampled", getName().c_str());
@@ -268,15 +442,18 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
             grown.push_back(&tree);
             edges.push_back({from->state, samples[i]});
         }
-        edges_->check(edges, valid);
+        checkNewEdges(edges, valid);
         for (std::size_t k = 0; k < edges.size(); ++k)
             if (valid[k])
-                fresh.emplace_back(addMotion(*grown[k], edges[k].to, nearest[k]), grown[k]);
+                fresh.emplace_back(addMotion(*grown[k], edges[k].to, nearest[k], !lazy_), grown[k]);
     }
     si_->freeStates(samples);
     OMPL_LOG(INFO, "%s: %u states in the trees (%u start, %u goal)", getName().c_str(),
-             static_cast<unsigned int>(motions_.size()), static_cast<unsigned int>(startTree_->size()),
-             static_cast<unsigned int>(goalTree_->size()));
+             static_cast<unsigned int>(startTree_->size() + goalTree_->size()),
+             static_cast<unsigned int>(startTree_->size()), static_cast<unsigned int>(goalTree_->size()));
+    if (lazy_)
+        OMPL_LOG(INFO, "%s: %u candidate solutions decided, %u rejected, %u states cut", getName().c_str(), candidates_,
+                 rejectedCandidates_, cutMotions_);
     return solved ? ob::PlannerStatus::EXACT_SOLUTION : ob::PlannerStatus::TIMEOUT;
 }
 

@@ -28,9 +28,20 @@ namespace rastercheck::planners
     certified edges of the planner's own over rastercheck's validity checker (collision-free at
     every point), else (a foreign checker) one edge at a time.
 
+    Lazy mode ("lazy", on by default): a new edge is decided at lazy_samples states spread evenly
+    along it (its end included; all new edges' states in one batch) instead of by the EdgeChecker,
+    and only when a connection joins the trees are the edges of that candidate solution decided by
+    the EdgeChecker, in one batch. An edge it rejects is cut with the subtree below it (the states
+    leave the nearest-neighbour structure) and the search goes on; an edge it accepts is never
+    decided again. The returned path is therefore decided edge by edge exactly as in eager mode
+    (certified edges: collision-free at every point), but the edges that never lie on a candidate
+    solution, most of both trees, cost a few state checks instead of a certification (LazyRRT's
+    idea, on both trees of RRT-Connect).
+
     Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's extent),
     "batch_size" (samples per iteration, >= 1), "shortcut" (0 or 1: shorten the solution with
-    BatchShortcutter before returning it). Seeded through OMPL's RNG like every OMPL
+    BatchShortcutter before returning it), "lazy" (0 or 1) and "lazy_samples" (states per new edge
+    in lazy mode, >= 1). Seeded through OMPL's RNG like every OMPL
     planner: a run with the same seed and verdicts grows the same trees. Honours the termination
     condition between batches; goal regions must be sampleable (GoalSampleableRegion). */
 class BatchRRTConnect : public ::ompl::base::Planner
@@ -53,20 +64,53 @@ public:
         in batches, within the time left) before it is returned. */
     void setShortcut(bool shortcut) { shortcut_ = shortcut; }
     bool getShortcut() const { return shortcut_; }
+    /** \brief Lazy mode (see the class comment): new edges checked at a few states, a candidate
+        solution's edges decided by the EdgeChecker only when the trees join. */
+    void setLazy(bool lazy) { lazy_ = lazy; }
+    bool getLazy() const { return lazy_; }
+    /** \brief States checked per new edge in lazy mode; throws ConfigurationError for 0. */
+    void setLazySamples(unsigned int samples);
+    unsigned int getLazySamples() const { return lazySamples_; }
+    /** \brief Lazy mode, the last solve: candidate solutions decided, how many were rejected, and
+        the states cut from the trees with the rejected edges above them. */
+    unsigned int getCandidateCount() const { return candidates_; }
+    unsigned int getRejectedCandidateCount() const { return rejectedCandidates_; }
+    unsigned int getCutStateCount() const { return cutMotions_; }
 
 private:
+    struct Motion;
+    using Tree = std::shared_ptr<::ompl::NearestNeighbors<Motion *>>;
     struct Motion
     {
         ::ompl::base::State *state = nullptr;
         Motion *parent = nullptr;
+        const Tree *tree = nullptr;
+        std::vector<Motion *> children;  ///< kept for cutting subtrees in lazy mode
+        bool edgeDecided = true;         ///< the edge from parent was decided by the EdgeChecker
+        unsigned int rakedLevels = 0;    ///< levels of rakeEdges the undecided edge from parent passed
+        bool cut = false;                ///< removed from its tree with a rejected edge above it
     };
-    using Tree = std::shared_ptr<::ompl::NearestNeighbors<Motion *>>;
 
     /** \brief Connect step: each \a fresh state (and its tree) pulls the other tree toward it;
         true, with the solution path added, when a line joins the trees. */
     bool connect(const std::vector<std::pair<Motion *, const Tree *>> &fresh,
                  const ::ompl::base::PlannerTerminationCondition &ptc);
-    Motion *addMotion(const Tree &tree, const ::ompl::base::State *state, Motion *parent);
+    /** \brief Decides the new \a edges: by the EdgeChecker, or in lazy mode at lazy_samples states each. */
+    void checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid) const;
+    /** \brief Lazy mode: decides the undecided edges from both trees' roots to \a startEnd and
+        \a goalEnd and the \a bridge between them, in one batch; cuts the subtree below each rejected
+        tree edge. True when every edge is accepted. */
+    bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge);
+    /** \brief Checks states along \a edges at rising density (the midpoints, then the quarter
+        points, ...) down to the space's longest valid segment, one batch per level; stops after the
+        first level with a rejected state. levels[e]: the levels edge e passed before (skipped), and
+        on return the levels it has passed now. valid[e] = 0 for the edges where a state was
+        rejected; true when none was. */
+    bool rakeEdges(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
+                   std::vector<std::uint8_t> &valid) const;
+    /** \brief Removes \a motion and every motion below it from their tree. */
+    void cutSubtree(Motion *motion);
+    Motion *addMotion(const Tree &tree, const ::ompl::base::State *state, Motion *parent, bool edgeDecided);
     /** \brief The states from \a a tree's root to \a motion's, root first. */
     static std::vector<const ::ompl::base::State *> branch(const Motion *motion);
     void freeMemory();
@@ -78,6 +122,9 @@ private:
     double range_ = 0.0;
     unsigned int batchSize_ = 8;
     bool shortcut_ = false;
+    bool lazy_ = true;
+    unsigned int lazySamples_ = 2;
     std::pair<const Motion *, const Motion *> connection_{nullptr, nullptr};  ///< (start tree, goal tree)
+    unsigned int candidates_ = 0, rejectedCandidates_ = 0, cutMotions_ = 0;   ///< lazy mode, this solve
 };
 }  // namespace rastercheck::planners

@@ -13,6 +13,7 @@ namespace rastercheck::planners
 {
 EdgeChecker::EdgeChecker(const ob::SpaceInformationPtr &si) : si_(si)
 {
+    states_ = dynamic_cast<const ompl::StateValidityChecker *>(si_->getStateValidityChecker().get());
     const ob::MotionValidatorPtr &validator = si_->getMotionValidator();
     batch_ = dynamic_cast<const ompl::BatchMotionValidator *>(validator.get());
     if (batch_)
@@ -20,21 +21,20 @@ EdgeChecker::EdgeChecker(const ob::SpaceInformationPtr &si) : si_(si)
         description_ = dynamic_cast<const ompl::CertifiedMotionValidator *>(batch_) ? "certified" : "batched";
         return;
     }
-    const auto checker = std::dynamic_pointer_cast<ompl::StateValidityChecker>(si_->getStateValidityChecker());
-    if (!checker)
+    if (!states_)
     {
         description_ = "one at a time";
         return;
     }
     try
     {
-        owned_ = std::make_shared<ompl::CertifiedMotionValidator>(si_, *checker);
+        owned_ = std::make_shared<ompl::CertifiedMotionValidator>(si_, *states_);
         description_ = "certified";
     }
     catch (const ConfigurationError &error)
     {
         OMPL_LOG(WARN, "%s; edges are checked at the space's resolution instead", error.what());
-        owned_ = std::make_shared<ompl::MotionValidator>(si_, *checker);
+        owned_ = std::make_shared<ompl::MotionValidator>(si_, *states_);
         description_ = "batched";
     }
     batch_ = owned_.get();
@@ -64,5 +64,19 @@ void EdgeChecker::check(const std::vector<ompl::Edge> &edges, std::vector<std::u
         valid[i] = si_->checkMotion(edges[i].from, edges[i].to, last) ? 1 : 0;
         (*lastValid)[i] = valid[i] ? 1.0 : last.second;
     }
+}
+
+void EdgeChecker::checkStates(const std::vector<const ob::State *> &states, std::vector<std::uint8_t> &valid) const
+{
+    valid.assign(states.size(), 0);
+    if (states.empty())
+        return;
+    if (states_)
+    {
+        states_->areValid(states.data(), states.size(), valid.data());
+        return;
+    }
+    for (std::size_t i = 0; i < states.size(); ++i)
+        valid[i] = si_->isValid(states[i]) ? 1 : 0;
 }
 }  // namespace rastercheck::planners

@@ -8,6 +8,7 @@
 #include <ompl/base/SpaceInformation.h>
 
 #include "rastercheck/ompl/BatchMotionValidator.h"
+#include "rastercheck/ompl/StateValidityChecker.h"
 
 namespace rastercheck::planners
 {
@@ -27,11 +28,17 @@ public:
     void check(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid,
                std::vector<double> *lastValid = nullptr) const;
 
+    /** \brief Decides \a states alone (not the motions between them): valid[i] = 1 when
+        SpaceInformation::isValid accepts states[i]. One Checker::check call when the validity
+        checker is rastercheck's, else one isValid call per state. */
+    void checkStates(const std::vector<const ::ompl::base::State *> &states, std::vector<std::uint8_t> &valid) const;
+
     /** \brief "certified", "batched" or "one at a time": what check() runs. */
     const std::string &description() const { return description_; }
 
 private:
     ::ompl::base::SpaceInformationPtr si_;
+    const ompl::StateValidityChecker *states_ = nullptr;  ///< rastercheck's, or null
     const ompl::BatchMotionValidator *batch_ = nullptr;
     std::shared_ptr<ompl::BatchMotionValidator> owned_;
     std::string description_;

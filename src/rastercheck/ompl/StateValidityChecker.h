@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 
@@ -35,6 +36,11 @@ public:
     /** \brief Same verdict as isValid(state); \a contact receives why an invalid state is invalid
         (Contact::Kind::OutOfBounds for states outside the space's bounds). */
     bool isValid(const ::ompl::base::State *state, Contact &contact) const;
+
+    /** \brief Decides \a n states in one Checker::check call (one batch: one GPU pass where the
+        checker has a device): valid[i] = 1 when isValid(states[i]) would return true. Counted as n
+        calls. */
+    void areValid(const ::ompl::base::State *const *states, std::size_t n, std::uint8_t *valid) const;
 
     /** \brief Number of isValid() calls since construction or resetCounters(). */
     std::uint64_t getCallCount() const { return calls_.load(std::memory_order_relaxed); }
