@@ -97,12 +97,16 @@ void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortc
         validity->resetCounters();
     setup.setPlanner(planner);
     const auto begin = std::chrono::steady_clock::now();
-    const bool solved = setup.solve(timeLimit) == ob::PlannerStatus::EXACT_SOLUTION;
+    const ob::PlannerStatus status = setup.solve(timeLimit);
+    const bool solved = status == ob::PlannerStatus::EXACT_SOLUTION;
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
     ++tally.attempts;
     tally.states.push_back(static_cast<double>(statesChecked(setup)));
     if (!solved || !collisionFree(setup.getSolutionPath(), oracle))
     {
+        // Named on stderr, before the problem's "done" line: which problems a planner misses.
+        std::fprintf(stderr, "  %s: %s\n", planner->getName().c_str(),
+                     solved ? "colliding path" : status.asString().c_str());
         tally.colliding += solved ? 1 : 0;
         tally.times.push_back(timeLimit);
         tally.simplifiedTimes.push_back(timeLimit + 1.0);

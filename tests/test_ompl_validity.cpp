@@ -128,6 +128,41 @@ TEST(OmplValidity, OutOfBoundsAndNonFiniteStatesAreInvalid)
     EXPECT_FALSE(context.validity->isValid(state.get()));
 }
 
+TEST(OmplValidity, AreValidGivesIsValidsVerdictsInOneBatch)
+{
+    // 400 uniform states (a mix of free and colliding among the boxes), one outside the bounds and
+    // one with a NaN: areValid's verdicts are isValid's, and it counts every state as a call.
+    const Context context = cubeAmongBoxes();
+    ob::StateSamplerPtr sampler = context.si->allocStateSampler();
+    std::vector<ob::State *> owned(402);
+    for (ob::State *&state : owned)
+    {
+        state = context.si->allocState();
+        sampler->sampleUniform(state);
+    }
+    context.mapping->fromConfiguration(std::vector<double>{0, 0, 2.5, 0, 0, 0, 1}, owned[7]);
+    context.mapping->fromConfiguration(std::vector<double>{0, std::nan(""), 0, 0, 0, 0, 1}, owned[300]);
+    const std::vector<const ob::State *> states(owned.begin(), owned.end());
+    context.validity->resetCounters();
+    std::vector<std::uint8_t> valid(states.size(), 2);
+    context.validity->areValid(states.data(), states.size(), valid.data());
+    EXPECT_EQ(context.validity->getCallCount(), states.size());
+    const std::uint64_t invalid = context.validity->getInvalidCount();
+    std::size_t free = 0;
+    for (std::size_t i = 0; i < states.size(); ++i)
+    {
+        EXPECT_EQ(valid[i] != 0, context.validity->isValid(states[i])) << i;
+        free += valid[i];
+    }
+    EXPECT_EQ(valid[7], 0);
+    EXPECT_EQ(valid[300], 0);
+    EXPECT_EQ(invalid, states.size() - free);
+    EXPECT_GT(free, 40u);
+    EXPECT_GT(invalid, 20u);
+    for (ob::State *state : owned)
+        context.si->freeState(state);
+}
+
 TEST(OmplValidity, MotionValidatorMatchesDiscreteOnSyntheticScene)
 {
     const Context context = cubeAmongBoxes();

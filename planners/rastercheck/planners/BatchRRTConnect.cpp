@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include <ompl/base/goals/GoalSampleableRegion.h>
 #include <ompl/geometric/PathGeometric.h>
@@ -24,6 +25,8 @@ BatchRRTConnect::BatchRRTConnect(const ob::SpaceInformationPtr &si) : ob::Planne
                                "1:1:1024");
     declareParam<bool>("shortcut", this, &BatchRRTConnect::setShortcut, &BatchRRTConnect::getShortcut, "0,1");
     declareParam<bool>("lazy", this, &BatchRRTConnect::setLazy, &BatchRRTConnect::getLazy, "0,1");
+    declareParam<unsigned int>("lazy_limit", this, &BatchRRTConnect::setLazyLimit, &BatchRRTConnect::getLazyLimit,
+                               "1:1:1000000");
     declareParam<unsigned int>("lazy_samples", this, &BatchRRTConnect::setLazySamples, &BatchRRTConnect::getLazySamples,
                                "1:1:64");
 }
@@ -84,6 +87,7 @@ void BatchRRTConnect::clear()
     if (goalTree_)
         goalTree_->clear();
     connection_ = {nullptr, nullptr};
+    ghosts_[0] = ghosts_[1] = 0;
 }
 
 BatchRRTConnect::Motion *BatchRRTConnect::addMotion(const Tree &tree, const ob::State *state, Motion *parent,
@@ -101,9 +105,9 @@ BatchRRTConnect::Motion *BatchRRTConnect::addMotion(const Tree &tree, const ob::
     return motion;
 }
 
-void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid) const
+void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid)
 {
-    if (!lazy_)
+    if (!lazyNow_)
     {
         edges_->check(edges, valid);
         return;
@@ -125,6 +129,7 @@ void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::v
     }
     std::vector<std::uint8_t> stateValid;
     edges_->checkStates(states, stateValid);
+    lazyStates_ += states.size();
     valid.assign(edges.size(), 1);
     for (std::size_t i = 0; i < states.size(); ++i)
         valid[i / k] &= stateValid[i];
@@ -139,20 +144,76 @@ void BatchRRTConnect::cutSubtree(Motion *motion)
         std::vector<Motion *> &siblings = motion->parent->children;
         siblings.erase(std::find(siblings.begin(), siblings.end(), motion));
     }
+    // Cut motions stay in the nearest-neighbour structure as ghosts (removing them one by one from
+    // OMPL's GNAT rebuilds it every 500 removals, which took 80 % of a lazy run on OMPL.app's Home);
+    // nearest() skips them, and the structure is rebuilt once its ghosts are a fifth of it.
     std::vector<Motion *> stack{motion};
     while (!stack.empty())
     {
         Motion *m = stack.back();
         stack.pop_back();
-        (*m->tree)->remove(m);
         m->cut = true;
+        ++ghosts(*m->tree);
         ++cutMotions_;
         stack.insert(stack.end(), m->children.begin(), m->children.end());
     }
+    const Tree &tree = *motion->tree;
+    if (4 * ghosts(tree) > liveSize(tree))
+    {
+        std::vector<Motion *> all, live;
+        tree->list(all);
+        std::copy_if(all.begin(), all.end(), std::back_inserter(live), [](const Motion *m) { return !m->cut; });
+        tree->clear();
+        tree->add(live);
+        ghosts(tree) = 0;
+    }
+}
+
+void BatchRRTConnect::abandonLaziness()
+{
+    // Where candidates keep failing, the lazy trees grow through obstacles faster than candidates
+    // cut them back (OMPL.app's Home: 13 880 candidates rejected in 15 s, trees three times the
+    // size of an eager run's that solves in 2.4 s). Keep only what was decided, and go on eagerly.
+    OMPL_LOG(INFO, "%s: %u candidates rejected; the rest of this solve decides every new edge", getName().c_str(),
+             rejectedCandidates_);
+    lazyNow_ = false;
+    for (const Tree *tree : {&startTree_, &goalTree_})
+    {
+        std::vector<Motion *> motions;
+        (*tree)->list(motions);
+        for (Motion *motion : motions)
+            if (!motion->cut && !motion->edgeDecided)
+                cutSubtree(motion);
+    }
+}
+
+std::size_t &BatchRRTConnect::ghosts(const Tree &tree)
+{
+    return ghosts_[&tree == &startTree_ ? 0 : 1];
+}
+
+std::size_t BatchRRTConnect::liveSize(const Tree &tree) const
+{
+    return tree->size() - ghosts_[&tree == &startTree_ ? 0 : 1];
+}
+
+BatchRRTConnect::Motion *BatchRRTConnect::nearest(const Tree &tree, const Motion *probe) const
+{
+    Motion *motion = tree->nearest(const_cast<Motion *>(probe));
+    // Roots are never cut, so some k finds a live motion.
+    std::vector<Motion *> near;
+    for (std::size_t k = 4; motion->cut; k *= 2)
+    {
+        tree->nearestK(const_cast<Motion *>(probe), k, near);
+        const auto live = std::find_if(near.begin(), near.end(), [](const Motion *m) { return !m->cut; });
+        if (live != near.end())
+            motion = *live;
+    }
+    return motion;
 }
 
 bool BatchRRTConnect::rakeEdges(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
-                                std::vector<std::uint8_t> &valid) const
+                                std::vector<std::uint8_t> &valid)
 {
     valid.assign(edges.size(), 1);
     const double segment = si_->getStateSpace()->getLongestValidSegmentLength();
@@ -192,6 +253,7 @@ bool BatchRRTConnect::rakeEdges(const std::vector<ompl::Edge> &edges, std::vecto
         if (!deeper)
             break;
         edges_->checkStates(states, stateValid);
+        rakedStates_ += states.size();
         for (std::size_t i = 0; i < states.size(); ++i)
             if (!stateValid[i])
             {
@@ -207,7 +269,7 @@ bool BatchRRTConnect::rakeEdges(const std::vector<ompl::Edge> &edges, std::vecto
     return passed;
 }
 
-bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge)
+bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided)
 {
     // The undecided edges of both branches (parent to child, as they were grown) and the bridge.
     std::vector<ompl::Edge> edges;
@@ -219,8 +281,13 @@ bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const o
                 edges.push_back({m->parent->state, m->state});
                 below.push_back(m);
             }
-    edges.push_back(bridge);
-    below.push_back(nullptr);
+    if (!bridgeDecided)
+    {
+        edges.push_back(bridge);
+        below.push_back(nullptr);
+    }
+    if (edges.empty())
+        return true;  // eager mode: every edge was decided when it was grown
     ++candidates_;
     // Most candidates cross an obstacle that the few states of their edges missed: states at
     // rising density find that for a fraction of a certification's cost. Only a candidate that
@@ -248,6 +315,8 @@ bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const o
         if (below[e] && !valid[e] && !below[e]->cut)
             cutSubtree(below[e]);
     rejectedCandidates_ += accepted ? 0 : 1;
+    if (!accepted && lazyNow_ && rejectedCandidates_ >= lazyLimit_)
+        abandonLaziness();
     return accepted;
 }
 
@@ -281,7 +350,7 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
         Line line;
         line.target = motion;
         line.other = tree == &startTree_ ? &goalTree_ : &startTree_;
-        line.last = (*line.other)->nearest(motion);
+        line.last = nearest(*line.other, motion);
         line.origin = line.last->state;
         const double d = si_->distance(line.origin, motion->state);
         line.step = d > range_ ? range_ / d : 1.0;
@@ -316,6 +385,7 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             edges.push_back({line.last->state, to});
             owner.push_back(l);
         }
+        const bool lazyRound = lazyNow_;  // a rejected candidate below may end laziness mid-round
         checkNewEdges(edges, valid);
         live = false;
         for (std::size_t e = 0; e < edges.size(); ++e)
@@ -329,7 +399,7 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             }
             if (edges[e].to != line.target->state)
             {
-                line.last = addMotion(*line.other, edges[e].to, line.last, !lazy_);
+                line.last = addMotion(*line.other, edges[e].to, line.last, !lazyRound);
                 ++line.grown;
                 live = true;
                 continue;
@@ -338,7 +408,7 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             const bool fromStart = line.other == &goalTree_;
             Motion *startEnd = fromStart ? line.target : line.last;
             Motion *goalEnd = fromStart ? line.last : line.target;
-            if (lazy_ && !decideCandidate(startEnd, goalEnd, edges[e]))
+            if (!decideCandidate(startEnd, goalEnd, edges[e], !lazyRound))
             {
                 line.alive = false;
                 continue;
@@ -387,6 +457,8 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
     if (!sampler_)
         sampler_ = si_->allocStateSampler();
     candidates_ = rejectedCandidates_ = cutMotions_ = 0;
+    lazyNow_ = lazy_;
+    lazyStates_ = rakedStates_ = 0;
     OMPL_LOG(INFO, "%s: starting with %u states, %u samples per batch", getName().c_str(),
              static_cast<unsigned int>(startTree_->size() + goalTree_->size()), batchSize_);
 
@@ -395,7 +467,7 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
     Motion probe;
     // States added since the last connection round, and the tree each belongs to.
     std::vector<std::pair<Motion *, const Tree *>> fresh;
-    std::vector<Motion *> nearest;
+    std::vector<Motion *> parents;  ///< the tree state each new edge starts from
     std::vector<const Tree *> grown;
     std::vector<ompl::Edge> edges;
     std::vector<std::uint8_t> valid;
@@ -406,7 +478,7 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
         // Goal states: the first one waits for the goal region (up to ptc); more while it offers
         // new ones, as RRT-Connect. A new goal state tries to connect to the start tree (the
         // first one: the straight line from start to goal).
-        if (goalTree_->size() == 0 || pis_.getSampledGoalsCount() < goalTree_->size() / 2)
+        if (goalTree_->size() == 0 || pis_.getSampledGoalsCount() < liveSize(goalTree_) / 2)
         {
             if (const ob::State *state = goalTree_->size() == 0 ? pis_.nextGoal(ptc) : pis_.nextGoal())
                 fresh.emplace_back(addMotion(goalTree_, state, nullptr, true), &goalTree_);
@@ -425,35 +497,38 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
         // Extend: batch_size samples, alternately for each tree; each tree steps from its nearest
         // state toward the sample by at most range; all edges decided in one call.
         edges.clear();
-        nearest.clear();
+        parents.clear();
         grown.clear();
         for (unsigned int i = 0; i < batchSize_; ++i)
         {
             const Tree &tree = extensions++ % 2 == 0 ? startTree_ : goalTree_;
             sampler_->sampleUniform(samples[i]);
             probe.state = samples[i];
-            Motion *from = tree->nearest(&probe);
+            Motion *from = nearest(tree, &probe);
             const double d = si_->distance(from->state, samples[i]);
             if (!(d > 0.0))
                 continue;
             if (d > range_)
                 si_->getStateSpace()->interpolate(from->state, samples[i], range_ / d, samples[i]);
-            nearest.push_back(from);
+            parents.push_back(from);
             grown.push_back(&tree);
             edges.push_back({from->state, samples[i]});
         }
         checkNewEdges(edges, valid);
         for (std::size_t k = 0; k < edges.size(); ++k)
             if (valid[k])
-                fresh.emplace_back(addMotion(*grown[k], edges[k].to, nearest[k], !lazy_), grown[k]);
+                fresh.emplace_back(addMotion(*grown[k], edges[k].to, parents[k], !lazyNow_), grown[k]);
     }
     si_->freeStates(samples);
     OMPL_LOG(INFO, "%s: %u states in the trees (%u start, %u goal)", getName().c_str(),
-             static_cast<unsigned int>(startTree_->size() + goalTree_->size()),
-             static_cast<unsigned int>(startTree_->size()), static_cast<unsigned int>(goalTree_->size()));
+             static_cast<unsigned int>(liveSize(startTree_) + liveSize(goalTree_)),
+             static_cast<unsigned int>(liveSize(startTree_)), static_cast<unsigned int>(liveSize(goalTree_)));
     if (lazy_)
-        OMPL_LOG(INFO, "%s: %u candidate solutions decided, %u rejected, %u states cut", getName().c_str(), candidates_,
-                 rejectedCandidates_, cutMotions_);
+        OMPL_LOG(INFO,
+                 "%s: %u candidate solutions, %u rejected, %u states cut; %llu states checked on new edges, %llu along "
+                 "candidates",
+                 getName().c_str(), candidates_, rejectedCandidates_, cutMotions_,
+                 static_cast<unsigned long long>(lazyStates_), static_cast<unsigned long long>(rakedStates_));
     return solved ? ob::PlannerStatus::EXACT_SOLUTION : ob::PlannerStatus::TIMEOUT;
 }
 
@@ -467,6 +542,8 @@ void BatchRRTConnect::getPlannerData(ob::PlannerData &data) const
             (*tree)->list(motions);
         for (const Motion *motion : motions)
         {
+            if (motion->cut)
+                continue;
             const ob::PlannerDataVertex vertex(motion->state, tag);
             if (!motion->parent)
                 tag == 1 ? data.addStartVertex(vertex) : data.addGoalVertex(vertex);

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+#include <cstdint>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -30,18 +32,21 @@ namespace rastercheck::planners
 
     Lazy mode ("lazy", on by default): a new edge is decided at lazy_samples states spread evenly
     along it (its end included; all new edges' states in one batch) instead of by the EdgeChecker,
-    and only when a connection joins the trees are the edges of that candidate solution decided by
-    the EdgeChecker, in one batch. An edge it rejects is cut with the subtree below it (the states
-    leave the nearest-neighbour structure) and the search goes on; an edge it accepts is never
-    decided again. The returned path is therefore decided edge by edge exactly as in eager mode
-    (certified edges: collision-free at every point), but the edges that never lie on a candidate
-    solution, most of both trees, cost a few state checks instead of a certification (LazyRRT's
-    idea, on both trees of RRT-Connect).
+    and only when a connection joins the trees are the edges of that candidate solution decided:
+    first by states at rising density down to the space's resolution (most failing candidates end
+    there, cheaply), then by the EdgeChecker, in one batch. An edge either rejects is cut with the
+    subtree below it and the search goes on; an edge the EdgeChecker accepts is never decided
+    again. The returned path is therefore decided edge by edge exactly as in eager mode (certified
+    edges: collision-free at every point), but the edges that never lie on a candidate solution,
+    most of both trees, cost a few state checks instead of a certification (LazyRRT's idea, on
+    both trees of RRT-Connect). Where candidates keep failing (narrow passages: lazy trees grow
+    through walls faster than candidates cut them back), a solve gives laziness up after
+    lazy_limit rejected candidates: it cuts what it has not decided and goes on eagerly.
 
     Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's extent),
     "batch_size" (samples per iteration, >= 1), "shortcut" (0 or 1: shorten the solution with
-    BatchShortcutter before returning it), "lazy" (0 or 1) and "lazy_samples" (states per new edge
-    in lazy mode, >= 1). Seeded through OMPL's RNG like every OMPL
+    BatchShortcutter before returning it), "lazy" (0 or 1), "lazy_samples" (states per new edge
+    in lazy mode, >= 1) and "lazy_limit" (rejected candidates before a solve turns eager). Seeded through OMPL's RNG like every OMPL
     planner: a run with the same seed and verdicts grows the same trees. Honours the termination
     condition between batches; goal regions must be sampleable (GoalSampleableRegion). */
 class BatchRRTConnect : public ::ompl::base::Planner
@@ -68,6 +73,11 @@ public:
         solution's edges decided by the EdgeChecker only when the trees join. */
     void setLazy(bool lazy) { lazy_ = lazy; }
     bool getLazy() const { return lazy_; }
+    /** \brief Rejected candidates after which a solve stops being lazy: the edges not yet decided
+        are cut and every new edge is decided when it is grown (eager mode) for the rest of the
+        solve. */
+    void setLazyLimit(unsigned int candidates) { lazyLimit_ = std::max(1u, candidates); }
+    unsigned int getLazyLimit() const { return lazyLimit_; }
     /** \brief States checked per new edge in lazy mode; throws ConfigurationError for 0. */
     void setLazySamples(unsigned int samples);
     unsigned int getLazySamples() const { return lazySamples_; }
@@ -76,6 +86,9 @@ public:
     unsigned int getCandidateCount() const { return candidates_; }
     unsigned int getRejectedCandidateCount() const { return rejectedCandidates_; }
     unsigned int getCutStateCount() const { return cutMotions_; }
+    /** \brief Lazy mode, the last solve: states checked on new edges, and along candidates' edges. */
+    std::uint64_t getLazyStateCount() const { return lazyStates_; }
+    std::uint64_t getRakedStateCount() const { return rakedStates_; }
 
 private:
     struct Motion;
@@ -96,20 +109,28 @@ private:
     bool connect(const std::vector<std::pair<Motion *, const Tree *>> &fresh,
                  const ::ompl::base::PlannerTerminationCondition &ptc);
     /** \brief Decides the new \a edges: by the EdgeChecker, or in lazy mode at lazy_samples states each. */
-    void checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid) const;
-    /** \brief Lazy mode: decides the undecided edges from both trees' roots to \a startEnd and
-        \a goalEnd and the \a bridge between them, in one batch; cuts the subtree below each rejected
-        tree edge. True when every edge is accepted. */
-    bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge);
+    void checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid);
+    /** \brief Decides the edges from both trees' roots to \a startEnd and \a goalEnd that are not
+        decided yet, and the \a bridge between them unless \a bridgeDecided, in one batch (after a
+        rake that rejects most failing candidates for less); cuts the subtree below each rejected
+        tree edge. True when every edge is accepted (at once when none needed deciding). */
+    bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided);
     /** \brief Checks states along \a edges at rising density (the midpoints, then the quarter
         points, ...) down to the space's longest valid segment, one batch per level; stops after the
         first level with a rejected state. levels[e]: the levels edge e passed before (skipped), and
         on return the levels it has passed now. valid[e] = 0 for the edges where a state was
         rejected; true when none was. */
     bool rakeEdges(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
-                   std::vector<std::uint8_t> &valid) const;
+                   std::vector<std::uint8_t> &valid);
     /** \brief Removes \a motion and every motion below it from their tree. */
     void cutSubtree(Motion *motion);
+    /** \brief Cuts every edge not yet decided; the rest of the solve is eager. */
+    void abandonLaziness();
+    /** \brief The live motion of \a tree nearest to \a probe (cut motions are skipped). */
+    Motion *nearest(const Tree &tree, const Motion *probe) const;
+    /** \brief Cut motions still held by \a tree's structure; its motions that are not cut. */
+    std::size_t &ghosts(const Tree &tree);
+    std::size_t liveSize(const Tree &tree) const;
     Motion *addMotion(const Tree &tree, const ::ompl::base::State *state, Motion *parent, bool edgeDecided);
     /** \brief The states from \a a tree's root to \a motion's, root first. */
     static std::vector<const ::ompl::base::State *> branch(const Motion *motion);
@@ -123,8 +144,12 @@ private:
     unsigned int batchSize_ = 8;
     bool shortcut_ = false;
     bool lazy_ = true;
+    bool lazyNow_ = true;  ///< lazy_, until this solve abandons laziness
+    unsigned int lazyLimit_ = 1000;
     unsigned int lazySamples_ = 2;
     std::pair<const Motion *, const Motion *> connection_{nullptr, nullptr};  ///< (start tree, goal tree)
     unsigned int candidates_ = 0, rejectedCandidates_ = 0, cutMotions_ = 0;   ///< lazy mode, this solve
+    std::uint64_t lazyStates_ = 0, rakedStates_ = 0;                          ///< lazy mode, this solve
+    std::size_t ghosts_[2] = {0, 0};  ///< cut motions still in the start and goal trees' structures
 };
 }  // namespace rastercheck::planners

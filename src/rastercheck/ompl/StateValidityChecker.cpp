@@ -50,29 +50,19 @@ bool StateValidityChecker::decide(const ::ompl::base::State *state, Contact *con
 void StateValidityChecker::areValid(const ::ompl::base::State *const *states, std::size_t n, std::uint8_t *valid) const
 {
     calls_.fetch_add(n, std::memory_order_relaxed);
-    // States outside the bounds are decided here; the others go to the checker together.
+    // Every state goes to the checker, so that its warnings count states as the caller does; one
+    // outside the bounds (rare: samplers draw inside them) is then overruled.
     thread_local std::vector<double> q;
-    thread_local std::vector<std::size_t> inside;
-    thread_local std::vector<std::uint8_t> verdicts;
     const std::size_t dof = mapping_->numCoordinates();
     q.resize(n * dof);
-    inside.clear();
+    for (std::size_t i = 0; i < n; ++i)
+        mapping_->toConfiguration(states[i], q.data() + i * dof);
+    checker_->check(q.data(), n, valid, request_);
+    std::uint64_t rejected = 0;
     for (std::size_t i = 0; i < n; ++i)
     {
-        valid[i] = 0;
-        if (!si_->satisfiesBounds(states[i]))
-            continue;
-        mapping_->toConfiguration(states[i], q.data() + inside.size() * dof);
-        inside.push_back(i);
-    }
-    verdicts.assign(inside.size(), 0);
-    if (!inside.empty())
-        checker_->check(q.data(), inside.size(), verdicts.data(), request_);
-    std::uint64_t rejected = n - inside.size();
-    for (std::size_t k = 0; k < inside.size(); ++k)
-    {
-        valid[inside[k]] = verdicts[k];
-        rejected += verdicts[k] ? 0 : 1;
+        valid[i] = valid[i] && si_->satisfiesBounds(states[i]) ? 1 : 0;
+        rejected += valid[i] ? 0 : 1;
     }
     invalid_.fetch_add(rejected, std::memory_order_relaxed);
 }
