@@ -10,6 +10,9 @@
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
+//                                   [range_fraction=0]
+// (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
+// 0: each planner's default, OMPL's fifth of the extent)
 // (a subset of planners: for profiling one of them; the others' rows stay empty; "eager" is
 // BatchRRTConnect with lazy 0, every new edge certified when it is grown)
 // The robot "crane" plans robots/'s crane lift over the plant (examples/crane_lift's problem),
@@ -141,6 +144,7 @@ int main(int argc, char **argv)
     const int firstProblem = argc > 5 ? std::atoi(argv[5]) : 1;
     const std::vector<std::string> chosen = bench::splitList(argc > 6 ? argv[6] : "fcl,rrtconnect,batch,eager");
     const unsigned int lazySamples = argc > 7 ? static_cast<unsigned int>(std::atoi(argv[7])) : 2u;
+    const double rangeFraction = argc > 8 ? std::atof(argv[8]) : 0.0;
     auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
@@ -150,8 +154,10 @@ int main(int argc, char **argv)
 
     std::printf(
         "Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
-        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u, lazy_samples %u.\n",
-        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize, lazySamples);
+        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u, lazy_samples %u; range %s.\n",
+        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize, lazySamples,
+        rangeFraction > 0.0 ? (std::to_string(rangeFraction) + " of the maximum extent, every planner").c_str()
+                            : "each planner's default");
     std::printf(
         "Solved = exact solution whose path the exact oracle accepts at 10x the planner's resolution. "
         "Times: median and p95 over all runs, unsolved ones at the limit (+1 s with simplification).\n\n");
@@ -176,22 +182,31 @@ int main(int argc, char **argv)
             fcl->setStateValidityChecker(std::make_shared<bench::FclStateValidityChecker>(
                 fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
 
+            // Range 0 leaves a planner its default.
+            const double range = rangeFraction * ours->getStateSpace()->getMaximumExtent();
+            auto rrtConnect = [&](const og::SimpleSetupPtr &setup)
+            {
+                auto planner = std::make_shared<og::RRTConnect>(setup->getSpaceInformation());
+                planner->setRange(range);
+                return planner;
+            };
+            auto batchRrtConnect = [&](bool lazy)
+            {
+                auto planner = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
+                planner->setBatchSize(batchSize);
+                planner->setLazy(lazy);
+                planner->setLazySamples(lazySamples);
+                planner->setRange(range);
+                return planner;
+            };
             if (runs("fcl"))
-                run(*fcl, std::make_shared<og::RRTConnect>(fcl->getSpaceInformation()), false, timeLimit, *oracle,
-                    runSeed, tallies[labels[0]]);
+                run(*fcl, rrtConnect(fcl), false, timeLimit, *oracle, runSeed, tallies[labels[0]]);
             if (runs("rrtconnect"))
-                run(*ours, std::make_shared<og::RRTConnect>(ours->getSpaceInformation()), false, timeLimit, *oracle,
-                    runSeed, tallies[labels[1]]);
-            auto batch = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
-            batch->setBatchSize(batchSize);
-            batch->setLazySamples(lazySamples);
+                run(*ours, rrtConnect(ours), false, timeLimit, *oracle, runSeed, tallies[labels[1]]);
             if (runs("batch"))
-                run(*ours, batch, true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
-            auto eager = std::make_shared<planners::BatchRRTConnect>(ours->getSpaceInformation());
-            eager->setBatchSize(batchSize);
-            eager->setLazy(false);
+                run(*ours, batchRrtConnect(true), true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
             if (runs("eager"))
-                run(*ours, eager, true, timeLimit, *oracle, runSeed, tallies[labels[3]]);
+                run(*ours, batchRrtConnect(false), true, timeLimit, *oracle, runSeed, tallies[labels[3]]);
         };
 
         if (robotName == "crane")

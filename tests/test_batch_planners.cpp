@@ -130,6 +130,8 @@ TEST(BatchRRTConnect, SolvesPandaProblemsWithPathsTheOracleAccepts)
     }
 }
 
+namespace
+{
 /** \brief States the setup's rastercheck checker decided since the counters were reset (validity
     checks and certified edges' states). */
 std::uint64_t statesChecked(const og::SimpleSetup &setup)
@@ -147,6 +149,7 @@ void resetCounters(const og::SimpleSetup &setup)
     edges->resetStateCounter();
     rco::getStateValidityChecker(setup)->resetCounters();
 }
+}  // namespace
 
 TEST(BatchRRTConnect, LazyAndEagerModesReturnCertifiedPathsAndLazyChecksFewerStates)
 {
@@ -172,22 +175,35 @@ TEST(BatchRRTConnect, LazyAndEagerModesReturnCertifiedPathsAndLazyChecksFewerSta
     EXPECT_LT(states[1], states[0] * 3 / 4) << "eager " << states[0] << ", lazy " << states[1];
 }
 
-TEST(BatchRRTConnect, LazyModeCutsARejectedCandidateAndPlansOn)
+namespace
 {
-    // One state per new edge and a range as long as the space: the first candidate, the straight
-    // line from start to goal, passes the lazy check (both ends are free) but crosses the wall, so
-    // it is rejected; the planner goes on and finds the gap.
+/** \brief The cube across the wall (seed 4), lazily with one state per new edge and a range as
+    long as the space, so that the first candidate, the straight line from start to goal, passes
+    the lazy check (both ends are free) but crosses the wall; asserts a solution the oracle accepts. */
+void solveLazilyAcrossTheWall(og::SimpleSetupPtr &setup, std::shared_ptr<rcp::BatchRRTConnect> &planner,
+                              unsigned int lazyLimit)
+{
     rco::SetupOptions options;
     options.checker.backend = rc::BackendChoice::Cpu;
-    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    setup = rco::makeSimpleSetup(wallWithGap(true), options);
     setAcrossTheWall(*setup);
-    auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
+    planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
     planner->setLazySamples(1);
     planner->setRange(10.0);
+    planner->setLazyLimit(lazyLimit);
     setup->setPlanner(planner);
     seed(4);
     ASSERT_EQ(setup->solve(60.0), ob::PlannerStatus::EXACT_SOLUTION);
     EXPECT_TRUE(collisionFree(*setup, setup->getSolutionPath()));
+}
+}  // namespace
+
+TEST(BatchRRTConnect, LazyModeCutsARejectedCandidateAndPlansOn)
+{
+    // The straight line through the wall is rejected; the planner goes on and finds the gap.
+    og::SimpleSetupPtr setup;
+    std::shared_ptr<rcp::BatchRRTConnect> planner;
+    ASSERT_NO_FATAL_FAILURE(solveLazilyAcrossTheWall(setup, planner, 1000));
     EXPECT_GE(planner->getRejectedCandidateCount(), 1u);
     EXPECT_EQ(planner->getCandidateCount(), planner->getRejectedCandidateCount() + 1);
     EXPECT_GE(planner->getCutStateCount(), 1u);  // seed 4: a later candidate's step through the wall
@@ -213,18 +229,9 @@ TEST(BatchRRTConnect, AfterLazyLimitRejectedCandidatesTheSolveGoesOnEagerly)
     // The first candidate (the straight line through the wall) is rejected; with lazy_limit 1 the
     // planner cuts what it has not decided and decides every later edge when it grows it, so no
     // second candidate is ever decided, and it still finds the gap.
-    rco::SetupOptions options;
-    options.checker.backend = rc::BackendChoice::Cpu;
-    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
-    setAcrossTheWall(*setup);
-    auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
-    planner->setLazySamples(1);
-    planner->setRange(10.0);
-    planner->setLazyLimit(1);
-    setup->setPlanner(planner);
-    seed(4);
-    ASSERT_EQ(setup->solve(60.0), ob::PlannerStatus::EXACT_SOLUTION);
-    EXPECT_TRUE(collisionFree(*setup, setup->getSolutionPath()));
+    og::SimpleSetupPtr setup;
+    std::shared_ptr<rcp::BatchRRTConnect> planner;
+    ASSERT_NO_FATAL_FAILURE(solveLazilyAcrossTheWall(setup, planner, 1));
     EXPECT_EQ(planner->getCandidateCount(), 1u);
     EXPECT_EQ(planner->getRejectedCandidateCount(), 1u);
     const ob::MotionValidatorPtr edges = setup->getSpaceInformation()->getMotionValidator();

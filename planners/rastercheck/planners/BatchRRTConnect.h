@@ -46,8 +46,9 @@ namespace rastercheck::planners
     Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's extent),
     "batch_size" (samples per iteration, >= 1), "shortcut" (0 or 1: shorten the solution with
     BatchShortcutter before returning it), "lazy" (0 or 1), "lazy_samples" (states per new edge
-    in lazy mode, >= 1) and "lazy_limit" (rejected candidates before a solve turns eager). Seeded through OMPL's RNG like every OMPL
-    planner: a run with the same seed and verdicts grows the same trees. Honours the termination
+    in lazy mode, >= 1) and "lazy_limit" (rejected candidates before a solve turns eager). Seeded
+    through OMPL's RNG like every OMPL planner: a run with the same seed and verdicts grows the
+    same trees. Honours the termination
     condition between batches; goal regions must be sampleable (GoalSampleableRegion). */
 class BatchRRTConnect : public ::ompl::base::Planner
 {
