@@ -154,9 +154,11 @@ void resetCounters(const og::SimpleSetup &setup)
 TEST(BatchRRTConnect, LazyAndEagerModesReturnCertifiedPathsAndLazyChecksFewerStates)
 {
     // Both modes return paths whose every edge the certified validator accepts on its own; lazy
-    // mode decides only the candidate solutions' edges that way, so it checks fewer states.
+    // mode certifies only the candidate solutions' edges, so it certifies far fewer states and
+    // checks fewer in all. (Cage, the hardest, is left out of the counts: there lazy mode reaches
+    // lazy_limit and finishes eagerly.)
     RASTERCHECK_REQUIRE_DATA(root);
-    std::uint64_t states[2] = {0, 0};
+    std::uint64_t certified[2] = {0, 0}, all[2] = {0, 0};
     for (const char *scenario : {"table_pick", "bookshelf_small", "bookshelf_thin", "box", "table_under_pick", "cage"})
         for (const bool lazy : {false, true})
         {
@@ -165,14 +167,21 @@ TEST(BatchRRTConnect, LazyAndEagerModesReturnCertifiedPathsAndLazyChecksFewerSta
             resetCounters(*setup);
             seed(13);
             const og::PathGeometric path = solveAndCheck(*setup, 60.0, false, lazy);
-            states[lazy] += statesChecked(*setup);
-            const ob::MotionValidatorPtr edges = setup->getSpaceInformation()->getMotionValidator();
+            const auto edges = std::dynamic_pointer_cast<rco::CertifiedMotionValidator>(
+                setup->getSpaceInformation()->getMotionValidator());
+            ASSERT_TRUE(edges);
+            if (std::string(scenario) != "cage")
+            {
+                certified[lazy] += edges->getCheckedStateCount();
+                all[lazy] += statesChecked(*setup);
+            }
             for (std::size_t i = 0; i + 1 < path.getStateCount(); ++i)
                 EXPECT_TRUE(edges->checkMotion(path.getState(i), path.getState(i + 1)))
                     << scenario << (lazy ? " lazy" : " eager") << " edge " << i;
         }
-    // Seed 13: lazy 258 562 states against eager 493 805 (cage, the hardest, is most of both).
-    EXPECT_LT(states[1], states[0] * 3 / 4) << "eager " << states[0] << ", lazy " << states[1];
+    // Seed 13: certified 5 027 eager against 1 439 lazy; all states 5 037 against 3 512.
+    EXPECT_LT(certified[1], certified[0] / 2) << "eager " << certified[0] << ", lazy " << certified[1];
+    EXPECT_LT(all[1], all[0] * 4 / 5) << "eager " << all[0] << ", lazy " << all[1];
 }
 
 namespace

@@ -146,7 +146,7 @@ private:
     bool shortcut_ = false;
     bool lazy_ = true;
     bool lazyNow_ = true;  ///< lazy_, until this solve abandons laziness
-    unsigned int lazyLimit_ = 1000;
+    unsigned int lazyLimit_ = 300;
     unsigned int lazySamples_ = 2;
     std::pair<const Motion *, const Motion *> connection_{nullptr, nullptr};  ///< (start tree, goal tree)
     unsigned int candidates_ = 0, rejectedCandidates_ = 0, cutMotions_ = 0;   ///< lazy mode, this solve
