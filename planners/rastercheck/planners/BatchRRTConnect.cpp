@@ -144,9 +144,9 @@ void BatchRRTConnect::cutSubtree(Motion *motion)
         std::vector<Motion *> &siblings = motion->parent->children;
         siblings.erase(std::find(siblings.begin(), siblings.end(), motion));
     }
-    // Cut motions stay in the nearest-neighbour structure as ghosts (removing them one by one from
-    // OMPL's GNAT rebuilds it every 500 removals, which took 80 % of a lazy run on OMPL.app's Home);
-    // nearest() skips them, and the structure is rebuilt once its ghosts are a fifth of it.
+    // Cut motions stay in the nearest-neighbour structure as ghosts: OMPL's GNAT rebuilds itself
+    // whenever a removed element is one of its pivots, which took 80 % of a lazy run on OMPL.app's
+    // Home. nearest() skips ghosts, and the structure is rebuilt once they are a fifth of it.
     std::vector<Motion *> stack{motion};
     while (!stack.empty())
     {
