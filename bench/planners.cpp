@@ -88,7 +88,8 @@ std::uint64_t statesChecked(const og::SimpleSetup &setup)
 
 /** \brief One planning run of \a planner on \a setup, then its simplification; tallied. */
 void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortcut, double timeLimit,
-         const rastercheck::ompl::StateValidityChecker &oracle, std::uint_fast32_t runSeed, Tally &tally)
+         const rastercheck::ompl::StateValidityChecker &oracle, std::uint_fast32_t runSeed, const std::string &label,
+         Tally &tally)
 {
     seed(runSeed);
     setup.clear();
@@ -108,8 +109,7 @@ void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortc
     if (!solved || !collisionFree(setup.getSolutionPath(), oracle))
     {
         // Named on stderr, before the problem's "done" line: which problems a planner misses.
-        std::fprintf(stderr, "  %s: %s\n", planner->getName().c_str(),
-                     solved ? "colliding path" : status.asString().c_str());
+        std::fprintf(stderr, "  %s: %s\n", label.c_str(), solved ? "colliding path" : status.asString().c_str());
         tally.colliding += solved ? 1 : 0;
         tally.times.push_back(timeLimit);
         tally.simplifiedTimes.push_back(timeLimit + 1.0);
@@ -200,13 +200,13 @@ int main(int argc, char **argv)
                 return planner;
             };
             if (runs("fcl"))
-                run(*fcl, rrtConnect(fcl), false, timeLimit, *oracle, runSeed, tallies[labels[0]]);
+                run(*fcl, rrtConnect(fcl), false, timeLimit, *oracle, runSeed, labels[0], tallies[labels[0]]);
             if (runs("rrtconnect"))
-                run(*ours, rrtConnect(ours), false, timeLimit, *oracle, runSeed, tallies[labels[1]]);
+                run(*ours, rrtConnect(ours), false, timeLimit, *oracle, runSeed, labels[1], tallies[labels[1]]);
             if (runs("batch"))
-                run(*ours, batchRrtConnect(true), true, timeLimit, *oracle, runSeed, tallies[labels[2]]);
+                run(*ours, batchRrtConnect(true), true, timeLimit, *oracle, runSeed, labels[2], tallies[labels[2]]);
             if (runs("eager"))
-                run(*ours, batchRrtConnect(false), true, timeLimit, *oracle, runSeed, tallies[labels[3]]);
+                run(*ours, batchRrtConnect(false), true, timeLimit, *oracle, runSeed, labels[3], tallies[labels[3]]);
         };
 
         if (robotName == "crane")

@@ -105,6 +105,34 @@ BatchRRTConnect::Motion *BatchRRTConnect::addMotion(const Tree &tree, const ob::
     return motion;
 }
 
+std::size_t BatchRRTConnect::checkAlongEdges(const std::vector<ompl::Edge> &edges,
+                                             const std::vector<std::pair<std::size_t, double>> &points,
+                                             std::vector<std::uint8_t> &valid) const
+{
+    std::vector<ob::State *> inner;
+    std::vector<const ob::State *> states;
+    states.reserve(points.size());
+    for (const auto &[e, fraction] : points)
+    {
+        if (fraction >= 1.0)
+        {
+            states.push_back(edges[e].to);
+            continue;
+        }
+        inner.push_back(si_->allocState());
+        si_->getStateSpace()->interpolate(edges[e].from, edges[e].to, fraction, inner.back());
+        states.push_back(inner.back());
+    }
+    std::vector<std::uint8_t> stateValid;
+    edges_->checkStates(states, stateValid);
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (!stateValid[i])
+            valid[points[i].first] = 0;
+    for (ob::State *state : inner)
+        si_->freeState(state);
+    return states.size();
+}
+
 void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid)
 {
     if (!lazyNow_)
@@ -114,27 +142,13 @@ void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::v
     }
     // States at fractions 1/k, 2/k, ..., 1 of every edge (the start is a tree's state already).
     const unsigned int k = lazySamples_;
-    std::vector<ob::State *> inner;
-    std::vector<const ob::State *> states;
-    states.reserve(edges.size() * k);
-    for (const ompl::Edge &edge : edges)
-    {
-        for (unsigned int j = 1; j < k; ++j)
-        {
-            inner.push_back(si_->allocState());
-            si_->getStateSpace()->interpolate(edge.from, edge.to, static_cast<double>(j) / k, inner.back());
-            states.push_back(inner.back());
-        }
-        states.push_back(edge.to);
-    }
-    std::vector<std::uint8_t> stateValid;
-    edges_->checkStates(states, stateValid);
-    lazyStates_ += states.size();
+    std::vector<std::pair<std::size_t, double>> points;
+    points.reserve(edges.size() * k);
+    for (std::size_t e = 0; e < edges.size(); ++e)
+        for (unsigned int j = 1; j <= k; ++j)
+            points.emplace_back(e, j == k ? 1.0 : static_cast<double>(j) / k);
     valid.assign(edges.size(), 1);
-    for (std::size_t i = 0; i < states.size(); ++i)
-        valid[i / k] &= stateValid[i];
-    for (ob::State *state : inner)
-        si_->freeState(state);
+    lazyStates_ += checkAlongEdges(edges, points, valid);
 }
 
 void BatchRRTConnect::cutSubtree(Motion *motion)
@@ -220,18 +234,14 @@ bool BatchRRTConnect::rakeEdges(const std::vector<ompl::Edge> &edges, std::vecto
     std::vector<double> length(edges.size());
     for (std::size_t e = 0; e < edges.size(); ++e)
         length[e] = si_->distance(edges[e].from, edges[e].to);
-    std::vector<ob::State *> points;
-    std::vector<const ob::State *> states;
-    std::vector<std::size_t> owner;
-    std::vector<std::uint8_t> stateValid;
+    std::vector<std::pair<std::size_t, double>> points;
     bool passed = true;
     // Level L checks the odd multiples of 2^-L of every edge still longer than 2^-L times the
     // segment length and not yet clean at that level; a level with a rejected state ends the rake.
     for (unsigned int level = 1; passed; ++level)
     {
         const double parts = std::ldexp(1.0, static_cast<int>(level));
-        states.clear();
-        owner.clear();
+        points.clear();
         bool deeper = false;  // some edge still needs this level
         for (std::size_t e = 0; e < edges.size(); ++e)
         {
@@ -241,31 +251,16 @@ bool BatchRRTConnect::rakeEdges(const std::vector<ompl::Edge> &edges, std::vecto
             if (level <= levels[e])
                 continue;
             for (double j = 1.0; j < parts; j += 2.0)
-            {
-                if (states.size() == points.size())
-                    points.push_back(si_->allocState());
-                ob::State *point = points[states.size()];
-                si_->getStateSpace()->interpolate(edges[e].from, edges[e].to, j / parts, point);
-                states.push_back(point);
-                owner.push_back(e);
-            }
+                points.emplace_back(e, j / parts);
         }
         if (!deeper)
             break;
-        edges_->checkStates(states, stateValid);
-        rakedStates_ += states.size();
-        for (std::size_t i = 0; i < states.size(); ++i)
-            if (!stateValid[i])
-            {
-                valid[owner[i]] = 0;
-                passed = false;
-            }
+        rakedStates_ += checkAlongEdges(edges, points, valid);
+        passed = std::all_of(valid.begin(), valid.end(), [](std::uint8_t v) { return v != 0; });
         for (std::size_t e = 0; e < edges.size(); ++e)
             if (valid[e] && levels[e] + 1 == level)
                 levels[e] = level;
     }
-    for (ob::State *point : points)
-        si_->freeState(point);
     return passed;
 }
 

@@ -109,6 +109,12 @@ private:
         true, with the solution path added, when a line joins the trees. */
     bool connect(const std::vector<std::pair<Motion *, const Tree *>> &fresh,
                  const ::ompl::base::PlannerTerminationCondition &ptc);
+    /** \brief Checks the states at \a points (edge index, fraction; 1 = the edge's end) in one
+        batch; valid[e] = 0 for every edge with a rejected state (the others are left as they are).
+        Returns the number of states checked. */
+    std::size_t checkAlongEdges(const std::vector<ompl::Edge> &edges,
+                                const std::vector<std::pair<std::size_t, double>> &points,
+                                std::vector<std::uint8_t> &valid) const;
     /** \brief Decides the new \a edges: by the EdgeChecker, or in lazy mode at lazy_samples states each. */
     void checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid);
     /** \brief Decides the edges from both trees' roots to \a startEnd and \a goalEnd that are not
