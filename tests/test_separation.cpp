@@ -1,7 +1,9 @@
 // The convex separation cull (device/Separation.h): a proof by a plane that two solids are more
 // than the padding apart. It must never contradict the exact oracle (solidsOverlap), must be tight
 // on shapes whose distance is known, and must settle convex pairs whenever they are clearly apart.
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -620,4 +622,83 @@ TEST(Separation, TheClusteredSupportSearchFindsWhatReadingEveryHullPointFinds)
             ASSERT_EQ(d.x * found[0] + d.y * found[1] + d.z * found[2], everyPoint) << names[s] << " trial " << trial;
         }
     }
+}
+
+namespace
+{
+/** \brief The test's own answer: the nearest point to the origin of the hull of \a points, the least
+    norm over every face (every non-empty subset) whose projection of the origin falls inside it,
+    solved with Eigen's least squares. */
+double nearestNormOfHull(const std::vector<Vec> &points)
+{
+    const int count = static_cast<int>(points.size());
+    double best = std::numeric_limits<double>::infinity();
+    for (int mask = 1; mask < (1 << count); ++mask)
+    {
+        std::vector<Vec> face;
+        for (int i = 0; i < count; ++i)
+            if (mask & (1 << i))
+                face.push_back(points[static_cast<std::size_t>(i)]);
+        const int n = static_cast<int>(face.size()) - 1;
+        if (n == 0)
+        {
+            best = std::min(best, face[0].norm());
+            continue;
+        }
+        Eigen::MatrixXd edges(3, n);
+        for (int k = 0; k < n; ++k)
+            edges.col(k) = face[static_cast<std::size_t>(k + 1)] - face[0];
+        const Eigen::VectorXd lambda = edges.colPivHouseholderQr().solve(-face[0]);
+        if ((edges * lambda + face[0]).norm() > 1e-9 && n == 3)
+            continue;  // a flat tetrahedron: its faces hold the answer
+        if ((lambda.array() < 0.0).any() || lambda.sum() > 1.0)
+            continue;
+        best = std::min(best, (face[0] + edges * lambda).norm());
+    }
+    return best;
+}
+}  // namespace
+
+TEST(Separation, GjksSimplexStepFindsTheNearestPointOfTheHullFromTheFacesOfTheNewestPoint)
+{
+    // As GJK calls it: the simplex kept from the last step (whose nearest point is v), plus a point w
+    // that gets closer along v (v . w < v . v). Only the faces holding w are searched first; the
+    // answer must be the hull's nearest point all the same.
+    std::mt19937 rng(17);
+    std::normal_distribution<double> normal;
+    int origins = 0, steps = 0;
+    for (int trial = 0; trial < 20000; ++trial)
+    {
+        const auto random = [&] { return rc::device::Vec3<double>{normal(rng), normal(rng), normal(rng)}; };
+        rc::device::Vec3<double> simplex[4] = {random()};
+        int count = 1;
+        rc::device::Vec3<double> v = simplex[0];
+        const int size = 2 + trial % 3;  // the simplex the step sees: 2, 3 or 4 points
+        while (count < size)
+        {
+            rc::device::Vec3<double> w = random();
+            if (!(rc::device::dot(v, w) < 0.9 * rc::device::dot(v, v)))
+                continue;  // GJK adds only a point that gets closer
+            simplex[count++] = w;
+            std::vector<Vec> points;
+            for (int i = 0; i < count; ++i)
+                points.emplace_back(simplex[i].x, simplex[i].y, simplex[i].z);
+            rc::device::Vec3<double> next = v;
+            const rc::device::detail::SimplexStep step = rc::device::detail::closestOnSimplex(simplex, count, next);
+            if (step == rc::device::detail::SimplexStep::OriginInside)
+            {
+                ++origins;
+                EXPECT_LT(nearestNormOfHull(points), 1e-9) << "trial " << trial;
+                break;
+            }
+            ASSERT_EQ(step, rc::device::detail::SimplexStep::Closer) << "trial " << trial;
+            ++steps;
+            const double expected = nearestNormOfHull(points);
+            ASSERT_NEAR(std::sqrt(rc::device::dot(next, next)), expected, 1e-9 * (1.0 + expected)) << "trial " << trial;
+            ASSERT_LT(rc::device::dot(next, next), rc::device::dot(v, v)) << "trial " << trial;
+            v = next;
+        }
+    }
+    EXPECT_GT(steps, 20000);
+    EXPECT_GT(origins, 100);
 }

@@ -218,8 +218,9 @@ RC_HD double gapAlong(const Vec3<double> &v, const ConvexProxy &a, const Pose<do
 namespace detail
 {
 /** \brief Closest point to the origin of the convex hull of simplex[0..count) (count 1 to 4), and
-    the smallest sub-simplex whose hull holds it, written back in place. Every face is tried (15 at
-    most): the projection of the origin on a face's affine hull, when it falls inside the face, is
+    the smallest sub-simplex whose hull holds it, written back in place. The faces that hold the last
+    point (the one GJK just added) are tried, 8 at most, and the others only when none of those is
+    usable: the projection of the origin on a face's affine hull, when it falls inside the face, is
     a point of the hull, and the nearest of those is the closest point. Degenerate faces are
     skipped: their sub-faces hold the answer. \a companion (optional) is kept in step with the
     simplex; \a weights (optional, 4) receives the barycentric weights of the closest point on the
@@ -237,8 +238,16 @@ RC_HD SimplexStep closestOnSimplex(Vec3<double> *simplex, int &count, Vec3<doubl
     double bestNorm = -1.0;
     int bestMask = 0;
     double bestWeights[4] = {};
-    for (int mask = 1; mask < (1 << count); ++mask)
+    // The faces that hold the newest point (the last; GJK adds a point only where it gets closer)
+    // come first: every other face's closest point lies no nearer than the last one, so the answer
+    // is on one of them. The others are tried only when rounding leaves none of those usable.
+    // Order: newest | k for k < newest, then the masks 1 .. newest - 1 without it.
+    const int newest = 1 << (count - 1);
+    for (int k = 0; k < 2 * newest - 1; ++k)
     {
+        if (k == newest && bestNorm >= 0.0)
+            break;
+        const int mask = k < newest ? (newest | k) : k - newest + 1;
         int index[4] = {0, 0, 0, 0}, size = 0;
         for (int i = 0; i < count; ++i)
             if (mask & (1 << i))
