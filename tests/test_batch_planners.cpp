@@ -474,3 +474,36 @@ TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)
     // ... except in raster mode, which cannot certify: batched at the space's resolution.
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Raster), "batched");
 }
+
+TEST(BatchRRTConnect, TurningEagerDecidesTheLazyTreesFromTheRootsAndKeepsWhatIsFree)
+{
+    // After lazy_limit rejected candidates the edges grown lazily are decided, not thrown away: the
+    // free ones stay (a Fetch goal tree inside a shelf lost all its growth before), and every edge
+    // left in the trees is one the edge checker accepts.
+    RASTERCHECK_REQUIRE_DATA(root);
+    og::SimpleSetupPtr setup = pandaSetup(root, "bookshelf_small");
+    auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
+    planner->setLazyLimit(2);
+    setup->setPlanner(planner);
+    seed(13);
+    ASSERT_EQ(setup->solve(60.0), ob::PlannerStatus::EXACT_SOLUTION);
+    EXPECT_TRUE(collisionFree(*setup, setup->getSolutionPath()));
+    ASSERT_GE(planner->getRejectedCandidateCount(), 2u);
+    EXPECT_GT(planner->getKeptStateCount(), 0u);
+    ob::PlannerData data(setup->getSpaceInformation());
+    planner->getPlannerData(data);
+    const ob::MotionValidatorPtr edges = setup->getSpaceInformation()->getMotionValidator();
+    std::size_t checked = 0;
+    for (unsigned int v = 0; v < data.numVertices(); ++v)
+    {
+        std::vector<unsigned int> out;
+        data.getEdges(v, out);
+        for (const unsigned int w : out)
+        {
+            ++checked;
+            EXPECT_TRUE(edges->checkMotion(data.getVertex(v).getState(), data.getVertex(w).getState()))
+                << v << " -> " << w;
+        }
+    }
+    EXPECT_GE(checked, planner->getKeptStateCount());
+}

@@ -41,7 +41,8 @@ namespace rastercheck::planners
     most of both trees, cost a few state checks instead of a certification (LazyRRT's idea, on
     both trees of RRT-Connect). Where candidates keep failing (narrow passages: lazy trees grow
     through walls faster than candidates cut them back), a solve gives laziness up after
-    lazy_limit rejected candidates: it cuts what it has not decided and goes on eagerly.
+    lazy_limit rejected candidates: it decides the edges it grew lazily, from the roots down
+    (keeping what is free, cutting the subtree below each rejected edge), and goes on eagerly.
 
     Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's extent),
     "batch_size" (samples per iteration, >= 1), "shortcut" (0 or 1: shorten the solution with
@@ -87,6 +88,9 @@ public:
     unsigned int getCandidateCount() const { return candidates_; }
     unsigned int getRejectedCandidateCount() const { return rejectedCandidates_; }
     unsigned int getCutStateCount() const { return cutMotions_; }
+    /** \brief The last solve: states grown lazily that the switch to eager mode (lazy_limit)
+        decided and kept; 0 when it stayed lazy. */
+    unsigned int getKeptStateCount() const { return keptMotions_; }
     /** \brief Lazy mode, the last solve: states checked on new edges, and along candidates' edges. */
     std::uint64_t getLazyStateCount() const { return lazyStates_; }
     std::uint64_t getRakedStateCount() const { return rakedStates_; }
@@ -120,8 +124,10 @@ private:
     /** \brief Decides the edges from both trees' roots to \a startEnd and \a goalEnd that are not
         decided yet, and the \a bridge between them unless \a bridgeDecided, in one batch (after a
         rake that rejects most failing candidates for less); cuts the subtree below each rejected
-        tree edge. True when every edge is accepted (at once when none needed deciding). */
-    bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided);
+        tree edge. True when every edge is accepted (at once when none needed deciding). After the
+        lazy_limit-th rejected candidate, abandons laziness (until \a ptc). */
+    bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided,
+                         const ::ompl::base::PlannerTerminationCondition &ptc);
     /** \brief Checks states along \a edges at rising density (the midpoints, then the quarter
         points, ...) down to the space's longest valid segment, one batch per level; stops after the
         first level with a rejected state. levels[e]: the levels edge e passed before (skipped), and
@@ -131,8 +137,9 @@ private:
                    std::vector<std::uint8_t> &valid);
     /** \brief Removes \a motion and every motion below it from their tree. */
     void cutSubtree(Motion *motion);
-    /** \brief Cuts every edge not yet decided; the rest of the solve is eager. */
-    void abandonLaziness();
+    /** \brief The rest of the solve is eager; the edges grown lazily are decided from the roots down
+        (one batch per depth; a rejected edge's subtree is cut undecided) until \a ptc. */
+    void abandonLaziness(const ::ompl::base::PlannerTerminationCondition &ptc);
     /** \brief The live motion of \a tree nearest to \a probe (cut motions are skipped). */
     Motion *nearest(const Tree &tree, const Motion *probe) const;
     /** \brief Cut motions still held by \a tree's structure; its motions that are not cut. */
@@ -156,6 +163,7 @@ private:
     unsigned int lazySamples_ = 2;
     std::pair<const Motion *, const Motion *> connection_{nullptr, nullptr};  ///< (start tree, goal tree)
     unsigned int candidates_ = 0, rejectedCandidates_ = 0, cutMotions_ = 0;   ///< lazy mode, this solve
+    unsigned int keptMotions_ = 0;  ///< this solve: lazily grown, decided and kept when it turned eager
     std::uint64_t lazyStates_ = 0, rakedStates_ = 0;                          ///< lazy mode, this solve
     std::size_t ghosts_[2] = {0, 0};  ///< cut motions still in the start and goal trees' structures
 };
