@@ -12,12 +12,11 @@
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
-//                                   [range_fraction=0] [lazy_keep=0]
+//                                   [range_fraction=0]
 // (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
 // 0: each planner's default, OMPL's fifth of the extent)
 // (a subset of planners: for profiling one of them; the others' rows stay empty; "eager" is
-// BatchRRTConnect with lazy 0, every new edge certified when it is grown; lazy_keep 1: the lazy
-// BatchRRTConnect keeps the free edges it grew lazily when it turns eager)
+// BatchRRTConnect with lazy 0, every new edge certified when it is grown)
 // The robot "crane" plans robots/'s crane lift over the plant (examples/crane_lift's problem),
 // problems_per_scenario runs with different seeds. A robot "omplapp:NAME" plans OMPL.app's NAME.cfg
 // (from $RASTERCHECK_OMPLAPP, a resources/3D folder; never bundled), as many runs.
@@ -149,7 +148,6 @@ int main(int argc, char **argv)
     const std::vector<std::string> chosen = bench::splitList(argc > 6 ? argv[6] : "fcl,rrtconnect,batch,eager");
     const unsigned int lazySamples = argc > 7 ? static_cast<unsigned int>(std::atoi(argv[7])) : 2u;
     const double rangeFraction = argc > 8 ? std::atof(argv[8]) : 0.0;
-    const bool lazyKeep = argc > 9 && std::atoi(argv[9]) != 0;
     auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
@@ -159,9 +157,8 @@ int main(int argc, char **argv)
 
     std::printf(
         "Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
-        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u, lazy_samples %u, lazy_keep %d; "
-        "range %s.\n",
-        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize, lazySamples, lazyKeep ? 1 : 0,
+        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u, lazy_samples %u; range %s.\n",
+        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize, lazySamples,
         rangeFraction > 0.0 ? (std::to_string(rangeFraction) + " of the maximum extent, every planner").c_str()
                             : "each planner's default");
     std::printf(
@@ -213,7 +210,6 @@ int main(int argc, char **argv)
                 planner->setBatchSize(batchSize);
                 planner->setLazy(lazy);
                 planner->setLazySamples(lazySamples);
-                planner->setLazyKeep(lazyKeep);
                 planner->setRange(range);
                 return planner;
             };

@@ -345,13 +345,11 @@ TEST(BatchRRTConnect, ParametersAndRegistry)
                                          {"shortcut", "1"},
                                          {"lazy", "0"},
                                          {"lazy_samples", "3"},
-                                         {"lazy_limit", "50"},
-                                         {"lazy_keep", "1"}});
+                                         {"lazy_limit", "50"}});
     auto batch = std::static_pointer_cast<rcp::BatchRRTConnect>(planner);
     EXPECT_FALSE(batch->getLazy());
     EXPECT_EQ(batch->getLazySamples(), 3u);
     EXPECT_EQ(batch->getLazyLimit(), 50u);
-    EXPECT_TRUE(batch->getLazyKeep());
     EXPECT_THROW(rco::setPlannerParameters(*planner, {{"lazy_samples", "0"}}), rc::ConfigurationError);
     EXPECT_EQ(batch->getBatchSize(), 16u);
     EXPECT_DOUBLE_EQ(batch->getRange(), 0.5);
@@ -475,44 +473,4 @@ TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Exact), "certified");
     // ... except in raster mode, which cannot certify: batched at the space's resolution.
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Raster), "batched");
-}
-
-TEST(BatchRRTConnect, TurningEagerCutsTheLazyTreesOrDecidesThemFromTheRootsAndKeepsWhatIsFree)
-{
-    // After lazy_limit rejected candidates the edges grown lazily are cut (a restart), or with
-    // lazy_keep decided and the free ones kept (a Fetch goal tree inside a shelf keeps its way
-    // out); either way every edge left in the trees is one the edge checker accepts.
-    RASTERCHECK_REQUIRE_DATA(root);
-    for (const bool keep : {false, true})
-    {
-        og::SimpleSetupPtr setup = pandaSetup(root, "bookshelf_small");
-        auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
-        planner->setLazyLimit(2);
-        planner->setLazyKeep(keep);
-        setup->setPlanner(planner);
-        seed(13);
-        ASSERT_EQ(setup->solve(60.0), ob::PlannerStatus::EXACT_SOLUTION) << keep;
-        EXPECT_TRUE(collisionFree(*setup, setup->getSolutionPath())) << keep;
-        ASSERT_GE(planner->getRejectedCandidateCount(), 2u) << keep;
-        if (keep)
-            EXPECT_GT(planner->getKeptStateCount(), 0u);
-        else
-            EXPECT_EQ(planner->getKeptStateCount(), 0u);
-        ob::PlannerData data(setup->getSpaceInformation());
-        planner->getPlannerData(data);
-        const ob::MotionValidatorPtr edges = setup->getSpaceInformation()->getMotionValidator();
-        std::size_t checked = 0;
-        for (unsigned int v = 0; v < data.numVertices(); ++v)
-        {
-            std::vector<unsigned int> out;
-            data.getEdges(v, out);
-            for (const unsigned int w : out)
-            {
-                ++checked;
-                EXPECT_TRUE(edges->checkMotion(data.getVertex(v).getState(), data.getVertex(w).getState()))
-                    << keep << ": " << v << " -> " << w;
-            }
-        }
-        EXPECT_GE(checked, planner->getKeptStateCount()) << keep;
-    }
 }

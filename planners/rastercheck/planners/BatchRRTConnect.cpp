@@ -27,7 +27,6 @@ BatchRRTConnect::BatchRRTConnect(const ob::SpaceInformationPtr &si) : ob::Planne
     declareParam<bool>("lazy", this, &BatchRRTConnect::setLazy, &BatchRRTConnect::getLazy, "0,1");
     declareParam<unsigned int>("lazy_limit", this, &BatchRRTConnect::setLazyLimit, &BatchRRTConnect::getLazyLimit,
                                "1:1:1000000");
-    declareParam<bool>("lazy_keep", this, &BatchRRTConnect::setLazyKeep, &BatchRRTConnect::getLazyKeep, "0,1");
     declareParam<unsigned int>("lazy_samples", this, &BatchRRTConnect::setLazySamples, &BatchRRTConnect::getLazySamples,
                                "1:1:64");
 }
@@ -184,64 +183,22 @@ void BatchRRTConnect::cutSubtree(Motion *motion)
     }
 }
 
-void BatchRRTConnect::abandonLaziness(const ob::PlannerTerminationCondition &ptc)
+void BatchRRTConnect::abandonLaziness()
 {
     // Where candidates keep failing, the lazy trees grow through obstacles faster than candidates
     // cut them back (OMPL.app's Home: 13 880 candidates rejected in 15 s, trees three times the
-    // size of an eager run's that solves in 2.4 s). From here on every new edge is decided when it
-    // is grown. The edges grown lazily hang below the undecided edges whose parent edge is decided
-    // (the first round below). By default they are all cut: the search restarts from what was
-    // decided, which is what narrow passages want (OMPL.app's Twistycool, 8 runs: a median of 0.8
-    // to 2.3 s, against 10.7 to 13.9 s keeping the trees: RRT-Connect's heavy tail grows with the
-    // trees). With lazy_keep they are decided from the roots down and kept where free: round by
-    // round in one batch, an accepted edge opening its children to the next round, a rejected one
-    // cut with its subtree (never decided); a Fetch goal tree inside a shelf keeps the way out it
-    // found (Fetch problems 1-20 of each scenario, 2 s: 58 -> 70 of 140 solved).
+    // size of an eager run's that solves in 2.4 s). Keep only what was decided, and go on eagerly.
+    OMPL_LOG(INFO, "%s: %u candidates rejected; the rest of this solve decides every new edge", getName().c_str(),
+             rejectedCandidates_);
     lazyNow_ = false;
-    const unsigned int cutBefore = cutMotions_;
-    std::vector<Motion *> round, next;
     for (const Tree *tree : {&startTree_, &goalTree_})
     {
         std::vector<Motion *> motions;
         (*tree)->list(motions);
         for (Motion *motion : motions)
-            if (!motion->cut && !motion->edgeDecided && motion->parent->edgeDecided)
-                round.push_back(motion);
-    }
-    if (!lazyKeep_)
-    {
-        for (Motion *motion : round)
-            if (!motion->cut)
+            if (!motion->cut && !motion->edgeDecided)
                 cutSubtree(motion);
-        round.clear();
     }
-    std::vector<ompl::Edge> edges;
-    std::vector<std::uint8_t> valid;
-    while (!round.empty() && !ptc)
-    {
-        edges.clear();
-        for (const Motion *motion : round)
-            edges.push_back({motion->parent->state, motion->state});
-        edges_->check(edges, valid);
-        next.clear();
-        for (std::size_t e = 0; e < round.size(); ++e)
-        {
-            Motion *motion = round[e];
-            if (!valid[e])
-            {
-                cutSubtree(motion);
-                continue;
-            }
-            motion->edgeDecided = true;
-            ++keptMotions_;
-            for (Motion *child : motion->children)
-                if (!child->edgeDecided)
-                    next.push_back(child);
-        }
-        round.swap(next);
-    }
-    OMPL_LOG(INFO, "%s: %u candidates rejected; of the states grown lazily %u kept, %u cut; every new edge decided now",
-             getName().c_str(), rejectedCandidates_, keptMotions_, cutMotions_ - cutBefore);
 }
 
 std::size_t &BatchRRTConnect::ghosts(const Tree &tree)
@@ -307,8 +264,7 @@ bool BatchRRTConnect::rakeEdges(const std::vector<ompl::Edge> &edges, std::vecto
     return passed;
 }
 
-bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided,
-                                      const ob::PlannerTerminationCondition &ptc)
+bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided)
 {
     // The undecided edges of both branches (parent to child, as they were grown) and the bridge.
     std::vector<ompl::Edge> edges;
@@ -355,7 +311,7 @@ bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const o
             cutSubtree(below[e]);
     rejectedCandidates_ += accepted ? 0 : 1;
     if (!accepted && lazyNow_ && rejectedCandidates_ >= lazyLimit_)
-        abandonLaziness(ptc);
+        abandonLaziness();
     return accepted;
 }
 
@@ -447,7 +403,7 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             const bool fromStart = line.other == &goalTree_;
             Motion *startEnd = fromStart ? line.target : line.last;
             Motion *goalEnd = fromStart ? line.last : line.target;
-            if (!decideCandidate(startEnd, goalEnd, edges[e], !lazyRound, ptc))
+            if (!decideCandidate(startEnd, goalEnd, edges[e], !lazyRound))
             {
                 line.alive = false;
                 continue;
@@ -495,7 +451,7 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
     }
     if (!sampler_)
         sampler_ = si_->allocStateSampler();
-    candidates_ = rejectedCandidates_ = cutMotions_ = keptMotions_ = 0;
+    candidates_ = rejectedCandidates_ = cutMotions_ = 0;
     lazyNow_ = lazy_;
     lazyStates_ = rakedStates_ = 0;
     OMPL_LOG(INFO, "%s: starting with %u states, %u samples per batch", getName().c_str(),

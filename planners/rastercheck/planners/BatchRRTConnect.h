@@ -41,15 +41,12 @@ namespace rastercheck::planners
     most of both trees, cost a few state checks instead of a certification (LazyRRT's idea, on
     both trees of RRT-Connect). Where candidates keep failing (narrow passages: lazy trees grow
     through walls faster than candidates cut them back), a solve gives laziness up after
-    lazy_limit rejected candidates: it cuts the edges it grew lazily and goes on eagerly from what
-    was decided (a restart, which narrow passages favour), or with lazy_keep decides them from the
-    roots down, keeping what is free (a goal tree that found its way out of a shelf keeps it).
+    lazy_limit rejected candidates: it cuts what it has not decided and goes on eagerly.
 
     Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's extent),
     "batch_size" (samples per iteration, >= 1), "shortcut" (0 or 1: shorten the solution with
     BatchShortcutter before returning it), "lazy" (0 or 1), "lazy_samples" (states per new edge
-    in lazy mode, >= 1), "lazy_limit" (rejected candidates before a solve turns eager) and
-    "lazy_keep" (0 or 1: keep the free edges grown lazily when it does). Seeded
+    in lazy mode, >= 1) and "lazy_limit" (rejected candidates before a solve turns eager). Seeded
     through OMPL's RNG like every OMPL planner: a run with the same seed and verdicts grows the
     same trees. Honours the termination
     condition between batches; goal regions must be sampleable (GoalSampleableRegion). */
@@ -82,10 +79,6 @@ public:
         solve. */
     void setLazyLimit(unsigned int candidates) { lazyLimit_ = std::max(1u, candidates); }
     unsigned int getLazyLimit() const { return lazyLimit_; }
-    /** \brief When a solve turns eager (lazy_limit): false (default) cuts every edge grown lazily,
-        true decides them from the roots down and keeps the free ones. */
-    void setLazyKeep(bool keep) { lazyKeep_ = keep; }
-    bool getLazyKeep() const { return lazyKeep_; }
     /** \brief States checked per new edge in lazy mode; throws ConfigurationError for 0. */
     void setLazySamples(unsigned int samples);
     unsigned int getLazySamples() const { return lazySamples_; }
@@ -94,9 +87,6 @@ public:
     unsigned int getCandidateCount() const { return candidates_; }
     unsigned int getRejectedCandidateCount() const { return rejectedCandidates_; }
     unsigned int getCutStateCount() const { return cutMotions_; }
-    /** \brief The last solve: states grown lazily that the switch to eager mode (lazy_limit)
-        decided and kept (lazy_keep); 0 when it stayed lazy or cut them. */
-    unsigned int getKeptStateCount() const { return keptMotions_; }
     /** \brief Lazy mode, the last solve: states checked on new edges, and along candidates' edges. */
     std::uint64_t getLazyStateCount() const { return lazyStates_; }
     std::uint64_t getRakedStateCount() const { return rakedStates_; }
@@ -130,10 +120,8 @@ private:
     /** \brief Decides the edges from both trees' roots to \a startEnd and \a goalEnd that are not
         decided yet, and the \a bridge between them unless \a bridgeDecided, in one batch (after a
         rake that rejects most failing candidates for less); cuts the subtree below each rejected
-        tree edge. True when every edge is accepted (at once when none needed deciding). After the
-        lazy_limit-th rejected candidate, abandons laziness (until \a ptc). */
-    bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided,
-                         const ::ompl::base::PlannerTerminationCondition &ptc);
+        tree edge. True when every edge is accepted (at once when none needed deciding). */
+    bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided);
     /** \brief Checks states along \a edges at rising density (the midpoints, then the quarter
         points, ...) down to the space's longest valid segment, one batch per level; stops after the
         first level with a rejected state. levels[e]: the levels edge e passed before (skipped), and
@@ -143,10 +131,8 @@ private:
                    std::vector<std::uint8_t> &valid);
     /** \brief Removes \a motion and every motion below it from their tree. */
     void cutSubtree(Motion *motion);
-    /** \brief The rest of the solve is eager; the edges grown lazily are cut, or with lazy_keep decided
-        from the roots down (one batch per depth; a rejected edge's subtree is cut undecided) until
-        \a ptc. */
-    void abandonLaziness(const ::ompl::base::PlannerTerminationCondition &ptc);
+    /** \brief Cuts every edge not yet decided; the rest of the solve is eager. */
+    void abandonLaziness();
     /** \brief The live motion of \a tree nearest to \a probe (cut motions are skipped). */
     Motion *nearest(const Tree &tree, const Motion *probe) const;
     /** \brief Cut motions still held by \a tree's structure; its motions that are not cut. */
@@ -167,12 +153,10 @@ private:
     bool lazy_ = true;
     bool lazyNow_ = true;  ///< lazy_, until this solve abandons laziness
     unsigned int lazyLimit_ = 300;
-    bool lazyKeep_ = false;
     unsigned int lazySamples_ = 2;
     std::pair<const Motion *, const Motion *> connection_{nullptr, nullptr};  ///< (start tree, goal tree)
     unsigned int candidates_ = 0, rejectedCandidates_ = 0, cutMotions_ = 0;   ///< lazy mode, this solve
-    unsigned int keptMotions_ = 0;  ///< this solve: lazily grown, decided and kept when it turned eager
-    std::uint64_t lazyStates_ = 0, rakedStates_ = 0;  ///< lazy mode, this solve
-    std::size_t ghosts_[2] = {0, 0};                  ///< cut motions still in the start and goal trees' structures
+    std::uint64_t lazyStates_ = 0, rakedStates_ = 0;                          ///< lazy mode, this solve
+    std::size_t ghosts_[2] = {0, 0};  ///< cut motions still in the start and goal trees' structures
 };
 }  // namespace rastercheck::planners
