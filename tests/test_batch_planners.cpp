@@ -13,8 +13,6 @@
 #include <ompl/base/goals/GoalState.h>
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/geometric/SimpleSetup.h>
-#include <ompl/util/Console.h>
-#include <ompl/util/RandomNumbers.h>
 
 #include "NonConvex.h"
 #include "TestSupport.h"
@@ -35,14 +33,6 @@ namespace og = ::ompl::geometric;
 
 namespace
 {
-/** \brief Seeds OMPL's random numbers (before the planner and its sampler exist). */
-void seed(std::uint_fast32_t value)
-{
-    ::ompl::msg::setLogLevel(::ompl::msg::LOG_NONE);  // OMPL warns when the seed changes after RNGs exist
-    ::ompl::RNG::setSeed(value);
-    ::ompl::msg::setLogLevel(::ompl::msg::LOG_WARN);
-}
-
 /** \brief The exact oracle on \a path at 20 times the planner's resolution. */
 ::testing::AssertionResult collisionFree(const og::SimpleSetup &setup, const og::PathGeometric &path)
 {
@@ -124,7 +114,7 @@ TEST(BatchRRTConnect, SolvesPandaProblemsWithPathsTheOracleAccepts)
         // Certified edges: the default of makeSimpleSetup, and what the planner uses.
         ASSERT_TRUE(std::dynamic_pointer_cast<rco::CertifiedMotionValidator>(
             setup->getSpaceInformation()->getMotionValidator()));
-        seed(7);
+        rc::test::seedOmpl(7);
         const og::PathGeometric path = solveAndCheck(*setup, 60.0);
         EXPECT_GE(path.getStateCount(), 2u) << scenario;
     }
@@ -165,7 +155,7 @@ TEST(BatchRRTConnect, LazyAndEagerModesReturnCertifiedPathsAndLazyChecksFewerSta
             og::SimpleSetupPtr setup = pandaSetup(root, scenario);
             setup->getSpaceInformation()->setup();
             resetCounters(*setup);
-            seed(13);
+            rc::test::seedOmpl(13);
             const og::PathGeometric path = solveAndCheck(*setup, 60.0, false, lazy);
             const auto edges = std::dynamic_pointer_cast<rco::CertifiedMotionValidator>(
                 setup->getSpaceInformation()->getMotionValidator());
@@ -201,7 +191,7 @@ void solveLazilyAcrossTheWall(og::SimpleSetupPtr &setup, std::shared_ptr<rcp::Ba
     planner->setRange(10.0);
     planner->setLazyLimit(lazyLimit);
     setup->setPlanner(planner);
-    seed(4);
+    rc::test::seedOmpl(4);
     ASSERT_EQ(setup->solve(60.0), ob::PlannerStatus::EXACT_SOLUTION);
     EXPECT_TRUE(collisionFree(*setup, setup->getSolutionPath()));
 }
@@ -257,7 +247,7 @@ TEST(BatchRRTConnect, SeededRunsRepeat)
     std::vector<std::vector<double>> paths[2];
     for (auto &states : paths)
     {
-        seed(11);
+        rc::test::seedOmpl(11);
         og::PathGeometric path = solveAndCheck(*setup, 60.0);
         for (const ob::State *state : path.getStates())
             states.push_back(rco::getStateValidityChecker(*setup)->getStateMapping().toConfiguration(state));
@@ -274,7 +264,7 @@ TEST(BatchRRTConnect, PlansForSE2AndSE3BodiesThroughAGap)
         options.checker.backend = rc::BackendChoice::Cpu;
         og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(planar), options);
         setAcrossTheWall(*setup);
-        seed(3);
+        rc::test::seedOmpl(3);
         const og::PathGeometric path = solveAndCheck(*setup, 60.0, true);
         // The path passes the gap: some state has |y| < 0.3 while near x = 0.
         bool throughGap = false;
@@ -299,7 +289,7 @@ TEST(BatchRRTConnect, PlansTheCraneLiftWithItsCompoundSpace)
     options.heldCoordinates = {{"base_x", 0.0}, {"base_y", 0.0}, {"base_yaw", 0.0}};
     og::SimpleSetupPtr setup = rco::makeSimpleSetup(plant, options);
     rco::setStartAndGoal(*setup, rc::loadMoveItRequest(rc::test::sourcePath("robots/sites/plant_lift.yaml")));
-    seed(5);
+    rc::test::seedOmpl(5);
     const og::PathGeometric path = solveAndCheck(*setup, 120.0, true);
     EXPECT_GE(path.getStateCount(), 2u);
 }
@@ -413,7 +403,7 @@ TEST(BatchRRTConnect, WorksWithAForeignValidityChecker)
     auto planner = std::make_shared<rcp::BatchRRTConnect>(setup.getSpaceInformation());
     planner->setShortcut(true);
     setup.setPlanner(planner);
-    seed(2);
+    rc::test::seedOmpl(2);
     ASSERT_EQ(setup.solve(10.0), ob::PlannerStatus::EXACT_SOLUTION);
     og::PathGeometric path = setup.getSolutionPath();
     path.interpolate(1000);
@@ -443,7 +433,7 @@ TEST(BatchShortcutter, ShortensAPathAndKeepsItCollisionFree)
     }
     ASSERT_TRUE(collisionFree(*setup, path));
     const double before = path.length();
-    seed(9);
+    rc::test::seedOmpl(9);
     rcp::BatchShortcutter shortcutter(si);
     EXPECT_EQ(shortcutter.edgeChecker().description(), "certified");
     EXPECT_TRUE(shortcutter.shortcut(path, ob::timedPlannerTerminationCondition(30.0)));

@@ -9,7 +9,6 @@
 #include <ompl/base/ScopedState.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
-#include <ompl/util/RandomNumbers.h>
 
 #include "Reference.h"
 #include "TestSupport.h"
@@ -318,7 +317,7 @@ TEST(CraneLift, StraightLineSwingsTheLoadIntoTank1)
 
 TEST(CraneLift, ShortPlannedLiftIsFreeByTheOracleAndKeepsTheHookVertical)
 {
-    ::ompl::RNG::setSeed(6);
+    rc::test::seedOmpl(6);
     rc::ompl::SetupOptions options;
     options.request.padding = 0.25;
     options.heldCoordinates = {{"base_x", 0.0}, {"base_y", 0.0}, {"base_yaw", 0.0}};

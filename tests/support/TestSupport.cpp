@@ -6,6 +6,9 @@
 #include <stdexcept>
 #include <sys/wait.h>
 
+#include <ompl/util/Console.h>
+#include <ompl/util/RandomNumbers.h>
+
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
 
@@ -69,6 +72,14 @@ void expectInputError(const std::function<void()> &load, const std::string &file
         EXPECT_NE(e.element().find(element), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
     }
+}
+
+void seedOmpl(std::uint_fast32_t value)
+{
+    const ::ompl::msg::LogLevel level = ::ompl::msg::getLogLevel();
+    ::ompl::msg::setLogLevel(::ompl::msg::LOG_NONE);  // OMPL warns when the seed changes after RNGs exist
+    ::ompl::RNG::setSeed(value);
+    ::ompl::msg::setLogLevel(level);
 }
 
 std::string writeFile(const std::string &path, const std::string &text)

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <cstdlib>
 #include <functional>
 #include <string>
@@ -52,6 +53,12 @@ inline CommandRun runCli(const std::string &arguments) { return runCommand(std::
     and a message containing \a what. */
 void expectInputError(const std::function<void()> &load, const std::string &file, const std::string &element,
                       const std::string &what);
+
+/** \brief Seeds OMPL's random numbers, so samplers and planners made afterwards draw the same
+    numbers on every run. OMPL's RNGs are seeded from one global generator when made: without this
+    every test process draws differently (a test counting random edges' verdicts failed in CI that
+    way). Silences OMPL's warning that RNGs already exist (other tests in the same program). */
+void seedOmpl(std::uint_fast32_t value);
 
 /** \brief Writes \a text to \a path (creating it) and returns the path. */
 std::string writeFile(const std::string &path, const std::string &text);
