@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 #include <cub/device/device_segmented_sort.cuh>
 #include <cub/device/device_select.cuh>
@@ -43,6 +44,13 @@ __global__ void forEachKernel(std::size_t n, F f)
 }
 
 __global__ void probeKernel(int *out) { *out = 42; }
+
+__global__ void iotaKernel(std::uint32_t *out, std::size_t n)
+{
+    const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < n)
+        out[i] = static_cast<std::uint32_t>(i);
+}
 
 /** \brief One device allocation that only grows, freed with its owner. */
 class DeviceAllocation
@@ -165,6 +173,34 @@ public:
         std::uint32_t result = 0;
         download(&result, count, 1);
         return result;
+    }
+
+    /** \brief order = 0..n-1 stably sorted by keys[i] (each below numKeys): CUB's radix sort (LSD,
+        so stable) over the keys' low bits, the indices as values. The fragment sort's spare
+        buffers hold the sorted keys and the indices: that sort comes later in the chunk, on the
+        same stream. */
+    void orderByKey(const std::uint32_t *keys, std::size_t n, std::uint32_t numKeys, std::uint32_t *order)
+    {
+        if (n == 0)
+            return;
+        int bits = 1;
+        while (bits < 32 && (std::uint64_t{1} << bits) < numKeys)
+            ++bits;
+        auto *sortedKeys =
+            static_cast<std::uint32_t *>(reserve(keysAlt_, n * sizeof(std::uint32_t), "cudaMalloc (sort keys)"));
+        auto *indices =
+            static_cast<std::uint32_t *>(reserve(valuesAlt_, n * sizeof(std::uint32_t), "cudaMalloc (sort values)"));
+        constexpr unsigned threads = 256;
+        iotaKernel<<<static_cast<unsigned>((n + threads - 1) / threads), threads, 0, stream_>>>(indices, n);
+        check(cudaGetLastError(), "kernel launch (iota)");
+        const auto items = static_cast<std::int64_t>(n);
+        std::size_t bytes = 0;
+        check(
+            cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys, sortedKeys, indices, order, items, 0, bits, stream_),
+            "cub::DeviceRadixSort::SortPairs (size)");
+        check(cub::DeviceRadixSort::SortPairs(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, keys,
+                                              sortedKeys, indices, order, items, 0, bits, stream_),
+              "cub::DeviceRadixSort::SortPairs");
     }
 
     /** \brief out[i] = sum of in[0..i); the inputs end with a zero, so the last output is the total. */

@@ -37,10 +37,16 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
         const rc::StagedBackend staged(model, poisonedStages(model));
+        // The proofs in pair order, as the GPU takes them in large batches (StageBudget).
+        rc::device::StageBudget pairOrder;
+        pairOrder.orderedProofsFrom = 0;
+        const rc::StagedBackend ordered(model, poisonedStages(model, pairOrder));
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
             request.mode = mode;
+            rc::test::expectSameDecisions(ordered, cpu, *model, suite.states, request,
+                                          label(suite.name, mode) + " pair order");
             const rc::test::Agreement counts =
                 rc::test::expectSameDecisions(staged, cpu, *model, suite.states, request, label(suite.name, mode));
             if (mode == rc::CollisionMode::Exact && suite.name.rfind("panda", 0) == 0)

@@ -139,6 +139,18 @@ public:
         return count;
     }
 
+    /** \brief order = 0..n-1 stably sorted by keys[i] (each below numKeys): a counting sort. */
+    void orderByKey(const std::uint32_t *keys, std::size_t n, std::uint32_t numKeys, std::uint32_t *order)
+    {
+        std::vector<std::size_t> next(static_cast<std::size_t>(numKeys) + 1, 0);
+        for (std::size_t i = 0; i < n; ++i)
+            ++next[keys[i] + 1];
+        for (std::uint32_t k = 0; k < numKeys; ++k)
+            next[k + 1] += next[k];
+        for (std::size_t i = 0; i < n; ++i)
+            order[next[keys[i]]++] = static_cast<std::uint32_t>(i);
+    }
+
     std::size_t exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n)
     {
         unsigned long long total = 0;

@@ -2,19 +2,19 @@
 
 // The batched pipeline: many states decided in one pass, stage by stage, each stage one data-
 // parallel loop over its elements (a kernel on the GPU). The driver is a template over an
-// executor that provides the loops, scans, compaction and segmented sort: the CUDA executor runs
-// them as kernels and CUB calls (cuda/), the host executor as plain loops (collision/
-// HostStageRunner), so the CPU test suite runs exactly the code the GPU runs, apart from those
-// primitives.
+// executor that provides the loops, scans, compaction, ordering by a small key and segmented
+// sort: the CUDA executor runs them as kernels and CUB calls (cuda/), the host executor as plain
+// loops (collision/HostStageRunner), so the CPU test suite runs exactly the code the GPU runs,
+// apart from those primitives.
 //
 // Stages per chunk of states:
 //   1. forward kinematics (one element per state), component poses, OBBs and AABBs (per state x
 //      component), layer boxes and the robot's bounding sphere (per state);
 //   2. culls per (state, pair): distance filter, layer AABBs, OBB tests; compaction of survivors;
-//   3. per surviving pair: image window, the convex separation proof, the grid, and the candidate
-//      triangles (both meshes' trees walked with the node culls, counted, scanned, written); per
-//      (pair, candidate triangle): the per-triangle cull and the pre-rasterization fragment count;
-//      scan;
+//   3. per surviving pair (in pair order when there are many): image window, the convex
+//      separation proof, the grid, and the candidate triangles (both meshes' trees walked with the
+//      node culls, counted, scanned, written); per (pair, candidate triangle): the per-triangle
+//      cull and the pre-rasterization fragment count; scan;
 //   4. rasterization into the counted slots; segmented sort by (pixel, depth) per pair;
 //   5. Sort_Search_Pair per pixel run; per pair the first hit pixel (atomic minimum); outcomes.
 // The per-state reduction (the first colliding pair in pair order) runs on the host, which also
@@ -145,6 +145,12 @@ struct StageBudget
         pass it, or whose allocator refuses, frees its scratch and throws StageMemoryExhausted,
         and the chunk is split. */
     std::size_t maxScratchBytes = 0;
+    /** Chunks with at least this many pairs past the box culls take the proofs in pair order
+        (stage 3). Measured on an H200 (2026-11-26, docs/benchmarks.md "GPU"): the order made the
+        proof stage 1.8-3.2x faster and a batch of 10^6 Panda states 1.3-1.4x, 10^5 states 1.0-1.2x,
+        but batches of 10^3-10^4 states (2 000 to 20 000 pairs, less than one wave of the device)
+        a third slower; there the unordered stage stays. */
+    std::size_t orderedProofsFrom = std::size_t(1) << 16;
 };
 
 /** \brief What the stages did, summed over the chunks of a runner's passes: how much work the
@@ -173,6 +179,8 @@ enum StageBuffer : int
     BufferPairFlags,
     BufferCandidates,
     BufferCandidateCount,
+    BufferCandidatePairs,
+    BufferProofOrder,
     BufferGrids,
     BufferMargins,
     BufferStatus,
@@ -364,12 +372,28 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     const std::uint32_t numCandidates = ex.selectFlagged(flags, pairElements, candidates);
 
     // 3. Per surviving pair: the image window, the grid, and how many triangles to rasterize.
+    // The survivors are in (state, pair) order, so a warp holds different pairs of a few states,
+    // each proof with its own hulls and loop lengths (GJK over up to 128 points per solid and
+    // passes over hundreds of vertices): the threads diverge (an H200, 2026-11-26: this stage was
+    // 2/3 of a safe-mode batch's kernel time, at 6 % occupancy). Taken in pair order, a warp runs
+    // one pair's proof for 32 states: the same hull data and trip counts (budget.orderedProofsFrom
+    // says when that pays).
+    const bool pairOrdered = numCandidates >= budget.orderedProofsFrom;
+    std::uint32_t *proofOrder = nullptr;
+    if (pairOrdered)
+    {
+        std::uint32_t *candidatePairs = ex.template buffer<std::uint32_t>(BufferCandidatePairs, numCandidates + 1);
+        proofOrder = ex.template buffer<std::uint32_t>(BufferProofOrder, numCandidates + 1);
+        ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) { candidatePairs[c] = candidates[c] % pairs; });
+        ex.orderByKey(candidatePairs, numCandidates, pairs, proofOrder);
+    }
     RasterGrid *grids = ex.template buffer<RasterGrid>(BufferGrids, numCandidates + 1);
     float *margins = ex.template buffer<float>(BufferMargins, numCandidates + 1);
     std::int32_t *status = ex.template buffer<std::int32_t>(BufferStatus, numCandidates + 1);
     unsigned long long *triangleCount = ex.template buffer<unsigned long long>(BufferTriangleCount, numCandidates + 1);
     std::uint8_t *rasterized = ex.template buffer<std::uint8_t>(BufferRasterized, numCandidates + 1);
-    ex.forEach(numCandidates + 1, [=] RC_LAMBDA(std::size_t c) {
+    ex.forEach(numCandidates + 1, [=] RC_LAMBDA(std::size_t k) {
+        const std::size_t c = pairOrdered && k < numCandidates ? proofOrder[k] : k;
         triangleCount[c] = 0;
         rasterized[c] = 0;
         if (c == numCandidates)
