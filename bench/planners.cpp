@@ -12,7 +12,7 @@
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
-//                                   [range_fraction=0]
+//                                   [range_fraction=0] [lazy_limit=300]
 // (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
 // 0: each planner's default, OMPL's fifth of the extent)
 // (a subset of planners: for profiling one of them; the others' rows stay empty; "eager" is
@@ -148,6 +148,7 @@ int main(int argc, char **argv)
     const std::vector<std::string> chosen = bench::splitList(argc > 6 ? argv[6] : "fcl,rrtconnect,batch,eager");
     const unsigned int lazySamples = argc > 7 ? static_cast<unsigned int>(std::atoi(argv[7])) : 2u;
     const double rangeFraction = argc > 8 ? std::atof(argv[8]) : 0.0;
+    const unsigned int lazyLimit = argc > 9 ? static_cast<unsigned int>(std::atoi(argv[9])) : 300u;
     auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
@@ -157,8 +158,9 @@ int main(int argc, char **argv)
 
     std::printf(
         "Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
-        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u, lazy_samples %u; range %s.\n",
-        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize, lazySamples,
+        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u, lazy_samples %u, lazy_limit %u; "
+        "range %s.\n",
+        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize, lazySamples, lazyLimit,
         rangeFraction > 0.0 ? (std::to_string(rangeFraction) + " of the maximum extent, every planner").c_str()
                             : "each planner's default");
     std::printf(
@@ -210,6 +212,7 @@ int main(int argc, char **argv)
                 planner->setBatchSize(batchSize);
                 planner->setLazy(lazy);
                 planner->setLazySamples(lazySamples);
+                planner->setLazyLimit(lazyLimit);
                 planner->setRange(range);
                 return planner;
             };
