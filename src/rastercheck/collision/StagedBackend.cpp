@@ -74,6 +74,7 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
     // An overlap the hulls prove names no triangle: only when no contact is asked. Not in raster
     // mode, whose verdicts (misses included) must not depend on whether contacts are asked.
     settings.proveOverlaps = !contactsAsked && request.mode != CollisionMode::Raster;
+    settings.meshObstaclesUnproven = request.mode != CollisionMode::Raster;  // CpuBackend's pairCollides
     return settings;
 }
 
