@@ -1,6 +1,8 @@
 // Backends side by side: states/s against batch size and scene size for FCL (one core), the CPU
 // backend (all cores) and the CUDA backend (when a device is usable), and the motion validator's
 // per-edge latency, all in one run on the same states. Prints Markdown tables (docs/benchmarks.md).
+// Scenes: three Panda MotionBenchMaker scenes, the crane in the plant, and FCL's env.obj / rob.obj
+// (a free-flying non-convex mesh among non-convex meshes, both open: the real-mesh case).
 //
 // usage: rastercheck_bench_backends [max_batch=1000000] [mode=safe]
 //   CPU and FCL are timed on batches up to 10^4 states (their rate no longer depends on the batch
@@ -16,6 +18,7 @@
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/collision/StagedBackend.h"
+#include "rastercheck/io/OmplAppProblem.h"
 #include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/Setup.h"
 
@@ -103,6 +106,12 @@ int main(int argc, char **argv)
                          loadMoveItScene(bench::mbmProblemPath(root, "panda", scenario, 1, "scene"))});
     const Problem &crane = test::plant();
     cases.push_back({"crane in the plant", crane.robot, crane.scene});
+    const OmplAppProblem meshes = loadOmplAppProblemString(
+        "[problem]\nrobot = rob.obj\nworld = env.obj\nstart.x = 0\nstart.y = 0\nstart.z = 0\nstart.theta = 0\n"
+        "start.axis.x = 1\nstart.axis.y = 0\nstart.axis.z = 0\ngoal.x = 0\ngoal.y = 0\ngoal.z = 0\n"
+        "goal.theta = 0\ngoal.axis.x = 1\ngoal.axis.y = 0\ngoal.axis.z = 0\n",
+        root + "/meshes/fcl", "fcl env/rob");
+    cases.push_back({"fcl env/rob", meshes.robot, meshes.scene});
 
     CollisionRequest request;
     request.mode = mode;

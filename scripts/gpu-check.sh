@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
 # The GPU verification of the CUDA backend (issue 5) in as few device calls as possible: the GPU
 # machine lacks our Debian libraries, so the programs are built here and carried there
-# (../shared/GPU.md), and device time counts from the machine's start, so each step is one call
-# that fits the device's 600 s per command (the limits of each step below add up to less).
+# (../shared/GPU.md), and device time counts from the machine's start, so all steps go in one call
+# (each step has its own time limit; a call may take 600 s).
 #
 #   On the build machine:  scripts/gpu-check.sh bundle
-#       builds build-gpu for sm_90 (H100, H200) and packs .gpu/ (programs, libraries, Panda data).
-#   On the GPU machine (device `run` with carry [".gpu"]), from the repository root, one step
-#   per call (each fits the 600 s a call may take; all three together do not):
-#       scripts/gpu-check.sh run tests      (then: run sanitize, run bench)
+#       builds build-gpu for sm_90 (H100, H200) and packs .gpu/ (programs, libraries, Panda data, FCL's meshes).
+#   On the GPU machine (device `run` with carry [".gpu"]), from the repository root:
+#       scripts/gpu-check.sh run tests bench sanitize
+#   (all three took 86 s on an H200 on 2026-11-26, each step well inside its limit below; a step
+#   may also run alone)
 #   The script sets LD_LIBRARY_PATH, RASTERCHECK_DATA and RASTERCHECK_SOURCE to the bundle and this
 #   checkout unless they are set, and RASTERCHECK_REQUIRE_GPU, so a GPU test fails rather than
 #   skips when the backend cannot use the device. Every step writes its log under $OUT (else
@@ -25,7 +26,7 @@ bundle() {
     cmake --build build-gpu --target test_gpu_backend test_staged_pipeline rastercheck_bench_backends
     mkdir -p "$(git rev-parse --git-dir)/info"  # gpu-bundle appends to info/exclude, absent in some checkouts
     ../shared/tools/gpu-bundle build-gpu --bin test_gpu_backend --bin test_staged_pipeline \
-        --bin rastercheck_bench_backends --data mbm/panda
+        --bin rastercheck_bench_backends --data mbm/panda --data meshes/fcl
 }
 
 run() {
@@ -69,6 +70,7 @@ run() {
                 step initcheck 240 compute-sanitizer --tool initcheck --error-exitcode 3 .gpu/bin/test_gpu_backend \
                     --gtest_filter='*To1000States*:*DeviceMemoryLimit*' ;;
             bench)
+                # The Panda scenes, the crane and FCL's env/rob meshes, FCL in the same run.
                 step bench-safe 280 .gpu/bin/rastercheck_bench_backends 1000000 safe
                 step bench-raster 200 .gpu/bin/rastercheck_bench_backends 100000 raster ;;
             *) echo "gpu-check: unknown step $s (tests, sanitize, bench)" >&2; return 2 ;;

@@ -19,6 +19,9 @@ packages=(
     # rastercheck view: its HTTP server and JSON, three.js for the page (served by the viewer: no
     # CDN), and the browser its test drives headless
     libcpp-httplib-dev nlohmann-json3-dev libjs-three chromium
+    # scripts/gpu-check.sh bundle: ../shared/tools/gpu-bundle copies with cpio (a fresh Debian 12
+    # machine lacks it; the first GPU run, 2026-11-26, stopped there)
+    cpio
 )
 # Node.js and npm for the browser test: Debian's, unless a node with npm is already installed (a
 # NodeSource nodejs, which carries its own npm, conflicts with Debian's npm package).
