@@ -532,6 +532,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         if (joint.kind == JointKind::Floating)
             quaternionStarts.push_back(joint.firstCoordinate + 3);
     }
+    selfPairTables = SelfPairTables(*this);  // reads selfPairs, convex, componentLink, quaternionStarts
 
     if (!diagonals.empty())
     {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rastercheck/collision/CollisionRequest.h"
+#include "rastercheck/collision/SelfPairTables.h"
 #include "rastercheck/device/Boxes.h"
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
@@ -168,6 +169,11 @@ public:
     std::vector<std::uint8_t> boundedCoordinates;
     /** \brief First coordinate of every floating joint's quaternion (qx). */
     std::vector<int> quaternionStarts;
+
+    /** \brief Joint-space clearance tables of the self pairs one or two coordinates move apart (a
+        wrist's links), which prove those pairs apart without a hull test where they are far enough
+        from touching (SelfPairTables). */
+    SelfPairTables selfPairTables;
 
     /** \brief True when every coordinate is finite, bounded coordinates lie within their bounds
         (OMPL's tolerance: one double epsilon), and no quaternion is zero. */

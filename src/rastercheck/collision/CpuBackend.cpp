@@ -471,6 +471,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         }
     }
 
+    const bool tablesDecide = request.mode == CollisionMode::Safe || request.mode == CollisionMode::Exact;
     if (request.checkSelfCollision)
         for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
         {
@@ -478,6 +479,11 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
             const double padding = request.padding + (extra ? extraSelf[i] : 0.0);
             if (!device::solidsMayMeet(ws.componentBounds[a], ws.componentBox[a], ws.componentBounds[b],
                                        ws.componentBox[b], device::floatPadding(padding)))
+                continue;
+            // The pair's clearance table: a proof of "apart" without a hull test. Safe and exact mode
+            // only, whose verdicts are the meshes' own (conservative and raster verdicts are their
+            // tests' outcomes, which the table must not change).
+            if (tablesDecide && model.selfPairTables.apart(i, q, padding))
                 continue;
             if (pairCollides(
                     componentSolid(model, ws, a), componentSolid(model, ws, b),

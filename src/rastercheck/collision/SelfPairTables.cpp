@@ -1,0 +1,200 @@
+#include "rastercheck/collision/SelfPairTables.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/device/Kinematics.h"
+#include "rastercheck/device/SolidRelation.h"
+#include "rastercheck/model/MotionBound.h"
+
+namespace rastercheck
+{
+namespace
+{
+constexpr int kMaxNodesPerAxis = 64;
+
+/** \brief The links from \a link up to the root, \a link first. */
+std::vector<int> ancestry(const RobotModel &robot, int link)
+{
+    std::vector<int> links{link};
+    for (int joint = robot.links[link].parentJoint; joint >= 0;
+         joint = robot.links[robot.joints[joint].parentLink].parentJoint)
+        links.push_back(robot.joints[joint].parentLink);
+    return links;
+}
+
+/** \brief The coordinates that move links \a a and \a b relative to each other (those of the
+    joints on the tree path between them), or false when a joint on that path does not qualify
+    (SelfPairTables' class comment) or more than two move. */
+bool pathCoordinates(const RobotModel &robot, int a, int b, std::vector<int> &coordinates)
+{
+    const std::vector<int> upA = ancestry(robot, a), upB = ancestry(robot, b);
+    int common = -1;
+    for (int link : upA)
+        if (std::find(upB.begin(), upB.end(), link) != upB.end())
+        {
+            common = link;
+            break;
+        }
+    std::vector<bool> mimicked(robot.joints.size(), false);
+    for (const Joint &joint : robot.joints)
+        if (joint.mimicOf >= 0)
+            mimicked[static_cast<std::size_t>(joint.mimicOf)] = true;
+    coordinates.clear();
+    for (const std::vector<int> *up : {&upA, &upB})
+        for (int link : *up)
+        {
+            if (link == common)
+                break;
+            const int j = robot.links[link].parentJoint;
+            const Joint &joint = robot.joints[j];
+            if (joint.kind == JointKind::Fixed)
+                continue;
+            const bool oneCoordinate = joint.kind == JointKind::Revolute || joint.kind == JointKind::Prismatic;
+            if (!oneCoordinate || joint.continuous || joint.mimicOf >= 0 || mimicked[static_cast<std::size_t>(j)] ||
+                joint.firstCoordinate < 0)
+                return false;
+            const int c = joint.firstCoordinate;
+            if (!std::isfinite(robot.lowerBounds[c]) || !std::isfinite(robot.upperBounds[c]))
+                return false;
+            if (robot.upperBounds[c] > robot.lowerBounds[c])
+                coordinates.push_back(c);
+        }
+    return common >= 0 && coordinates.size() <= 2;
+}
+}  // namespace
+
+SelfPairTables::SelfPairTables(const CollisionModel &model)
+{
+    const RobotModel &robot = *model.robot;
+    tableOf_.assign(model.selfPairs.size(), -1);
+    if (model.selfPairs.empty())
+        return;
+    const MotionBound bound(robot);
+    const double size = bound.size();
+    if (!(size > 0) || !std::isfinite(size))
+        return;
+    // A configuration for the rest of the robot: zero within the bounds, identity quaternions.
+    const std::size_t dof = robot.numCoordinates();
+    std::vector<double> canonical(dof);
+    for (std::size_t i = 0; i < dof; ++i)
+        canonical[i] = std::isfinite(robot.lowerBounds[i]) && std::isfinite(robot.upperBounds[i])
+                           ? std::clamp(0.0, robot.lowerBounds[i], robot.upperBounds[i])
+                           : 0.0;
+    for (int start : model.quaternionStarts)
+        canonical[static_cast<std::size_t>(start) + 3] = 1.0;
+    // Paddings tried per node: 0, then from size / 1024 (about 1 mm for an arm) up by half each.
+    std::vector<double> ladder{0.0};
+    for (double p = size / 1024; ladder.size() < 13; p *= 1.5)
+        ladder.push_back(p);
+    const double target = size / 512;  // the largest sweep to a node, per axis, where nodes allow
+
+    std::vector<double> q, jointValues(robot.kinematicJoints.size() + 1), componentSweeps(model.components.size());
+    std::vector<device::Pose<double>> links(robot.links.size());
+    const device::ConvexArrays arrays = model.convex.arrays();
+    for (std::size_t p = 0; p < model.selfPairs.size(); ++p)
+    {
+        const auto [a, b] = model.selfPairs[p];
+        std::vector<int> coordinates;
+        if (!pathCoordinates(robot, model.componentLink[a], model.componentLink[b], coordinates))
+            continue;
+        Table table;
+        table.numAxes = static_cast<int>(coordinates.size());
+        std::size_t numNodes = 1;
+        for (int k = 0; k < table.numAxes; ++k)
+        {
+            Axis &axis = table.axes[k];
+            axis.coordinate = coordinates[static_cast<std::size_t>(k)];
+            const auto c = static_cast<std::size_t>(axis.coordinate);
+            axis.lower = robot.lowerBounds[c];
+            const double range = robot.upperBounds[c] - axis.lower;
+            // The pair sweep over the whole range, per unit: MotionBound's bound is a sum of each
+            // joint's travel times a reach that holds in every configuration, so it is linear.
+            std::vector<double> from = canonical, to = canonical;
+            from[c] = axis.lower;
+            to[c] = robot.upperBounds[c];
+            double pairSweep = 0.0;
+            bound.sweeps(from.data(), to.data(), {{a, b}}, componentSweeps.data(), &pairSweep);
+            axis.rate = pairSweep / range;
+            if (!std::isfinite(axis.rate))
+                break;
+            axis.nodes = std::clamp(static_cast<int>(std::ceil(pairSweep / (2 * target))) + 1, 2, kMaxNodesPerAxis);
+            axis.step = range / (axis.nodes - 1);
+            numNodes *= static_cast<std::size_t>(axis.nodes);
+        }
+        if (!std::isfinite(table.axes[0].rate) || !std::isfinite(table.axes[1].rate))
+            continue;
+        table.clearance.resize(numNodes);
+        q = canonical;
+        for (std::size_t node = 0; node < numNodes; ++node)
+        {
+            std::size_t rest = node;
+            for (int k = table.numAxes; k-- > 0;)
+            {
+                const Axis &axis = table.axes[k];
+                const auto index = static_cast<int>(rest % static_cast<std::size_t>(axis.nodes));
+                rest /= static_cast<std::size_t>(axis.nodes);
+                q[static_cast<std::size_t>(axis.coordinate)] = axis.lower + index * axis.step;  // as apart() places it
+            }
+            device::linkPoses(robot.kinematicJoints.data(), static_cast<int>(robot.kinematicJoints.size()), q.data(),
+                              jointValues.data(), links.data());
+            const auto provenApart = [&](double padding)
+            {
+                return device::relateSolids(arrays, static_cast<std::uint32_t>(a), links[model.componentLink[a]],
+                                            static_cast<std::uint32_t>(b), links[model.componentLink[b]], padding,
+                                            false) == device::HullRelation::Apart;
+            };
+            // The largest padding on the ladder proven (a binary search: the proofs hold for every
+            // smaller padding in practice; any value proven is sound either way).
+            double clearance = -std::numeric_limits<double>::infinity();
+            if (provenApart(0.0))
+            {
+                std::size_t low = 0, high = ladder.size();  // ladder[low] proven; ladder[high] not (or past)
+                while (high - low > 1)
+                {
+                    const std::size_t middle = (low + high) / 2;
+                    (provenApart(ladder[middle]) ? low : high) = middle;
+                }
+                clearance = ladder[low];
+            }
+            float stored = static_cast<float>(clearance);
+            if (static_cast<double>(stored) > clearance)
+                stored = std::nextafter(stored, -std::numeric_limits<float>::infinity());
+            table.clearance[node] = stored;
+        }
+        tableOf_[p] = static_cast<int>(tables_.size());
+        tables_.push_back(std::move(table));
+    }
+}
+
+bool SelfPairTables::apart(std::size_t pair, const double *q, double padding) const
+{
+    if (pair >= tableOf_.size() || tableOf_[pair] < 0)
+        return false;
+    const Table &table = tables_[static_cast<std::size_t>(tableOf_[pair])];
+    double sweep = 0.0;
+    std::size_t index = 0;
+    for (int k = 0; k < table.numAxes; ++k)
+    {
+        const Axis &axis = table.axes[k];
+        const double value = q[axis.coordinate];
+        if (!std::isfinite(value))
+            return false;
+        const double node = std::clamp(std::round((value - axis.lower) / axis.step), 0.0, double(axis.nodes - 1));
+        sweep += axis.rate * std::fabs(value - (axis.lower + static_cast<int>(node) * axis.step));
+        index = index * static_cast<std::size_t>(axis.nodes) + static_cast<std::size_t>(node);
+    }
+    // The sweep's own rounding: a relative 1e-12 of it.
+    return static_cast<double>(table.clearance[index]) - sweep * (1 + 1e-12) > padding;
+}
+
+std::size_t SelfPairTables::memoryBytes() const
+{
+    std::size_t bytes = tableOf_.size() * sizeof(int);
+    for (const Table &table : tables_)
+        bytes += sizeof(Table) + table.clearance.size() * sizeof(float);
+    return bytes;
+}
+}  // namespace rastercheck
