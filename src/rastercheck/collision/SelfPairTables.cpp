@@ -96,7 +96,7 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
     const device::ConvexArrays arrays = model.convex.arrays();
     for (std::size_t p = 0; p < model.selfPairs.size(); ++p)
     {
-        const auto [a, b] = model.selfPairs[p];
+        const int a = model.selfPairs[p].first, b = model.selfPairs[p].second;  // (a lambda below reads them)
         std::vector<int> coordinates;
         if (!pathCoordinates(robot, model.componentLink[a], model.componentLink[b], coordinates))
             continue;
