@@ -15,54 +15,26 @@ namespace
 {
 constexpr int kMaxNodesPerAxis = 64;
 
-/** \brief The links from \a link up to the root, \a link first. */
-std::vector<int> ancestry(const RobotModel &robot, int link)
+/** \brief The coordinates that move components \a a and \a b relative to each other: those of
+    the joints MotionBound counts in their pair sweep (so the table's axes and its sweep rest on one
+    definition), or false when one of those joints does not qualify (SelfPairTables' class
+    comment) or more than two move. \a followed: per coordinate, whether a mimic joint follows it. */
+bool pairCoordinates(const RobotModel &robot, const MotionBound &bound, int a, int b, const std::vector<bool> &followed,
+                     std::vector<int> &coordinates)
 {
-    std::vector<int> links{link};
-    for (int joint = robot.links[link].parentJoint; joint >= 0;
-         joint = robot.links[robot.joints[joint].parentLink].parentJoint)
-        links.push_back(robot.joints[joint].parentLink);
-    return links;
-}
-
-/** \brief The coordinates that move links \a a and \a b relative to each other (those of the
-    joints on the tree path between them), or false when a joint on that path does not qualify
-    (SelfPairTables' class comment) or more than two move. */
-bool pathCoordinates(const RobotModel &robot, int a, int b, std::vector<int> &coordinates)
-{
-    const std::vector<int> upA = ancestry(robot, a), upB = ancestry(robot, b);
-    int common = -1;
-    for (int link : upA)
-        if (std::find(upB.begin(), upB.end(), link) != upB.end())
-        {
-            common = link;
-            break;
-        }
-    std::vector<bool> mimicked(robot.joints.size(), false);
-    for (const Joint &joint : robot.joints)
-        if (joint.mimicOf >= 0)
-            mimicked[static_cast<std::size_t>(joint.mimicOf)] = true;
     coordinates.clear();
-    for (const std::vector<int> *up : {&upA, &upB})
-        for (int link : *up)
-        {
-            if (link == common)
-                break;
-            const int j = robot.links[link].parentJoint;
-            const Joint &joint = robot.joints[j];
-            if (joint.kind == JointKind::Fixed)
-                continue;
-            const bool oneCoordinate = joint.kind == JointKind::Revolute || joint.kind == JointKind::Prismatic;
-            if (!oneCoordinate || joint.continuous || joint.mimicOf >= 0 || mimicked[static_cast<std::size_t>(j)] ||
-                joint.firstCoordinate < 0)
-                return false;
-            const int c = joint.firstCoordinate;
-            if (!std::isfinite(robot.lowerBounds[c]) || !std::isfinite(robot.upperBounds[c]))
-                return false;
-            if (robot.upperBounds[c] > robot.lowerBounds[c])
-                coordinates.push_back(c);
-        }
-    return common >= 0 && coordinates.size() <= 2;
+    for (const MotionBound::PairJoint &joint : bound.pairJoints(a, b))
+    {
+        const bool oneCoordinate = joint.kind == JointKind::Revolute || joint.kind == JointKind::Prismatic;
+        const auto c = static_cast<std::size_t>(joint.coordinate);
+        if (!oneCoordinate || joint.wraps || joint.mimic || followed[c])
+            return false;
+        if (!std::isfinite(robot.lowerBounds[c]) || !std::isfinite(robot.upperBounds[c]))
+            return false;
+        if (robot.upperBounds[c] > robot.lowerBounds[c])
+            coordinates.push_back(joint.coordinate);
+    }
+    return coordinates.size() <= 2;
 }
 }  // namespace
 
@@ -94,15 +66,21 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
     std::vector<double> q, jointValues(robot.kinematicJoints.size() + 1), componentSweeps(model.components.size());
     std::vector<device::Pose<double>> links(robot.links.size());
     const device::ConvexArrays arrays = model.convex.arrays();
+    std::vector<bool> followed(dof, false);
+    for (const Joint &joint : robot.joints)
+        if (joint.mimicOf >= 0 && robot.joints[static_cast<std::size_t>(joint.mimicOf)].firstCoordinate >= 0)
+            followed[static_cast<std::size_t>(robot.joints[static_cast<std::size_t>(joint.mimicOf)].firstCoordinate)] =
+                true;
+    std::vector<int> coordinates;
     for (std::size_t p = 0; p < model.selfPairs.size(); ++p)
     {
         const int a = model.selfPairs[p].first, b = model.selfPairs[p].second;  // (a lambda below reads them)
-        std::vector<int> coordinates;
-        if (!pathCoordinates(robot, model.componentLink[a], model.componentLink[b], coordinates))
+        if (!pairCoordinates(robot, bound, a, b, followed, coordinates))
             continue;
         Table table;
         table.numAxes = static_cast<int>(coordinates.size());
         std::size_t numNodes = 1;
+        bool finiteRates = true;
         for (int k = 0; k < table.numAxes; ++k)
         {
             Axis &axis = table.axes[k];
@@ -119,12 +97,15 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
             bound.sweeps(from.data(), to.data(), {{a, b}}, componentSweeps.data(), &pairSweep);
             axis.rate = pairSweep / range;
             if (!std::isfinite(axis.rate))
+            {
+                finiteRates = false;
                 break;
+            }
             axis.nodes = std::clamp(static_cast<int>(std::ceil(pairSweep / (2 * target))) + 1, 2, kMaxNodesPerAxis);
             axis.step = range / (axis.nodes - 1);
             numNodes *= static_cast<std::size_t>(axis.nodes);
         }
-        if (!std::isfinite(table.axes[0].rate) || !std::isfinite(table.axes[1].rate))
+        if (!finiteRates)
             continue;
         table.clearance.resize(numNodes);
         q = canonical;

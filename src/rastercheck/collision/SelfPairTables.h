@@ -23,9 +23,10 @@ class CollisionModel;
     their meshes. The proof is never wrong; where it does not hold, the pair goes through the
     usual tests.
 
-    A pair qualifies when every joint on the tree path between its two links is fixed, or a
-    revolute (not continuous) or prismatic joint with finite bounds that mimics none and that no
-    other joint mimics, and at most two of them move. Built once with the model (each node a few
+    A pair qualifies when every joint that moves its two components relative to each other (those
+    above exactly one of them, as MotionBound::pairJoints names them) is a revolute (not
+    continuous) or prismatic joint with finite bounds that mimics none and that no other joint
+    mimics, and at most two of them move. Built once with the model (each node a few
     proofs: about 11 ms per table for the Panda's); immutable, thread-safe. */
 class SelfPairTables
 {

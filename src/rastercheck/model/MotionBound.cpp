@@ -184,6 +184,24 @@ void MotionBound::travels(const double *qa, const double *qb, std::vector<Travel
     }
 }
 
+template <class F>
+void MotionBound::forEachPairCarrier(int first, int second, F &&f) const
+{
+    // The joints above exactly one of the two: both lists ascend, so merge them.
+    const std::vector<Carrier> &a = above_[static_cast<std::size_t>(first)];
+    const std::vector<Carrier> &b = above_[static_cast<std::size_t>(second)];
+    std::size_t x = 0, y = 0;
+    while (x < a.size() || y < b.size())
+    {
+        if (y == b.size() || (x < a.size() && a[x].joint < b[y].joint))
+            f(a[x++]);
+        else if (x == a.size() || b[y].joint < a[x].joint)
+            f(b[y++]);
+        else
+            ++x, ++y;  // above both
+    }
+}
+
 double MotionBound::sweep(const double *qa, const double *qb) const
 {
     std::vector<double> componentSweeps(above_.size());
@@ -214,21 +232,21 @@ void MotionBound::sweeps(const double *qa, const double *qb, const std::vector<s
     }
     for (std::size_t i = 0; i < pairs.size(); ++i)
     {
-        // The joints above exactly one of the two: both lists ascend, so merge them.
-        const std::vector<Carrier> &a = above_[static_cast<std::size_t>(pairs[i].first)];
-        const std::vector<Carrier> &b = above_[static_cast<std::size_t>(pairs[i].second)];
         double sum = 0.0;
-        std::size_t x = 0, y = 0;
-        while (x < a.size() || y < b.size())
-        {
-            if (y == b.size() || (x < a.size() && a[x].joint < b[y].joint))
-                sum += moved(a[x++]);
-            else if (x == a.size() || b[y].joint < a[x].joint)
-                sum += moved(b[y++]);
-            else
-                ++x, ++y;  // above both
-        }
+        forEachPairCarrier(pairs[i].first, pairs[i].second, [&](const Carrier &carrier) { sum += moved(carrier); });
         pairSweeps[i] = sum;
     }
+}
+
+std::vector<MotionBound::PairJoint> MotionBound::pairJoints(int a, int b) const
+{
+    std::vector<PairJoint> joints;
+    forEachPairCarrier(a, b,
+                       [&](const Carrier &carrier)
+                       {
+                           const MovingJoint &joint = moving_[static_cast<std::size_t>(carrier.joint)];
+                           joints.push_back({joint.kind, joint.firstCoordinate, joint.wraps, joint.mimic});
+                       });
+    return joints;
 }
 }  // namespace rastercheck

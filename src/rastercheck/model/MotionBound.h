@@ -54,6 +54,18 @@ public:
     void sweeps(const double *qa, const double *qb, const std::vector<std::pair<int, int>> &pairs,
                 double *componentSweeps, double *pairSweeps) const;
 
+    /** \brief A joint that moves two components relative to each other (pairJoints()). */
+    struct PairJoint
+    {
+        JointKind kind;
+        int coordinate;  ///< the joint's first coordinate, or that of the joint it mimics
+        bool wraps;      ///< a continuous revolute joint
+        bool mimic;
+    };
+    /** \brief The moving joints above exactly one of components \a a and \b b: those whose travel
+        pairSweeps counts for the pair, the only ones that change its points' distances. */
+    std::vector<PairJoint> pairJoints(int a, int b) const;
+
     /** \brief reach(j) for every joint (model order): the bound on the distance from the centre joint
         j turns about to any point of the components below it. 0 for a joint that carries no
         geometry. */
@@ -88,6 +100,9 @@ private:
     };
 
     void travels(const double *qa, const double *qb, std::vector<Travel> &travel) const;
+    /** \brief Calls \a f with each Carrier above exactly one of components \a a and \a b. */
+    template <class F>
+    void forEachPairCarrier(int a, int b, F &&f) const;
 
     std::vector<MovingJoint> moving_;
     std::vector<std::vector<Carrier>> above_;  ///< per component, by ascending joint
