@@ -90,6 +90,28 @@ inline std::vector<double> uniformStates(const RobotModel &robot, std::size_t n,
     return q;
 }
 
+/** \brief An OMPL.app .cfg's text for \a robot in \a world (mesh paths as the .cfg names them; no
+    start or goal needed for checking: both at the origin, identity), \a volume as min x y z max x
+    y z (empty: OMPL.app's default, the world's vertices' box). */
+inline std::string checkingCfg(const std::string &name, const std::string &robot, const std::string &world,
+                               const std::vector<double> &volume)
+{
+    std::ostringstream out;
+    out << "[problem]\nname = " << name << "\nrobot = " << robot << "\nworld = " << world << '\n';
+    for (const char *which : {"start", "goal"})
+        out << which << ".x = 0\n"
+            << which << ".y = 0\n"
+            << which << ".z = 0\n"
+            << which << ".theta = 0\n"
+            << which << ".axis.x = 1\n"
+            << which << ".axis.y = 0\n"
+            << which << ".axis.z = 0\n";
+    const char *axes[3] = {"x", "y", "z"};
+    for (std::size_t k = 0; k < volume.size(); ++k)
+        out << "volume." << (k < 3 ? "min." : "max.") << axes[k % 3] << " = " << volume[k] << '\n';
+    return out.str();
+}
+
 /** \brief Wall-clock seconds of \a work. */
 template <class Work>
 double seconds(Work &&work)

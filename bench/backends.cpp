@@ -106,11 +106,8 @@ int main(int argc, char **argv)
                          loadMoveItScene(bench::mbmProblemPath(root, "panda", scenario, 1, "scene"))});
     const Problem &crane = test::plant();
     cases.push_back({"crane in the plant", crane.robot, crane.scene});
-    const OmplAppProblem meshes = loadOmplAppProblemString(
-        "[problem]\nrobot = rob.obj\nworld = env.obj\nstart.x = 0\nstart.y = 0\nstart.z = 0\nstart.theta = 0\n"
-        "start.axis.x = 1\nstart.axis.y = 0\nstart.axis.z = 0\ngoal.x = 0\ngoal.y = 0\ngoal.z = 0\n"
-        "goal.theta = 0\ngoal.axis.x = 1\ngoal.axis.y = 0\ngoal.axis.z = 0\n",
-        root + "/meshes/fcl", "fcl env/rob");
+    const OmplAppProblem meshes = loadOmplAppProblemString(bench::checkingCfg("fcl_env_rob", "rob.obj", "env.obj", {}),
+                                                           root + "/meshes/fcl", "fcl env/rob");
     cases.push_back({"fcl env/rob", meshes.robot, meshes.scene});
 
     CollisionRequest request;

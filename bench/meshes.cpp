@@ -84,25 +84,12 @@ std::string writeTerrain(std::size_t triangles, bool solid = false)
     return path;
 }
 
-/** \brief A .cfg for \a robot in \a world (no start or goal needed for checking: both at the
-    centre of \a volume, given as min x y z max x y z; empty: from the world's vertices). */
+/** \brief bench::checkingCfg's text for \a robot in \a world, written to a file named by \a name. */
 std::string writeCfg(const std::string &name, const std::string &robot, const std::string &world,
                      const std::vector<double> &volume)
 {
     const std::string path = "/tmp/rastercheck_" + name + ".cfg";
-    std::ofstream out(path);
-    out << "[problem]\nname = " << name << "\nrobot = " << robot << "\nworld = " << world << '\n';
-    for (const char *which : {"start", "goal"})
-        out << which << ".x = 0\n"
-            << which << ".y = 0\n"
-            << which << ".z = 0\n"
-            << which << ".theta = 0\n"
-            << which << ".axis.x = 1\n"
-            << which << ".axis.y = 0\n"
-            << which << ".axis.z = 0\n";
-    const char *axes[3] = {"x", "y", "z"};
-    for (std::size_t k = 0; k < volume.size(); ++k)
-        out << "volume." << (k < 3 ? "min." : "max.") << axes[k % 3] << " = " << volume[k] << '\n';
+    std::ofstream(path) << bench::checkingCfg(name, robot, world, volume);
     return path;
 }
 
