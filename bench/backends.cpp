@@ -115,8 +115,9 @@ int main(int argc, char **argv)
     std::printf("mode %s, %u CPU threads\n\n", toString(mode).c_str(), std::thread::hardware_concurrency());
 
     // States/s against batch size and scene size.
-    std::printf("| scene | triangles (robot / scene) | batch | FCL 1 core | CPU backend | GPU backend | GPU / FCL |\n");
-    std::printf("|---|---|---|---|---|---|---|\n");
+    std::printf("| scene | triangles (robot / scene) | batch | FCL 1 core | CPU backend | GPU backend | GPU / FCL | "
+                "GPU / CPU | GPU per call |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|\n");
     for (const SceneCase &c : cases)
     {
         CheckerOptions gpuOptions;
@@ -140,15 +141,23 @@ int main(int argc, char **argv)
                                                    for (std::size_t i = 0; i < fclStates; ++i)
                                                        fcl.collides(q.data() + i * dof);
                                                });
-        for (std::size_t batch = 1; batch <= maxBatch; batch *= 10)
+        // 32 states: a motion validator's edge; 1 000: a planner's round of samples.
+        std::vector<std::size_t> batches{1, 32, 1000};
+        for (std::size_t batch = 10000; batch <= maxBatch; batch *= 10)
+            batches.push_back(batch);
+        for (std::size_t batch : batches)
         {
-            const int repeats = batch <= 1000 ? 5 : 2;
-            const double cpuRate = batch <= 10000 ? statesPerSecond(cpu, q, batch, request, repeats) : 0;
+            if (batch > maxBatch)
+                continue;
+            const int repeats = batch <= 1000 ? 20 : 2;
+            const double cpuRate = batch <= 100000 ? statesPerSecond(cpu, q, batch, request, repeats) : 0;
             const double gpuRate = haveGpu ? statesPerSecond(gpu.backend(), q, batch, request, repeats) : 0;
-            std::printf("| %s | %zu / %zu | %zu | %s | %s | %s | %s |\n", c.name.c_str(), c.robot->numTriangles(),
-                        sceneTriangles, batch, rate(fclRate).c_str(), cpuRate > 0 ? rate(cpuRate).c_str() : "-",
-                        haveGpu ? rate(gpuRate).c_str() : "no device",
-                        haveGpu ? (std::to_string(gpuRate / fclRate).substr(0, 6) + "x").c_str() : "-");
+            std::printf("| %s | %zu / %zu | %zu | %s | %s | %s | %s | %s | %s |\n", c.name.c_str(),
+                        c.robot->numTriangles(), sceneTriangles, batch, rate(fclRate).c_str(),
+                        cpuRate > 0 ? rate(cpuRate).c_str() : "-", haveGpu ? rate(gpuRate).c_str() : "no device",
+                        haveGpu ? (std::to_string(gpuRate / fclRate).substr(0, 6) + "x").c_str() : "-",
+                        haveGpu && cpuRate > 0 ? (std::to_string(gpuRate / cpuRate).substr(0, 5) + "x").c_str() : "-",
+                        haveGpu ? (std::to_string(static_cast<long>(1e6 * batch / gpuRate)) + " us").c_str() : "-");
         }
     }
 
@@ -167,14 +176,15 @@ int main(int argc, char **argv)
     // checks the same interpolated states one by one from the start, as DiscreteMotionValidator.
     std::printf("\n| scene | checker | edges | mean latency per edge | states per edge |\n|---|---|---|---|---|\n");
     for (const SceneCase &c : cases)
-        for (int choice = 0; choice < 4; ++choice)
+        for (int choice = 0; choice < 5; ++choice)
         {
             // 0: FCL, 1: CPU backend, 2: GPU backend, 3: CPU backend with certified edges (collision-free
-            // at every point, not only at the states a resolution apart: more states per edge).
+            // at every point, not only at the states a resolution apart: more states per edge), 4: GPU
+            // backend with certified edges (their midpoints' pair paddings ride with the batch).
             rastercheck::ompl::SetupOptions options;
-            options.checker.backend = choice == 2 ? BackendChoice::Cuda : BackendChoice::Cpu;
+            options.checker.backend = choice == 2 || choice == 4 ? BackendChoice::Cuda : BackendChoice::Cpu;
             options.request = request;
-            if (choice == 3)
+            if (choice >= 3)
             {
                 if (request.mode == CollisionMode::Raster)
                     continue;  // raster mode cannot certify
@@ -184,7 +194,7 @@ int main(int argc, char **argv)
             ::ompl::geometric::SimpleSetupPtr setup = rastercheck::ompl::makeSimpleSetup(problem, options);
             const rastercheck::ompl::StateValidityCheckerPtr checker =
                 rastercheck::ompl::getStateValidityChecker(*setup);
-            if (choice == 2 && checker->getChecker().backendName() == "cpu")
+            if ((choice == 2 || choice == 4) && checker->getChecker().backendName() == "cpu")
                 continue;
             const ::ompl::base::SpaceInformationPtr &si = setup->getSpaceInformation();
             si->setup();
@@ -230,9 +240,9 @@ int main(int argc, char **argv)
             else
                 for (int e = 0; e < edges; ++e)
                     states += si->getStateSpace()->validSegmentCount(from[e], to[e]);
-            const std::string name = choice == 0   ? "FCL, 1 core"
-                                     : choice == 3 ? "cpu backend, certified edges"
-                                                   : checker->getChecker().backendName() + " backend";
+            const std::string name = choice == 0 ? "FCL, 1 core"
+                                     : checker->getChecker().backendName() + " backend" +
+                                           (choice >= 3 ? ", certified edges" : "");
             std::printf("| %s | %s | %d | %.1f us | %.1f |\n", c.name.c_str(), name.c_str(), edges,
                         1e6 * elapsed / edges, static_cast<double>(states) / edges);
             for (int e = 0; e < edges; ++e)

@@ -236,6 +236,7 @@ StagesRow measureStages(const std::string &scene, const Checker &checker, const 
     const std::size_t n = q.size() / 7;
     const CollisionModelConstPtr model = checker.collisionModelPtr();
     const StagedBackend staged(model, makeHostStageRunner(model));
+    staged.countStages(true);
     std::vector<std::uint8_t> valid(n), cpuValid(n);
     const CollisionRequest request;
     const double rate = n / bench::threadSeconds([&] { staged.check(q.data(), n, valid.data(), nullptr, request, 1); });

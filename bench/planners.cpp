@@ -12,7 +12,9 @@
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
-//                                   [range_fraction=0] [lazy_limit=300]
+//                                   [range_fraction=0] [lazy_limit=300] [backend=cpu] [threads=1]
+// (backend and threads: the rastercheck checker's, CheckerOptions; threads 0 = every core; FCL
+// always runs on one core)
 // (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
 // 0: each planner's default, OMPL's fifth of the extent)
 // (a subset of planners: for profiling one of them; the others' rows stay empty; "eager" is
@@ -149,6 +151,8 @@ int main(int argc, char **argv)
     const unsigned int lazySamples = argc > 7 ? static_cast<unsigned int>(std::atoi(argv[7])) : 2u;
     const double rangeFraction = argc > 8 ? std::atof(argv[8]) : 0.0;
     const unsigned int lazyLimit = argc > 9 ? static_cast<unsigned int>(std::atoi(argv[9])) : 300u;
+    const BackendChoice backend = parseBackendChoice(argc > 10 ? argv[10] : "cpu");
+    const int checkerThreads = argc > 11 ? std::atoi(argv[11]) : 1;
     auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
@@ -158,9 +162,10 @@ int main(int argc, char **argv)
 
     std::printf(
         "Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
-        "seeded runs), time limit %g s, one core; BatchRRTConnect batch_size %u, lazy_samples %u, lazy_limit %u; "
-        "range %s.\n",
-        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, batchSize, lazySamples, lazyLimit,
+        "seeded runs), time limit %g s; rastercheck's checker: backend %s, threads %d (0: every core), FCL one core; "
+        "BatchRRTConnect batch_size %u, lazy_samples %u, lazy_limit %u; range %s.\n",
+        firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, argc > 10 ? argv[10] : "cpu", checkerThreads,
+        batchSize, lazySamples, lazyLimit,
         rangeFraction > 0.0 ? (std::to_string(rangeFraction) + " of the maximum extent, every planner").c_str()
                             : "each planner's default");
     std::printf(
@@ -175,8 +180,8 @@ int main(int argc, char **argv)
                                 std::uint_fast32_t runSeed)
         {
             rastercheck::ompl::SetupOptions options;  // certified edges: the default
-            options.checker.backend = BackendChoice::Cpu;
-            options.checker.threads = 1;
+            options.checker.backend = backend;
+            options.checker.threads = checkerThreads;
             og::SimpleSetupPtr ours = rastercheck::ompl::makeSimpleSetup(problem, options);
             setStartAndGoal(*ours);
             const rastercheck::ompl::StateValidityCheckerPtr oracle = rastercheck::ompl::getStateValidityChecker(*ours);

@@ -147,7 +147,10 @@ public:
             check(cudaMemcpyAsync(destination, source, count * sizeof(T), cudaMemcpyDeviceToHost, stream_),
                   "cudaMemcpyAsync (download)");
         check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize (download)");
+        ++counts_.synchronizations;
     }
+
+    device::ExecutorCounts &counts() { return counts_; }
 
     template <class F>
     void forEach(std::size_t n, F f)
@@ -158,6 +161,7 @@ public:
         const std::size_t blocks = (n + threads - 1) / threads;
         forEachKernel<<<static_cast<unsigned>(blocks), threads, 0, stream_>>>(n, f);
         check(cudaGetLastError(), "kernel launch");
+        ++counts_.launches;
     }
 
     std::uint32_t selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected)
@@ -170,6 +174,7 @@ public:
         check(cub::DeviceSelect::Flagged(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, indices, flags, selected,
                                          count, static_cast<std::int64_t>(n), stream_),
               "cub::DeviceSelect::Flagged");
+        ++counts_.launches;
         std::uint32_t result = 0;
         download(&result, count, 1);
         return result;
@@ -201,6 +206,7 @@ public:
         check(cub::DeviceRadixSort::SortPairs(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, keys,
                                               sortedKeys, indices, order, items, 0, bits, stream_),
               "cub::DeviceRadixSort::SortPairs");
+        counts_.launches += 2;  // with the iota
     }
 
     /** \brief out[i] = sum of in[0..i); the inputs end with a zero, so the last output is the total. */
@@ -212,6 +218,7 @@ public:
         check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, n, stream_), "cub::DeviceScan::ExclusiveSum (size)");
         check(cub::DeviceScan::ExclusiveSum(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, in, out, n, stream_),
               "cub::DeviceScan::ExclusiveSum");
+        ++counts_.launches;
         unsigned long long total = 0;
         download(&total, out + (n - 1), 1);
         return static_cast<std::size_t>(total);
@@ -235,6 +242,7 @@ public:
                                                         keysOut, values, valuesOut, static_cast<std::int64_t>(n),
                                                         numSegments, starts, starts + 1, stream_),
               "cub::DeviceSegmentedSort::StableSortPairs");
+        ++counts_.launches;
         check(cudaMemcpyAsync(keys, keysOut, n * sizeof(unsigned long long), cudaMemcpyDeviceToDevice, stream_),
               "cudaMemcpyAsync (sorted keys)");
         check(cudaMemcpyAsync(values, valuesOut, n * sizeof(std::uint32_t), cudaMemcpyDeviceToDevice, stream_),
@@ -255,6 +263,7 @@ private:
             releaseScratch();
             throw scratchExhausted(what, need, room, maxScratchBytes_);
         }
+        ++counts_.allocations;
         return a.pointer();
     }
 
@@ -278,6 +287,7 @@ private:
 
     cudaStream_t stream_ = nullptr;
     std::size_t maxScratchBytes_ = 0;
+    device::ExecutorCounts counts_;
     std::array<DeviceAllocation, device::kNumStageBuffers> buffers_;
     DeviceAllocation temp_, keysAlt_, valuesAlt_, count_;
 };
@@ -300,7 +310,12 @@ class CudaStageRunner : public StageRunner
 {
 public:
     CudaStageRunner(const device::ModelArrays &host, std::string deviceName, std::size_t memoryLimit)
-      : deviceName_(std::move(deviceName))
+      : deviceName_(std::move(deviceName)),
+        executors_([this] {
+            auto ex = std::make_unique<CudaExecutor>();
+            ex->limitScratch(budget_.maxScratchBytes);
+            return ex;
+        })
     {
         const std::size_t m = static_cast<std::size_t>(host.numComponents);
         const std::size_t o = static_cast<std::size_t>(host.numObjects);
@@ -358,7 +373,6 @@ public:
         budget_.maxFragments = std::min<std::size_t>(budget_.maxFragments, 1u << 31);
         budget_.maxItems = std::min<std::size_t>(budget_.maxItems, 1u << 31);
         budget_.maxPairElements = std::min<std::size_t>(budget_.maxPairElements, 1u << 31);
-        executor_.limitScratch(budget_.maxScratchBytes);
     }
 
     std::string name() const override { return "cuda (" + deviceName_ + ")"; }
@@ -366,15 +380,21 @@ public:
     void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
              std::vector<device::PairOutcome> &outcomes) override
     {
-        runStagesInChunks(executor_, model_, settings, budget_, q, admissible, n, outcomes, counts_);
+        device::StageCounts stages;
+        device::StageCounts *counted = countingStages() ? &stages : nullptr;
+        const device::ExecutorCounts used = executors_.run(
+            [&](CudaExecutor &ex) { runStagesInChunks(ex, model_, settings, budget_, q, admissible, n, outcomes, counted); });
+        record(counted, used);
     }
 
 private:
     std::string deviceName_;
     std::vector<DeviceAllocation> model_memory_;
     device::ModelArrays model_{};
+    // Each concurrent pass has its own stream and scratch within the budget; a pass that finds the
+    // device full (another executor holds the memory) splits its chunk (StageMemoryExhausted).
     device::StageBudget budget_;
-    CudaExecutor executor_;
+    ExecutorPool<CudaExecutor> executors_;
 };
 }  // namespace
 

@@ -6,8 +6,11 @@
 #
 #   On the build machine:  scripts/gpu-check.sh bundle
 #       builds build-gpu for sm_90 (H100, H200) and packs .gpu/ (programs, libraries, Panda data, FCL's meshes).
+#   Optionally, after bundle (which replaces .gpu/):  scripts/gpu-check.sh baseline REV
+#       builds the benchmark at git revision REV (a temporary worktree, build-gpu-base) into
+#       .gpu/baseline/, so that the step "baseline" measures old and new code on the same device.
 #   On the GPU machine (device `run` with carry [".gpu"]), from the repository root:
-#       scripts/gpu-check.sh run tests bench sanitize
+#       scripts/gpu-check.sh run tests bench sanitize [plan] [profile] [baseline]
 #   (all three took 86 s on an H200 on 2026-11-26, each step well inside its limit below; a step
 #   may also run alone)
 #   The script sets LD_LIBRARY_PATH, RASTERCHECK_DATA and RASTERCHECK_SOURCE to the bundle and this
@@ -23,10 +26,30 @@ bundle() {
     command -v cpio >/dev/null || { echo "gpu-check: gpu-bundle needs cpio (apt-get install cpio)" >&2; exit 1; }
     cmake -S . -B build-gpu -G Ninja -DCMAKE_BUILD_TYPE=Release -DRASTERCHECK_WITH_CUDA=ON \
         -DCMAKE_CUDA_ARCHITECTURES=90
-    cmake --build build-gpu --target test_gpu_backend test_staged_pipeline rastercheck_bench_backends
+    cmake --build build-gpu --target test_gpu_backend test_staged_pipeline rastercheck_bench_backends \
+        rastercheck_bench_planners
     mkdir -p "$(git rev-parse --git-dir)/info"  # gpu-bundle appends to info/exclude, absent in some checkouts
     ../shared/tools/gpu-bundle build-gpu --bin test_gpu_backend --bin test_staged_pipeline \
-        --bin rastercheck_bench_backends --data mbm/panda --data meshes/fcl
+        --bin rastercheck_bench_backends --bin rastercheck_bench_planners --data mbm/panda --data meshes/fcl
+}
+
+baseline() {
+    set -e
+    local rev=${1:?baseline needs a git revision}
+    local tree=build-gpu-base/src
+    rm -rf build-gpu-base/src
+    git worktree prune
+    git worktree add --detach "$tree" "$rev"
+    cmake -S "$tree" -B build-gpu-base/build -G Ninja -DCMAKE_BUILD_TYPE=Release -DRASTERCHECK_WITH_CUDA=ON \
+        -DCMAKE_CUDA_ARCHITECTURES=90
+    cmake --build build-gpu-base/build --target rastercheck_bench_backends
+    rm -rf .gpu/baseline
+    mkdir -p .gpu/baseline/lib
+    cp build-gpu-base/build/bench/rastercheck_bench_backends .gpu/baseline/
+    # The project's own libraries at that revision; the rest comes from the bundle's lib/.
+    cp -L build-gpu-base/build/librastercheck*.so* .gpu/baseline/lib/
+    git -C "$tree" rev-parse --short HEAD >.gpu/baseline/revision
+    git worktree remove --force "$tree"
 }
 
 run() {
@@ -73,7 +96,21 @@ run() {
                 # The Panda scenes, the crane and FCL's env/rob meshes, FCL in the same run.
                 step bench-safe 280 .gpu/bin/rastercheck_bench_backends 1000000 safe
                 step bench-raster 200 .gpu/bin/rastercheck_bench_backends 100000 raster ;;
-            *) echo "gpu-check: unknown step $s (tests, sanitize, bench)" >&2; return 2 ;;
+            plan)
+                # BatchRRTConnect on Panda problems 1-10 of every scenario, certified edges, 1 s: the
+                # checker on the GPU (batches of 8 and 256 samples) and on every CPU core.
+                step plan-cuda-8 150 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cuda 0
+                step plan-cuda-256 150 .gpu/bin/rastercheck_bench_planners panda 10 1 256 1 batch 2 0 300 cuda 0
+                step plan-cpu 150 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 0 ;;
+            profile)
+                # Registers per thread and occupancy of every kernel of a few small and large Panda batches.
+                step profile 200 ncu --section LaunchStats --section Occupancy --launch-count 120 \
+                    .gpu/bin/test_gpu_backend --gtest_filter='*To1000States*' ;;
+            baseline)
+                # The same benchmark at an earlier revision (scripts/gpu-check.sh baseline REV), same device.
+                step "baseline-$(cat .gpu/baseline/revision)" 280 env LD_LIBRARY_PATH=$PWD/.gpu/baseline/lib:$LD_LIBRARY_PATH \
+                    .gpu/baseline/rastercheck_bench_backends 1000000 safe ;;
+            *) echo "gpu-check: unknown step $s (tests, sanitize, bench, plan, profile, baseline)" >&2; return 2 ;;
         esac
     done
     printf '%s\n' "${summary[@]}" >"$out/summary.txt"
@@ -81,6 +118,7 @@ run() {
 
 case ${1:-} in
     bundle) bundle ;;
+    baseline) shift; baseline "$@" ;;
     run) shift; run "$@" ;;
-    *) sed -n '2,16p' "$0"; exit 2 ;;
+    *) sed -n '2,19p' "$0"; exit 2 ;;
 esac

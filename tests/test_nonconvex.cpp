@@ -750,6 +750,7 @@ TEST_P(NonConvexScene, TheStagesRasterizeOnlyTheTrianglesNearAPair)
     const Scenario &s = *scenario_;
     const rc::CpuBackend cpu(s.model);
     const rc::StagedBackend staged(s.model, rc::makeHostStageRunner(s.model, {}, rc::HostScratch::Poisoned));
+    staged.countStages(true);
     rc::CollisionRequest request;
     request.mode = rc::CollisionMode::Raster;
     rc::test::expectSameDecisions(staged, cpu, *s.model, s.states, request, s.name + " (raster)");

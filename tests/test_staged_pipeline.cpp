@@ -6,6 +6,9 @@
 // chunked run, which reuses what earlier chunks left as the CUDA runner does.
 #include <gtest/gtest.h>
 
+#include <random>
+#include <thread>
+
 #include "BackendSuites.h"
 #include "BlindSpots.h"
 #include "rastercheck/collision/StagedBackend.h"
@@ -258,4 +261,127 @@ TEST(StagedPipeline, TheStagesSettleMostPairsThemselvesAndNeverContradictTheOrac
     ASSERT_GT(craneSurviving, 100u);
     EXPECT_LT(craneOpen, craneSurviving / 8)
         << craneOpen << " of " << craneSurviving << " crane pairs left to the host";
+}
+
+namespace
+{
+/** \brief Extra paddings for \a rows rows of \a model's pairs: 0, 2 mm, 1 cm or 5 cm at random, the
+    range a certified midpoint's sweeps take on the Panda. */
+std::shared_ptr<rc::PairPadding> randomPairPaddings(const rc::CollisionModel &model, std::size_t rows,
+                                                    unsigned seed)
+{
+    std::mt19937 random(seed);
+    const double choices[] = {0.0, 0.002, 0.01, 0.05};
+    auto draw = [&] { return choices[random() % 4]; };
+    auto extra = std::make_shared<rc::PairPadding>();
+    extra->rows = rows;
+    extra->environment.resize(rows * model.numComponents());
+    extra->self.resize(rows * model.selfPairs.size());
+    for (double &p : extra->environment)
+        p = draw();
+    for (double &p : extra->self)
+        p = draw();
+    return extra;
+}
+}  // namespace
+
+TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
+{
+    // Certified midpoints (CertifiedMotionValidator, BatchRRTConnect) give every (state, pair) its own
+    // padding; the stages take them in every cull, proof and raster window, and the host's exact
+    // phase takes the open pair's own. Chunks of 5 states check that each chunk reads its own rows.
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(30))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::CpuBackend cpu(model);
+        const rc::StagedBackend staged(model, poisonedStages(model));
+        rc::device::StageBudget fewStates;
+        fewStates.maxStates = 5;
+        const rc::StagedBackend chunked(model, poisonedStages(model, fewStates));
+        const std::size_t n = suite.numStates();
+        for (rc::CollisionMode mode : kModes)
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            request.pairPadding = randomPairPaddings(*model, n, 7);
+            const rc::test::Agreement perState = rc::test::expectSameDecisions(
+                staged, cpu, *model, suite.states, request, label(suite.name, mode) + " padding per state");
+            if (mode == rc::CollisionMode::Safe)
+                rc::test::expectSameDecisions(chunked, cpu, *model, suite.states, request,
+                                              label(suite.name, mode) + " padding per state, chunked");
+            request.padding = 0.003;
+            request.pairPadding = randomPairPaddings(*model, 1, 11);
+            rc::test::expectSameDecisions(staged, cpu, *model, suite.states, request,
+                                          label(suite.name, mode) + " one padding row");
+            if (mode == rc::CollisionMode::Exact && suite.name.rfind("panda", 0) == 0)
+            {
+                EXPECT_GT(perState.valid, 0u) << suite.name;  // not every state swallowed by the paddings
+            }
+        }
+    }
+}
+
+TEST(StagedPipeline, ABatchCostsAFewWaitsAndNoAllocationAfterTheFirst)
+{
+    // What a small batch pays whatever its size (the GPU's fixed cost per call): the executor
+    // counts its launches, waits and allocations on the host, as the CUDA executor does.
+    const rc::test::StateSuite suite = rc::test::accuracySuites(32)[0];
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    const rc::StagedBackend staged(model, poisonedStages(model));
+    std::vector<std::uint8_t> valid(32);
+    auto call = [&](const rc::CollisionRequest &request)
+    {
+        const rc::device::ExecutorCounts before = staged.executorCounts();
+        staged.check(suite.states.data(), 32, valid.data(), nullptr, request, 1);
+        const rc::device::ExecutorCounts after = staged.executorCounts();
+        return rc::device::ExecutorCounts{after.chunks - before.chunks, after.launches - before.launches,
+                                          after.synchronizations - before.synchronizations,
+                                          after.allocations - before.allocations};
+    };
+    rc::CollisionRequest safe, exact;
+    exact.mode = rc::CollisionMode::Exact;
+    const rc::device::ExecutorCounts first = call(safe);
+    EXPECT_GT(first.allocations, 0u);
+    const rc::device::ExecutorCounts again = call(safe);
+    EXPECT_EQ(again.chunks, 1u);
+    EXPECT_EQ(again.allocations, 0u) << "buffers are kept between calls";
+    // The survivors' count, the two scans' totals (triangles, fragments), the outcomes.
+    EXPECT_LE(again.synchronizations, 4u);
+    EXPECT_LE(again.launches, 24u);
+    call(exact);
+    const rc::device::ExecutorCounts exactAgain = call(exact);
+    EXPECT_EQ(exactAgain.allocations, 0u);
+    EXPECT_LE(exactAgain.synchronizations, 2u) << "nothing to rasterize: no counts to wait for";
+    // Stage counts cost a wait per chunk: only when asked.
+    EXPECT_EQ(staged.stageCounts().states, 0u);
+    staged.countStages(true);
+    call(safe);
+    EXPECT_EQ(staged.stageCounts().states, 32u);
+}
+
+TEST(StagedPipeline, EightThreadsOnOneBackendGetTheVerdictsOfOne)
+{
+    // Planners call one checker from several threads: each pass takes an executor of its own (on
+    // the GPU, a stream and scratch), none waits for another's.
+    const rc::test::StateSuite suite = rc::test::accuracySuites(64)[0];
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    const rc::StagedBackend staged(model, poisonedStages(model));
+    const std::size_t n = suite.numStates();
+    rc::CollisionRequest request;
+    request.pairPadding = randomPairPaddings(*model, n, 3);
+    std::vector<std::uint8_t> alone(n);
+    staged.check(suite.states.data(), n, alone.data(), nullptr, request, 1);
+    std::vector<std::vector<std::uint8_t>> verdicts(8, std::vector<std::uint8_t>(n));
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 8; ++t)
+        threads.emplace_back(
+            [&, t]
+            {
+                for (int round = 0; round < 5; ++round)
+                    staged.check(suite.states.data(), n, verdicts[t].data(), nullptr, request, 1);
+            });
+    for (std::thread &thread : threads)
+        thread.join();
+    for (int t = 0; t < 8; ++t)
+        EXPECT_EQ(verdicts[t], alone) << "thread " << t;
 }

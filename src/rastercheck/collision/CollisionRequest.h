@@ -82,8 +82,7 @@ struct CollisionRequest
     /** \brief Optional extra padding per pair (null: none); a pair's solids collide when closer than
         padding + their entry. Each entry finite and >= 0, one per component and per self pair of
         the checker's model in each row, one row or one per state (Checker::check throws
-        ConfigurationError otherwise). The GPU stages
-        take one padding for all pairs, so such a request runs on the CPU backend. */
+        ConfigurationError otherwise). Every backend takes it, the GPU stages included. */
     std::shared_ptr<const PairPadding> pairPadding;
 };
 

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,6 +20,61 @@ namespace rastercheck
 struct StageMemoryExhausted : std::runtime_error
 {
     using std::runtime_error::runtime_error;
+};
+
+/** \brief Executors for concurrent passes: a call takes one no other call uses (made when none is
+    idle) and gives it back, with its scratch, for later calls. A thread that calls again gets a
+    warm executor, so a steady stream of batches allocates nothing. */
+template <class Exec>
+class ExecutorPool
+{
+public:
+    explicit ExecutorPool(std::function<std::unique_ptr<Exec>()> make) : make_(std::move(make)) {}
+
+    /** \brief Runs f(executor) on an executor of its own; returns what that executor did. */
+    template <class F>
+    device::ExecutorCounts run(F &&f)
+    {
+        std::unique_ptr<Exec> ex = take();
+        ex->counts() = {};
+        try
+        {
+            f(*ex);
+        }
+        catch (...)
+        {
+            giveBack(std::move(ex));
+            throw;
+        }
+        const device::ExecutorCounts used = ex->counts();
+        giveBack(std::move(ex));
+        return used;
+    }
+
+private:
+    std::unique_ptr<Exec> take()
+    {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            if (!idle_.empty())
+            {
+                std::unique_ptr<Exec> ex = std::move(idle_.back());
+                idle_.pop_back();
+                return ex;
+            }
+        }
+        return make_();
+    }
+
+    void giveBack(std::unique_ptr<Exec> ex)
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        idle_.push_back(std::move(ex));
+    }
+
+    std::function<std::unique_ptr<Exec>()> make_;
+    std::mutex mutex_;
+    std::vector<std::unique_ptr<Exec>> idle_;
 };
 
 /** \brief The most bytes one scratch buffer may grow to while the others hold \a heldByOthers,
@@ -61,11 +119,11 @@ bool runStageChunkWithin(Exec &ex, const device::ModelArrays &model, const devic
     single state that still overflows is run without rasterizing: its pairs go to the exact phase,
     slower and never wrong (in raster mode that state gets the exact answer, which may find
     collisions the raster would miss). Shared by the host and CUDA runners. The chunks that ran add
-    to \a counts. */
+    to \a counts when it is not null. */
 template <class Exec>
 void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device::StageSettings &settings,
                        const device::StageBudget &budget, const double *q, const std::uint8_t *admissible,
-                       std::size_t n, std::vector<device::PairOutcome> &outcomes, device::StageCounts &counts)
+                       std::size_t n, std::vector<device::PairOutcome> &outcomes, device::StageCounts *counts)
 {
     const std::size_t dof = static_cast<std::size_t>(model.numCoordinates);
     const std::size_t pairs = std::max<std::size_t>(1, model.numPairs());
@@ -80,21 +138,24 @@ void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device:
         const device::PairOutcome *chunkOutcomes = nullptr;
         std::uint32_t numOutcomes = 0;
         std::string why = "over the stage budget";
-        if (!runStageChunkWithin(ex, model, settings, budget, q + start * dof, admissible + start,
-                                 static_cast<std::uint32_t>(count), chunkOutcomes, numOutcomes, why, &counts))
+        device::StageSettings chunkSettings = settings;
+        chunkSettings.extraPadding = settings.extraPadding.fromState(start, model.numComponents, model.numSelfPairs);
+        if (!runStageChunkWithin(ex, model, chunkSettings, budget, q + start * dof, admissible + start,
+                                 static_cast<std::uint32_t>(count), chunkOutcomes, numOutcomes, why, counts))
         {
             if (count > 1)
             {
                 chunk = count / 2;
                 continue;
             }
-            device::StageSettings unrasterized = settings;
+            device::StageSettings unrasterized = chunkSettings;
             unrasterized.rasterize = false;
             if (!runStageChunkWithin(ex, model, unrasterized, budget, q + start * dof, admissible + start, 1,
-                                     chunkOutcomes, numOutcomes, why, &counts))
+                                     chunkOutcomes, numOutcomes, why, counts))
                 throw std::length_error("the stages cannot hold one state's pairs, even without rasterizing (" + why +
                                         ")");
         }
+        ++ex.counts().chunks;
         part.resize(numOutcomes);
         ex.download(part.data(), chunkOutcomes, numOutcomes);
         for (device::PairOutcome &o : part)

@@ -2,8 +2,10 @@
 
 // No Eigen and no CUDA here: the CUDA runner (cuda/) includes this with nvcc.
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -12,20 +14,58 @@
 namespace rastercheck
 {
 /** \brief Runs the batched pipeline's stages (device/BatchPipeline.h) on some executor: the GPU
-    (cuda/) or the host (makeHostStageRunner, which runs the GPU's code path on the CPU). */
+    (cuda/) or the host (makeHostStageRunner, which runs the GPU's code path on the CPU). The model
+    is held once; each call of run() takes an executor of its own (on the GPU: its own stream and
+    scratch buffers, kept for later calls), so several threads run passes at the same time. */
 class StageRunner
 {
 public:
     virtual ~StageRunner() = default;
     virtual std::string name() const = 0;
     /** \brief Appends to \a outcomes every pair of states [0, n) that survives the culls, sorted by
-        (state, pair), with state indices of this batch. Not thread-safe (StagedBackend locks). */
+        (state, pair), with state indices of this batch. Thread-safe. */
     virtual void run(const double *q, const std::uint8_t *admissible, std::size_t n,
                      const device::StageSettings &settings, std::vector<device::PairOutcome> &outcomes) = 0;
-    /** \brief What the stages did in every run so far. */
-    const device::StageCounts &counts() const { return counts_; }
+    /** \brief Whether runs add to counts(): counting the pairs that went to the raster costs a
+        compaction and a wait per chunk, so production passes leave it off (the default). */
+    void countStages(bool on) { countStages_ = on; }
+    /** \brief What the stages did in the runs made while countStages was on. */
+    device::StageCounts counts() const
+    {
+        std::lock_guard<std::mutex> lock(countsMutex_);
+        return counts_;
+    }
+    /** \brief The launches, waits and allocations of every run so far (always counted). */
+    device::ExecutorCounts executorCounts() const
+    {
+        std::lock_guard<std::mutex> lock(countsMutex_);
+        return executorCounts_;
+    }
 
 protected:
+    bool countingStages() const { return countStages_; }
+    /** \brief Adds what one run did: its stage counts (null when not counting) and its executor's. */
+    void record(const device::StageCounts *stages, const device::ExecutorCounts &executor)
+    {
+        std::lock_guard<std::mutex> lock(countsMutex_);
+        if (stages)
+        {
+            counts_.states += stages->states;
+            counts_.survivingPairs += stages->survivingPairs;
+            counts_.rasterizedPairs += stages->rasterizedPairs;
+            counts_.candidateTriangles += stages->candidateTriangles;
+            counts_.fragments += stages->fragments;
+        }
+        executorCounts_.chunks += executor.chunks;
+        executorCounts_.launches += executor.launches;
+        executorCounts_.synchronizations += executor.synchronizations;
+        executorCounts_.allocations += executor.allocations;
+    }
+
+private:
+    std::atomic<bool> countStages_{false};
+    mutable std::mutex countsMutex_;
     device::StageCounts counts_;
+    device::ExecutorCounts executorCounts_;
 };
 }  // namespace rastercheck

@@ -60,8 +60,9 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)
 {
     device::StageSettings settings{};
-    settings.padding = device::floatPadding(request.padding);
-    settings.separationPadding = std::max(0.0, request.padding);
+    settings.padding = std::max(0.0, request.padding);
+    if (const PairPadding *extra = request.pairPadding.get())
+        settings.extraPadding = device::PairPaddings{extra->environment.data(), extra->self.data(), extra->rows > 1};
     settings.pixel = static_cast<float>(request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize);
     settings.maxImageSide = request.maxImageSide;
     settings.checkEnvironment = request.checkEnvironment;
@@ -104,6 +105,7 @@ public:
                 throw scratchExhausted("stage buffer " + std::to_string(slot), need, room, maxScratchBytes_);
             }
             storage.resize(need);
+            ++counts_.allocations;
         }
         if (scratch_ == HostScratch::Poisoned)
             std::memset(storage.data(), 0xFF, need);
@@ -121,11 +123,17 @@ public:
     void download(T *destination, const T *source, std::size_t count)
     {
         upload(destination, source, count);
+        ++counts_.synchronizations;
     }
+
+    device::ExecutorCounts &counts() { return counts_; }
 
     template <class F>
     void forEach(std::size_t n, F f)
     {
+        if (n == 0)
+            return;
+        ++counts_.launches;
 #pragma omp parallel for schedule(static)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
             f(static_cast<std::size_t>(i));
@@ -133,6 +141,8 @@ public:
 
     std::uint32_t selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected)
     {
+        ++counts_.launches;
+        ++counts_.synchronizations;  // the GPU's count comes back to the host
         std::uint32_t count = 0;
         for (std::size_t i = 0; i < n; ++i)
             if (flags[i])
@@ -143,6 +153,9 @@ public:
     /** \brief order = 0..n-1 stably sorted by keys[i] (each below numKeys): a counting sort. */
     void orderByKey(const std::uint32_t *keys, std::size_t n, std::uint32_t numKeys, std::uint32_t *order)
     {
+        if (n == 0)
+            return;
+        counts_.launches += 2;  // the GPU's iota and radix sort
         std::vector<std::size_t> next(static_cast<std::size_t>(numKeys) + 1, 0);
         for (std::size_t i = 0; i < n; ++i)
             ++next[keys[i] + 1];
@@ -154,6 +167,10 @@ public:
 
     std::size_t exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n)
     {
+        if (n == 0)
+            return 0;
+        ++counts_.launches;
+        ++counts_.synchronizations;  // the total comes back to the host
         unsigned long long total = 0;
         for (std::size_t i = 0; i < n; ++i)
         {
@@ -168,7 +185,9 @@ public:
     void sortSegments(unsigned long long *keys, std::uint32_t *values, std::size_t n, const std::uint32_t *starts,
                       std::uint32_t numSegments)
     {
-        (void)n;
+        if (n == 0 || numSegments == 0)
+            return;
+        ++counts_.launches;
 #pragma omp parallel
         {
             std::vector<std::pair<unsigned long long, std::uint32_t>> scratch;
@@ -201,6 +220,7 @@ private:
 
     HostScratch scratch_;
     std::size_t maxScratchBytes_;
+    device::ExecutorCounts counts_;
     std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
 };
 
@@ -211,7 +231,7 @@ public:
         : model_(std::move(model)),
           arrays_(hostModelArrays(*model_)),
           budget_(budget),
-          executor_(scratch, budget.maxScratchBytes)
+          executors_([scratch, budget] { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes); })
     {
     }
 
@@ -220,14 +240,18 @@ public:
     void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
              std::vector<device::PairOutcome> &outcomes) override
     {
-        runStagesInChunks(executor_, arrays_, settings, budget_, q, admissible, n, outcomes, counts_);
+        device::StageCounts stages;
+        device::StageCounts *counted = countingStages() ? &stages : nullptr;
+        const device::ExecutorCounts used = executors_.run(
+            [&](HostExecutor &ex) { runStagesInChunks(ex, arrays_, settings, budget_, q, admissible, n, outcomes, counted); });
+        record(counted, used);
     }
 
 private:
     CollisionModelConstPtr model_;
     device::ModelArrays arrays_;
     device::StageBudget budget_;
-    HostExecutor executor_;
+    ExecutorPool<HostExecutor> executors_;
 };
 }  // namespace
 
@@ -238,26 +262,30 @@ std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, c
 }
 
 StagedBackend::StagedBackend(CollisionModelConstPtr model, std::unique_ptr<StageRunner> runner)
-    : model_(std::move(model)), exact_(model_), runner_(std::move(runner))
+    : model_(std::move(model)), arrays_(hostModelArrays(*model_)), exact_(model_), runner_(std::move(runner))
 {
 }
 
 StagedBackend::~StagedBackend() = default;
 
+void StagedBackend::countStages(bool on) const
+{
+    runner_->countStages(on);
+}
+
 device::StageCounts StagedBackend::stageCounts() const
 {
-    std::lock_guard<std::mutex> lock(runnerMutex_);
     return runner_->counts();
+}
+
+device::ExecutorCounts StagedBackend::executorCounts() const
+{
+    return runner_->executorCounts();
 }
 
 void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
                           const CollisionRequest &request, int threads) const
 {
-    if (request.pairPadding)
-    {
-        exact_.check(q, n, valid, contacts, request, threads);  // the stages take one padding for all pairs
-        return;
-    }
     const CollisionModel &model = *model_;
     const std::size_t dof = model.robot->numCoordinates();
     const int workers = batchWorkers(n, threads);
@@ -270,10 +298,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     const device::StageSettings settings = stageSettings(model, request, contacts != nullptr);
 
     std::vector<device::PairOutcome> outcomes;
-    {
-        std::lock_guard<std::mutex> lock(runnerMutex_);
-        runner_->run(q, admissible.data(), n, settings, outcomes);
-    }
+    runner_->run(q, admissible.data(), n, settings, outcomes);
     std::vector<std::size_t> firstOutcome(n + 1, outcomes.size());
     for (std::size_t k = outcomes.size(); k-- > 0;)
         firstOutcome[outcomes[k].state] = k;
@@ -284,6 +309,8 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
 #pragma omp parallel num_threads(workers)
     {
         std::unique_ptr<CpuWorkspace> ws = exact_.borrow();
+        CollisionRequest pairRequest = request;  // with the open pair's own padding
+        pairRequest.pairPadding = nullptr;
 #pragma omp for schedule(dynamic, 16)
         for (std::ptrdiff_t si = 0; si < static_cast<std::ptrdiff_t>(n); ++si)
         {
@@ -316,7 +343,8 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
                     if (!refitted)
                         exact_.refitState(q + i * dof, *ws);
                     refitted = true;
-                    collides = exact_.decideOpenPair(o->pair, request, *ws, contact);
+                    pairRequest.padding = device::pairPadding(arrays_, settings, i, o->pair);
+                    collides = exact_.decideOpenPair(o->pair, pairRequest, *ws, contact);
                 }
             }
             valid[i] = collides ? 0 : 1;

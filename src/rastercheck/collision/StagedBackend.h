@@ -3,7 +3,6 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
@@ -47,13 +46,17 @@ public:
     std::string name() const override { return runner_->name(); }
     void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts, const CollisionRequest &request,
                int threads) const override;
-    /** \brief What the stages did in every pass so far (device::StageCounts). */
+    /** \brief Whether passes count what the stages did (off by default: it costs a wait per chunk). */
+    void countStages(bool on) const;
+    /** \brief What the stages did in the passes made while countStages was on. */
     device::StageCounts stageCounts() const;
+    /** \brief Launches, waits and allocations of every pass so far. */
+    device::ExecutorCounts executorCounts() const;
 
 private:
     CollisionModelConstPtr model_;
+    device::ModelArrays arrays_;  // host memory: the pair paddings' layout
     CpuBackend exact_;
-    std::unique_ptr<StageRunner> runner_;
-    mutable std::mutex runnerMutex_;  // one pass at a time on the runner's buffers
+    std::unique_ptr<StageRunner> runner_;  // thread-safe: an executor per concurrent pass
 };
 }  // namespace rastercheck

@@ -96,11 +96,36 @@ struct ModelArrays
     }
 };
 
+/** \brief Extra padding per (state, pair) (CollisionRequest::pairPadding): the certified motion
+    validators give each pair of each midpoint the distance its solids can close in. Null arrays:
+    no extra padding. */
+struct PairPaddings
+{
+    const double *environment = nullptr;  // rows x numComponents: component k's pairs with every object
+    const double *self = nullptr;         // rows x numSelfPairs
+    bool rowPerState = false;             // row s for state s of the batch (else row 0 for every state)
+
+    RC_HD bool any() const { return environment != nullptr; }
+    /** \brief The rows of states [first, ...) of the batch. */
+    RC_HD PairPaddings fromState(std::size_t first, int numComponents, int numSelfPairs) const
+    {
+        PairPaddings rest = *this;
+        if (environment && rowPerState)
+        {
+            rest.environment += first * static_cast<std::size_t>(numComponents);
+            rest.self += first * static_cast<std::size_t>(numSelfPairs);
+        }
+        return rest;
+    }
+};
+
 /** \brief How the stages treat a batch (from the CollisionRequest). */
 struct StageSettings
 {
-    float padding;
-    double separationPadding;  ///< the request's padding (>= 0) for the hull proof, as on the CPU
+    double padding;  ///< the request's padding (>= 0); pairPadding() gives a pair's
+    /** \brief Added to padding per (state, pair); host memory in the settings a runner is
+        given, executor memory inside a chunk (runStageChunk uploads the chunk's rows). */
+    PairPaddings extraPadding;
     float pixel;
     int maxImageSide;
     bool checkEnvironment;
@@ -118,6 +143,38 @@ struct StageSettings
         (every mode but raster). */
     bool meshObstaclesUnproven;
 };
+
+/** \brief The padding of \a pair for state \a s of a chunk: the request's, plus the pair's extra
+    (the same sum the CPU backend forms, so both round it to float alike). */
+RC_HD double pairPadding(const ModelArrays &model, const StageSettings &settings, std::size_t s, std::uint32_t pair)
+{
+    const PairPaddings &extra = settings.extraPadding;
+    if (!extra.any())
+        return settings.padding;
+    const std::size_t row = extra.rowPerState ? s : 0;
+    const std::uint32_t m = static_cast<std::uint32_t>(model.numComponents);
+    const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
+    if (pair < environmentPairs)
+        return settings.padding + extra.environment[row * m + pair % m];
+    return settings.padding +
+           extra.self[row * static_cast<std::size_t>(model.numSelfPairs) + (pair - environmentPairs)];
+}
+
+/** \brief The largest padding of state \a s's environment pairs: the distance filter and the layer
+    culls stand for many pairs at once (the CPU backend takes the largest per layer; one per state
+    is coarser, never wrong: the pair's own test follows). */
+RC_HD double environmentReachPadding(const ModelArrays &model, const StageSettings &settings, std::size_t s)
+{
+    const PairPaddings &extra = settings.extraPadding;
+    double largest = settings.padding;
+    if (extra.any())
+    {
+        const double *row = extra.environment + (extra.rowPerState ? s : 0) * static_cast<std::size_t>(model.numComponents);
+        for (int k = 0; k < model.numComponents; ++k)
+            largest = row[k] + settings.padding > largest ? row[k] + settings.padding : largest;
+    }
+    return largest;
+}
 
 /** \brief Where a pair stands after the stages. */
 enum PairStatus : std::int32_t
@@ -168,6 +225,17 @@ struct StageCounts
     unsigned long long fragments = 0;
 };
 
+/** \brief The fixed costs of the passes an executor ran: what a small batch pays whatever its
+    size. Counted on the host by both executors alike (a CUB call counts as one launch), so the
+    host executor's tests see the GPU's figures. */
+struct ExecutorCounts
+{
+    unsigned long long chunks = 0;
+    unsigned long long launches = 0;          ///< kernels and CUB calls
+    unsigned long long synchronizations = 0;  ///< waits of the host for the executor
+    unsigned long long allocations = 0;       ///< scratch buffers grown
+};
+
 /** \brief The executor's scratch buffers, one per stage output; sized per chunk, reused. */
 enum StageBuffer : int
 {
@@ -180,6 +248,9 @@ enum StageBuffer : int
     BufferComponentBounds,
     BufferLayers,
     BufferRobotSphere,
+    BufferReachPadding,
+    BufferExtraEnvironment,
+    BufferExtraSelf,
     BufferPairFlags,
     BufferCandidates,
     BufferCandidateCount,
@@ -309,6 +380,19 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     std::uint8_t *admissible = ex.template buffer<std::uint8_t>(BufferAdmissible, numStates);
     ex.upload(states, hostStates, static_cast<std::size_t>(numStates) * dof);
     ex.upload(admissible, hostAdmissible, numStates);
+    StageSettings st = settings;  // with the chunk's pair paddings in executor memory
+    if (settings.extraPadding.any())
+    {
+        const std::size_t rows = settings.extraPadding.rowPerState ? numStates : 1;
+        const std::size_t environmentValues = rows * static_cast<std::size_t>(m);
+        const std::size_t selfValues = rows * static_cast<std::size_t>(model.numSelfPairs);
+        double *environment = ex.template buffer<double>(BufferExtraEnvironment, environmentValues + 1);
+        double *self = ex.template buffer<double>(BufferExtraSelf, selfValues + 1);
+        ex.upload(environment, settings.extraPadding.environment, environmentValues);
+        ex.upload(self, settings.extraPadding.self, selfValues);
+        st.extraPadding.environment = environment;
+        st.extraPadding.self = self;
+    }
 
     // 1. Forward kinematics and the hybrid hierarchy's boxes.
     double *jointValues = ex.template buffer<double>(BufferJointValues, static_cast<std::size_t>(numStates) * model.numJoints + 1);
@@ -319,6 +403,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     Box *bounds = ex.template buffer<Box>(BufferComponentBounds, componentElements + 1);
     Box *layers = ex.template buffer<Box>(BufferLayers, componentElements + 1);
     Sphere *robotSphere = ex.template buffer<Sphere>(BufferRobotSphere, numStates);
+    float *reachPadding = ex.template buffer<float>(BufferReachPadding, numStates);
     const ModelArrays md = model;
     ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) {
         if (admissible[s])
@@ -341,12 +426,12 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         for (int c = 0; c < m; ++c)
             extend(all, bounds[s * m + c]);
         robotSphere[s] = boundingSphere(all);
+        reachPadding[s] = floatPadding(environmentReachPadding(md, st, s));
     });
 
     // 2. Culls per (state, pair), then compaction: the survivors in (state, pair) order.
     const std::size_t pairElements = static_cast<std::size_t>(numStates) * pairs;
     std::uint8_t *flags = ex.template buffer<std::uint8_t>(BufferPairFlags, pairElements + 1);
-    const StageSettings st = settings;
     ex.forEach(pairElements, [=] RC_LAMBDA(std::size_t i) {
         const std::size_t s = i / pairs;
         const std::uint32_t pair = static_cast<std::uint32_t>(i % pairs);
@@ -357,17 +442,17 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
             {
                 const int o = static_cast<int>(pair / m), k = static_cast<int>(pair % m);
                 const Box &objectBox = md.objectBoxes[o];
-                survives = st.checkEnvironment && objectWithinReach(robotSphere[s], objectBox, st.padding) &&
-                           layersReach(layers + s * m, md.componentSubtreeEnd, k, objectBox, st.padding) &&
+                survives = st.checkEnvironment && objectWithinReach(robotSphere[s], objectBox, reachPadding[s]) &&
+                           layersReach(layers + s * m, md.componentSubtreeEnd, k, objectBox, reachPadding[s]) &&
                            solidsMayMeet(bounds[s * m + k], boxes[s * m + k], objectBox, md.objectOrientedBoxes[o],
-                                         st.padding);
+                                         floatPadding(pairPadding(md, st, s, pair)));
             }
             else
             {
                 const int *self = md.selfPairs + 2 * (pair - environmentPairs);
                 survives = st.checkSelfCollision &&
                            solidsMayMeet(bounds[s * m + self[0]], boxes[s * m + self[0]], bounds[s * m + self[1]],
-                                             boxes[s * m + self[1]], st.padding);
+                                         boxes[s * m + self[1]], floatPadding(pairPadding(md, st, s, pair)));
             }
         }
         flags[i] = survives ? 1 : 0;
@@ -406,15 +491,16 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         const std::uint32_t pair = candidates[c] % pairs;
         StageSolid a, b;
         pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
-        const Box window = pairWindow(a.bounds, b.bounds, st.padding);
+        const double padding = pairPadding(md, st, s, pair);
+        const Box window = pairWindow(a.bounds, b.bounds, floatPadding(padding));
         // A mesh obstacle's proof walks its patches, serially per thread: on FCL's env.obj (an H200,
         // 2026-11-26) the stages ran at 0.3x the CPU backend on 16 cores, which skips that proof.
         const bool meshObstacle =
             st.meshObstaclesUnproven && pair < environmentPairs && hasPatches(md.convex, m + pair / m);
         const HullRelation relation = isEmpty(window) ? HullRelation::Apart
                                       : meshObstacle  ? HullRelation::Unknown
-                                                      : pairHullRelation(md, pair, links + s * numLinks,
-                                                                         st.separationPadding, st.proveOverlaps);
+                                                      : pairHullRelation(md, pair, links + s * numLinks, padding,
+                                                                         st.proveOverlaps);
         if (relation != HullRelation::Unknown)
         {
             // An overlap proven by the hulls has no triangle or place (the contact is not asked).
@@ -425,7 +511,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         if (!st.rasterize || !rasterUsable(a.slice.closed, b.slice.closed, window, st.pixel))
             return;  // the exact phase decides
         grids[c] = makeGrid(window, st.pixel, st.maxImageSide);
-        margins[c] = pairMargin(window, grids[c], st.padding);
+        margins[c] = pairMargin(window, grids[c], floatPadding(padding));
         rasterized[c] = 1;
         // Candidate triangles from the node culls: the leaves of both trees near the image.
         unsigned long long count = 0;
@@ -433,6 +519,23 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         forEachTriangleNearImage(b.tree, b.treePlacement, grids[c], margins[c], [&](std::uint32_t) { ++count; });
         triangleCount[c] = count;
     });
+    PairOutcome *decided = ex.template buffer<PairOutcome>(BufferOutcomes, numCandidates + 1);
+    if (!st.rasterize)
+    {
+        // Nothing to rasterize (exact and conservative mode, contacts asked): no counts to wait for.
+        ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
+            decided[c] = PairOutcome{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs,
+                                     status[c], -1, {0.0f, 0.0f, 0.0f}};
+        });
+        outcomes = decided;
+        numOutcomes = numCandidates;
+        if (counts)
+        {
+            counts->states += numStates;
+            counts->survivingPairs += numCandidates;
+        }
+        return true;
+    }
     unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, numCandidates + 1);
     const std::size_t numItems = ex.exclusiveSum(triangleCount, itemStart, numCandidates + 1);
     if (numItems > budget.maxItems)
@@ -524,7 +627,6 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     });
 
     // Outcomes, in (state, pair) order.
-    PairOutcome *decided = ex.template buffer<PairOutcome>(BufferOutcomes, numCandidates + 1);
     ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
         PairOutcome out{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs, status[c], -1,
                         {0.0f, 0.0f, 0.0f}};
@@ -544,7 +646,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
                 hitContact(fragments + run, at, grids[c], pixel, out.triangle, out.position);
                 out.status = PairOverlaps;
             }
-            else if (!st.confirmMisses && !(st.padding > 0))
+            else if (!st.confirmMisses && !(pairPadding(md, st, out.state, out.pair) > 0))
                 out.status = PairApart;
         }
         decided[c] = out;
