@@ -88,7 +88,7 @@ run() {
             sanitize)
                 # Every kernel on small batches (the million-state test would take too long).
                 step memcheck 240 compute-sanitizer --tool memcheck --error-exitcode 3 .gpu/bin/test_gpu_backend \
-                    --gtest_filter='*AccuracySuites*:*To1000States*'
+                    --gtest_filter='*AccuracySuites*:*To1000States*:*PairPaddings*:*EightThreads*'
                 # initcheck: reads of device memory no one wrote (what HostScratch::Poisoned mimics).
                 step initcheck 240 compute-sanitizer --tool initcheck --error-exitcode 3 .gpu/bin/test_gpu_backend \
                     --gtest_filter='*To1000States*:*DeviceMemoryLimit*' ;;
@@ -104,7 +104,7 @@ run() {
                 step plan-cpu 150 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 0 ;;
             profile)
                 # Registers per thread and occupancy of every kernel of a few small and large Panda batches.
-                step profile 200 ncu --section LaunchStats --section Occupancy --launch-count 120 \
+                step profile 200 ncu --clock-control none --section LaunchStats --section Occupancy --launch-count 120 \
                     .gpu/bin/test_gpu_backend --gtest_filter='*To1000States*' ;;
             baseline)
                 # The same benchmark at an earlier revision (scripts/gpu-check.sh baseline REV), same device.

@@ -4,6 +4,7 @@
 // hide a device the backend could not use). The same driver and per-element code are checked on
 // every machine through the host executor (test_staged_pipeline).
 #include <cstdlib>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -118,6 +119,41 @@ TEST_F(PandaOnTheGpu, RandomBatchesOf1To1000StatesMatchTheCpu)
                                           rc::test::randomStates(*panda_->robot, n, 5), request,
                                           "batch of " + std::to_string(n) + " (" + rc::toString(mode) + ")");
         }
+}
+
+TEST_F(PandaOnTheGpu, PerStatePairPaddingsMatchTheCpu)
+{
+    // Certified midpoints: every (state, pair) with its own padding, in one pass on the device.
+    const std::vector<double> states = rc::test::randomStates(*panda_->robot, 1000, 9);
+    for (rc::CollisionMode mode : {rc::CollisionMode::Safe, rc::CollisionMode::Exact, rc::CollisionMode::Conservative})
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        request.pairPadding = rc::test::randomPairPaddings(gpu_->collisionModel(), 1000, 13);
+        rc::test::expectSameDecisions(gpu_->backend(), *cpu_, gpu_->collisionModel(), states, request,
+                                      "padding per state (" + rc::toString(mode) + ")");
+    }
+}
+
+TEST_F(PandaOnTheGpu, EightThreadsOnOneCheckerGetTheVerdictsOfOne)
+{
+    // Each thread's pass takes its own stream and scratch (StageRunner).
+    const std::vector<double> states = rc::test::randomStates(*panda_->robot, 2000, 17);
+    std::vector<std::uint8_t> alone(2000);
+    gpu_->check(states.data(), 2000, alone.data());
+    std::vector<std::vector<std::uint8_t>> verdicts(8, std::vector<std::uint8_t>(2000));
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 8; ++t)
+        threads.emplace_back(
+            [&, t]
+            {
+                for (int round = 0; round < 10; ++round)
+                    gpu_->check(states.data(), 2000, verdicts[t].data());
+            });
+    for (std::thread &thread : threads)
+        thread.join();
+    for (int t = 0; t < 8; ++t)
+        EXPECT_EQ(verdicts[t], alone) << "thread " << t;
 }
 
 // Verdicts only (the contacts path runs the exact phase on every pair); a separate test so that

@@ -6,7 +6,6 @@
 // chunked run, which reuses what earlier chunks left as the CUDA runner does.
 #include <gtest/gtest.h>
 
-#include <random>
 #include <thread>
 
 #include "BackendSuites.h"
@@ -263,28 +262,6 @@ TEST(StagedPipeline, TheStagesSettleMostPairsThemselvesAndNeverContradictTheOrac
         << craneOpen << " of " << craneSurviving << " crane pairs left to the host";
 }
 
-namespace
-{
-/** \brief Extra paddings for \a rows rows of \a model's pairs: 0, 2 mm, 1 cm or 5 cm at random, the
-    range a certified midpoint's sweeps take on the Panda. */
-std::shared_ptr<rc::PairPadding> randomPairPaddings(const rc::CollisionModel &model, std::size_t rows,
-                                                    unsigned seed)
-{
-    std::mt19937 random(seed);
-    const double choices[] = {0.0, 0.002, 0.01, 0.05};
-    auto draw = [&] { return choices[random() % 4]; };
-    auto extra = std::make_shared<rc::PairPadding>();
-    extra->rows = rows;
-    extra->environment.resize(rows * model.numComponents());
-    extra->self.resize(rows * model.selfPairs.size());
-    for (double &p : extra->environment)
-        p = draw();
-    for (double &p : extra->self)
-        p = draw();
-    return extra;
-}
-}  // namespace
-
 TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
 {
     // Certified midpoints (CertifiedMotionValidator, BatchRRTConnect) give every (state, pair) its own
@@ -303,14 +280,14 @@ TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
         {
             rc::CollisionRequest request;
             request.mode = mode;
-            request.pairPadding = randomPairPaddings(*model, n, 7);
+            request.pairPadding = rc::test::randomPairPaddings(*model, n, 7);
             const rc::test::Agreement perState = rc::test::expectSameDecisions(
                 staged, cpu, *model, suite.states, request, label(suite.name, mode) + " padding per state");
             if (mode == rc::CollisionMode::Safe)
                 rc::test::expectSameDecisions(chunked, cpu, *model, suite.states, request,
                                               label(suite.name, mode) + " padding per state, chunked");
             request.padding = 0.003;
-            request.pairPadding = randomPairPaddings(*model, 1, 11);
+            request.pairPadding = rc::test::randomPairPaddings(*model, 1, 11);
             rc::test::expectSameDecisions(staged, cpu, *model, suite.states, request,
                                           label(suite.name, mode) + " one padding row");
             if (mode == rc::CollisionMode::Exact && suite.name.rfind("panda", 0) == 0)
@@ -368,7 +345,7 @@ TEST(StagedPipeline, EightThreadsOnOneBackendGetTheVerdictsOfOne)
     const rc::StagedBackend staged(model, poisonedStages(model));
     const std::size_t n = suite.numStates();
     rc::CollisionRequest request;
-    request.pairPadding = randomPairPaddings(*model, n, 3);
+    request.pairPadding = rc::test::randomPairPaddings(*model, n, 3);
     std::vector<std::uint8_t> alone(n);
     staged.check(suite.states.data(), n, alone.data(), nullptr, request, 1);
     std::vector<std::vector<std::uint8_t>> verdicts(8, std::vector<std::uint8_t>(n));

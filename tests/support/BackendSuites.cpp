@@ -80,4 +80,18 @@ Agreement expectSameDecisions(const Backend &candidate, const Backend &reference
     }
     return agreement;
 }
+std::shared_ptr<PairPadding> randomPairPaddings(const CollisionModel &model, std::size_t rows, unsigned seed)
+{
+    std::mt19937 random(seed);
+    const double choices[] = {0.0, 0.002, 0.01, 0.05};
+    auto extra = std::make_shared<PairPadding>();
+    extra->rows = rows;
+    extra->environment.resize(rows * model.numComponents());
+    extra->self.resize(rows * model.selfPairs.size());
+    for (double &p : extra->environment)
+        p = choices[random() % 4];
+    for (double &p : extra->self)
+        p = choices[random() % 4];
+    return extra;
+}
 }  // namespace rastercheck::test

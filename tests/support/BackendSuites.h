@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,10 @@ std::vector<StateSuite> accuracySuites(std::size_t statesPerSuite);
 
 /** \brief \a n uniform random states within \a robot's bounds (continuous joints in [-pi, pi]). */
 std::vector<double> randomStates(const RobotModel &robot, std::size_t n, unsigned seed);
+
+/** \brief Extra paddings (CollisionRequest::pairPadding) for \a rows rows of \a model's pairs: 0, 2 mm,
+    1 cm or 5 cm at random (fixed \a seed), the range a certified midpoint's sweeps take on the Panda. */
+std::shared_ptr<PairPadding> randomPairPaddings(const CollisionModel &model, std::size_t rows, unsigned seed);
 
 /** \brief How many of a batch each backend called valid. */
 struct Agreement
