@@ -33,7 +33,7 @@ def crane(rc):
 
 @pytest.fixture(scope="session")
 def crane_checker(rc, crane):
-    return rc.Checker(crane, threads=2)
+    return rc.Checker(crane, threads=1)
 
 
 @pytest.fixture(scope="session")
@@ -54,4 +54,4 @@ def bookshelf(rc, panda_dir):
 
 @pytest.fixture(scope="session")
 def panda_checker(rc, bookshelf):
-    return rc.Checker(bookshelf, threads=2)
+    return rc.Checker(bookshelf, threads=1)

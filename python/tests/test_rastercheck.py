@@ -42,9 +42,9 @@ def test_crane_start_and_goal_are_valid_with_the_lift_clearance_but_not_with_hal
     valid = crane_checker.check(ends)
     assert valid.dtype == np.bool_ and valid.shape == (2,)
     assert valid.all()
-    assert rc.Checker(crane, padding=0.25, threads=2).check(ends).all()
+    assert rc.Checker(crane, padding=0.25, threads=1).check(ends).all()
     # The skid hangs 0.3 m above its support (robots/sites/README.md).
-    assert not rc.Checker(crane, padding=0.5, threads=2).check(ends).any()
+    assert not rc.Checker(crane, padding=0.5, threads=1).check(ends).any()
     assert crane_checker.contacts(crane.start) == []
 
 
@@ -121,7 +121,7 @@ def test_panda_verdicts_equal_the_command_line_on_the_same_csv(bookshelf, panda_
     scenario = panda_dir / "problems" / "bookshelf_small_panda"
     subprocess.run([os.environ.get("RASTERCHECK_CLI", "rastercheck"), "check", "--robot", panda_dir / "panda.urdf",
                     "--srdf", panda_dir / "panda.srdf", "--scene", scenario / "scene0001.yaml", "--states", csv,
-                    "--out", out, "--threads", "2"], check=True, capture_output=True)
+                    "--out", out, "--threads", "1"], check=True, capture_output=True)
     cli = np.loadtxt(out, delimiter=",", skiprows=1, usecols=0, dtype=int).astype(bool)
     valid = panda_checker.check(states)
     assert valid[:2].all()  # MotionBenchMaker's start and goal are valid
@@ -140,7 +140,7 @@ def test_other_real_dtypes_and_layouts_give_the_float64_verdicts(bookshelf, pand
 
 
 def test_planned_path_is_valid_edge_by_edge_and_densely(rc, bookshelf, panda_checker):
-    path, result = rc.plan(bookshelf, time_limit=5.0, seed=1, threads=2)
+    path, result = rc.plan(bookshelf, time_limit=5.0, seed=1, threads=1)
     assert result.solved, result
     assert result.states_checked > 0 and result.time > 0
     assert path.ndim == 2 and path.shape[1] == bookshelf.dof and len(path) >= 2
@@ -148,9 +148,9 @@ def test_planned_path_is_valid_edge_by_edge_and_densely(rc, bookshelf, panda_che
     np.testing.assert_allclose(path[-1], bookshelf.goal, atol=1e-9)
     assert panda_checker.check_motions(path[:-1], path[1:]).all()
     dense = np.concatenate([line(a, b, 200) for a, b in zip(path[:-1], path[1:])])
-    assert rc.Checker(bookshelf, mode="exact", threads=2).check(dense).all()
+    assert rc.Checker(bookshelf, mode="exact", threads=1).check(dense).all()
     # The same seed plans the same path.
-    again, _ = rc.plan(bookshelf, time_limit=5.0, seed=1, threads=2)
+    again, _ = rc.plan(bookshelf, time_limit=5.0, seed=1, threads=1)
     np.testing.assert_array_equal(again, path)
 
 
@@ -159,7 +159,7 @@ def test_plan_takes_a_start_and_goal_and_a_planner_by_name(rc, crane):
     goal = start.copy()
     goal[CRANE_COORDINATES.index("hoist")] = 9.0  # lift the skid 6.8 m straight up
     path, result = rc.plan(crane, start=start, goal=goal, planner="rrtconnect", time_limit=5.0, seed=2,
-                           simplify=False, threads=2)
+                           simplify=False, threads=1)
     assert result.solved and result.planner == "RRTConnect"
     np.testing.assert_allclose(path[[0, -1]], [start, goal], atol=1e-9)
 
