@@ -9,6 +9,7 @@
 #include <cmath>
 #include <map>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -58,10 +59,7 @@ using PyProblemPtr = std::shared_ptr<PyProblem>;
 
 std::string stemOf(const std::string &path)
 {
-    const std::size_t slash = path.find_last_of('/');
-    std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-    const std::size_t dot = name.find_last_of('.');
-    return dot == std::string::npos ? name : name.substr(0, dot);
+    return std::filesystem::path(path).stem().string();
 }
 
 py::array_t<double> vectorArray(const std::vector<double> &values)

@@ -164,6 +164,46 @@ def test_plan_takes_a_start_and_goal_and_a_planner_by_name(rc, crane):
     np.testing.assert_allclose(path[[0, -1]], [start, goal], atol=1e-9)
 
 
+# ---- an OMPL.app problem --------------------------------------------------------------------
+
+def box_obj(name, center, half):
+    """A closed box as Wavefront OBJ text: 8 corners, 12 outward triangles."""
+    corners = [[c + s * h for c, s, h in zip(center, signs, half)]
+               for signs in [(-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1),
+                             (-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)]]
+    faces = [(1, 3, 2), (1, 4, 3), (5, 6, 7), (5, 7, 8), (1, 2, 6), (1, 6, 5),
+             (2, 3, 7), (2, 7, 6), (3, 4, 8), (3, 8, 7), (4, 1, 5), (4, 5, 8)]
+    return f"o {name}\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in corners) + \
+        "".join(f"f {a} {b} {c}\n" for a, b, c in faces)
+
+
+def test_omplapp_cube_goes_around_a_wall(rc, tmp_path):
+    (tmp_path / "cube.obj").write_text(box_obj("cube", (0, 0, 0), (0.5, 0.5, 0.5)))
+    (tmp_path / "wall.obj").write_text(box_obj("wall", (3, 0, 0), (0.25, 1.5, 1.5)))
+    ends = "".join(f"{which}.{key} = {value}\n" for which, x in (("start", 0), ("goal", 6))
+                   for key, value in (("x", x), ("y", 0), ("z", 0), ("theta", 0), ("axis.x", 1), ("axis.y", 0),
+                                      ("axis.z", 0)))
+    volume = "".join(f"volume.{bound}.{axis} = {value}\n" for bound, values in (("min", (-2, -4, -4)), ("max", (8, 4, 4)))
+                     for axis, value in zip("xyz", values))
+    cfg = tmp_path / "wall.cfg"
+    cfg.write_text(f"[problem]\nname = wall\nrobot = cube.obj\nworld = wall.obj\n{ends}{volume}")
+    problem = rc.load_cfg(cfg)
+    assert problem.name == "wall" and problem.objects == ["wall"]
+    assert problem.coordinate_names == ["x", "y", "z", "qx", "qy", "qz", "qw"]
+    np.testing.assert_allclose(problem.start, [0, 0, 0, 0, 0, 0, 1])
+    np.testing.assert_allclose(problem.goal, [6, 0, 0, 0, 0, 0, 1])
+    np.testing.assert_allclose(problem.lower[:3], [-2, -4, -4])
+    checker = rc.Checker(problem, threads=1)
+    through = problem.start.copy()
+    through[0] = 3.0
+    assert checker.check([problem.start, problem.goal, through]).tolist() == [True, True, False]
+    assert [c["object"] for c in checker.contacts(through)] == ["wall"]
+    assert checker.check_motions(problem.start, problem.goal).tolist() == [False]
+    path, result = rc.plan(problem, planner="rrtconnect", time_limit=5.0, seed=3, threads=1)
+    assert result.solved
+    assert checker.check_motions(path[:-1], path[1:]).all()
+
+
 # ---- errors ---------------------------------------------------------------------------------
 
 def test_loader_errors_become_file_not_found_and_value_errors(rc, tmp_path):
