@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -351,7 +352,7 @@ struct PlanResult
 
 std::pair<py::array_t<double>, PlanResult> plan(const PyProblemPtr &problem, const py::object &start,
                                                 const py::object &goal, const std::string &planner, double timeLimit,
-                                                const py::object &seed, bool simplify, const std::string &mode,
+                                                std::optional<long long> seed, bool simplify, const std::string &mode,
                                                 double padding, const std::string &backend, int threads,
                                                 const std::map<std::string, py::object> &parameters)
 {
@@ -366,17 +367,17 @@ std::pair<py::array_t<double>, PlanResult> plan(const PyProblemPtr &problem, con
                               ": pass start= and goal= (load a MoveIt request with request=)");
     std::vector<std::pair<std::string, std::string>> plannerParameters;
     for (const auto &[name, value] : parameters)
-        plannerParameters.emplace_back(name, py::str(value).cast<std::string>());
-    if (!seed.is_none())
+        plannerParameters.emplace_back(name, py::isinstance<py::bool_>(value) ? (value.cast<bool>() ? "1" : "0")
+                                                                               : py::str(value).cast<std::string>());
+    if (seed)
     {
-        const long long value = seed.cast<long long>();
-        if (value < 0)
+        if (*seed < 0)
             throw py::value_error("seed must be >= 0");
         // OMPL warns that a seed set after its first random numbers cannot make earlier ones
         // repeat; the planner made below draws all of its numbers after this.
         const ::ompl::msg::LogLevel level = ::ompl::msg::getLogLevel();
         ::ompl::msg::setLogLevel(::ompl::msg::LOG_NONE);
-        ::ompl::RNG::setSeed(static_cast<std::uint_fast32_t>(value));
+        ::ompl::RNG::setSeed(static_cast<std::uint_fast32_t>(*seed));
         ::ompl::msg::setLogLevel(level);
     }
 

@@ -248,6 +248,12 @@ def test_plan_errors_are_value_errors(rc, crane, tmp_path):
         rc.plan(crane, planner="no_such_planner")
     with pytest.raises(ValueError, match="time_limit"):
         rc.plan(crane, time_limit=0)
+    with pytest.raises(ValueError, match="seed"):
+        rc.plan(crane, seed=-1)
+    with pytest.raises(TypeError):
+        rc.plan(crane, seed="one")
+    with pytest.raises(ValueError, match="range"):
+        rc.plan(crane, planner="rrtconnect", params={"range": "far"})
     with pytest.raises(ValueError, match="start"):
         rc.plan(crane, start=crane.start[:3])
     bare = rc.load(SOURCE / "robots/crane/crane.urdf")
