@@ -461,6 +461,8 @@ Errors: a file that cannot be found raises FileNotFoundError, any other bad
 input (a malformed file, an unknown option, a wrong shape, dtype or a
 non-finite value) ValueError with the loader's message.)doc";
 
+    m.attr("__version__") = RASTERCHECK_VERSION;
+
     py::register_exception_translator(
         [](std::exception_ptr thrown)
         {
@@ -614,7 +616,15 @@ fraction of edge i known valid (1.0 for a valid edge).)doc")
         .def_property_readonly(
             "padding", [](const PyChecker &c) { return c.request().padding; }, "The padding.")
         .def_property_readonly(
-            "dof", [](const PyChecker &c) { return c.problem()->dof(); }, "Coordinates per configuration.");
+            "dof", [](const PyChecker &c) { return c.problem()->dof(); }, "Coordinates per configuration.")
+        .def("__repr__",
+             [](const PyChecker &c)
+             {
+                 std::ostringstream text;
+                 text << "<rastercheck.Checker of '" << c.problem()->name << "': mode " << rc::toString(c.request().mode)
+                      << ", padding " << c.request().padding << ", backend " << c.checker().backendName() << ">";
+                 return text.str();
+             });
 
     py::class_<PlanResult>(m, "PlanResult", "What plan() reports besides the path.")
         .def_readonly("solved", &PlanResult::solved, "True when the path reaches the goal (an exact solution).")
