@@ -92,7 +92,8 @@ StatesArgument statesArgument(const py::handle &q, const PyProblem &problem, con
         throw py::value_error(std::string(what) + " must be an array of configurations");
     const char kind = states.array.dtype().kind();
     if (kind != 'f' && kind != 'i' && kind != 'u')
-        throw py::value_error(std::string(what) + " must hold real numbers (float64, or float32 converted), not dtype " +
+        throw py::value_error(std::string(what) +
+                              " must hold real numbers (float64, or float32 converted), not dtype " +
                               py::str(states.array.dtype()).cast<std::string>());
     const std::size_t dof = problem.dof();
     const py::ssize_t ndim = states.array.ndim();
@@ -174,9 +175,10 @@ py::dict contactDict(const rc::Checker &checker, const rc::Contact &contact)
     py::dict entry;
     entry["kind"] = rc::toString(contact.kind);
     entry["description"] = checker.describe(contact);
-    const bool pair = contact.kind == rc::Contact::Kind::Environment || contact.kind == rc::Contact::Kind::SelfCollision;
-    entry["component"] = pair ? py::cast(checker.robot().components[static_cast<std::size_t>(contact.component)].name)
-                              : py::none();
+    const bool pair =
+        contact.kind == rc::Contact::Kind::Environment || contact.kind == rc::Contact::Kind::SelfCollision;
+    entry["component"] =
+        pair ? py::cast(checker.robot().components[static_cast<std::size_t>(contact.component)].name) : py::none();
     if (!pair)
         entry["object"] = py::none();
     else if (contact.kind == rc::Contact::Kind::Environment)
@@ -195,7 +197,7 @@ class StateBlock
 public:
     StateBlock(const ob::SpaceInformationPtr &si, const rc::ompl::StateMapping &mapping, const double *rows,
                std::size_t n)
-      : si_(si), states_(n, nullptr)
+        : si_(si), states_(n, nullptr)
     {
         si_->allocStates(states_);
         for (std::size_t i = 0; i < n; ++i)
@@ -219,7 +221,7 @@ class PyChecker
 {
 public:
     PyChecker(PyProblemPtr problem, const std::string &mode, double padding, const std::string &backend, int threads)
-      : problem_(std::move(problem))
+        : problem_(std::move(problem))
     {
         if (threads < 0)
             throw py::value_error("threads must be >= 0 (0 = all cores), not " + std::to_string(threads));
@@ -368,7 +370,7 @@ std::pair<py::array_t<double>, PlanResult> plan(const PyProblemPtr &problem, con
     std::vector<std::pair<std::string, std::string>> plannerParameters;
     for (const auto &[name, value] : parameters)
         plannerParameters.emplace_back(name, py::isinstance<py::bool_>(value) ? (value.cast<bool>() ? "1" : "0")
-                                                                               : py::str(value).cast<std::string>());
+                                                                              : py::str(value).cast<std::string>());
     if (seed)
     {
         if (*seed < 0)
@@ -606,8 +608,7 @@ fraction of edge i known valid (1.0 for a valid edge).)doc")
              "Seconds per call of the C++ Checker::check on q, timed in C++ (the baseline of "
              "examples/python/bench_overhead.py).")
         .def_property_readonly(
-            "problem", [](const PyChecker &c) { return c.problem(); },
-            "The problem checked.")
+            "problem", [](const PyChecker &c) { return c.problem(); }, "The problem checked.")
         .def_property_readonly(
             "backend", [](const PyChecker &c) { return c.checker().backendName(); },
             "\"cpu\" or \"cuda (<device>)\": where batches run.")
@@ -621,8 +622,9 @@ fraction of edge i known valid (1.0 for a valid edge).)doc")
              [](const PyChecker &c)
              {
                  std::ostringstream text;
-                 text << "<rastercheck.Checker of '" << c.problem()->name << "': mode " << rc::toString(c.request().mode)
-                      << ", padding " << c.request().padding << ", backend " << c.checker().backendName() << ">";
+                 text << "<rastercheck.Checker of '" << c.problem()->name << "': mode "
+                      << rc::toString(c.request().mode) << ", padding " << c.request().padding << ", backend "
+                      << c.checker().backendName() << ">";
                  return text.str();
              });
 
