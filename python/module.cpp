@@ -70,6 +70,15 @@ py::array_t<double> vectorArray(const std::vector<double> &values)
     return array;
 }
 
+/** \brief "(3, 7)", "(7,)": an array's shape as Python writes it. */
+std::string shapeText(const py::array &array)
+{
+    std::string text = "(";
+    for (py::ssize_t d = 0; d < array.ndim(); ++d)
+        text += (d ? ", " : "") + std::to_string(array.shape(d));
+    return text + (array.ndim() == 1 ? ",)" : ")");
+}
+
 /** \brief Configurations a caller passed, as a C-contiguous float64 block: the caller's own memory
     when it already is one (no copy), else a converted copy that \a array keeps alive. */
 struct StatesArgument
@@ -98,14 +107,8 @@ StatesArgument statesArgument(const py::handle &q, const PyProblem &problem, con
     const std::size_t dof = problem.dof();
     const py::ssize_t ndim = states.array.ndim();
     if ((ndim != 1 && ndim != 2) || static_cast<std::size_t>(states.array.shape(ndim - 1)) != dof)
-    {
-        std::ostringstream message;
-        message << what << " must have shape (N, " << dof << ") or (" << dof << ",), not (";
-        for (py::ssize_t d = 0; d < ndim; ++d)
-            message << (d ? ", " : "") << states.array.shape(d);
-        message << (ndim == 1 ? ",)" : ")");
-        throw py::value_error(message.str());
-    }
+        throw py::value_error(std::string(what) + " must have shape (N, " + std::to_string(dof) + ") or (" +
+                              std::to_string(dof) + ",), not " + shapeText(states.array));
     states.rows = ndim == 1 ? 1 : static_cast<std::size_t>(states.array.shape(0));
     if (!py::isinstance<Float64>(states.array) || !(states.array.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_))
         states.array = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(states.array);
@@ -271,8 +274,8 @@ public:
         const StatesArgument from = statesArgument(a, *problem_, "a");
         const StatesArgument to = statesArgument(b, *problem_, "b");
         if (from.array.ndim() != to.array.ndim() || from.rows != to.rows)
-            throw py::value_error("a and b must have the same shape: " + std::to_string(from.rows) + " and " +
-                                  std::to_string(to.rows) + " edge ends");
+            throw py::value_error("a and b must have the same shape, not " + shapeText(from.array) + " and " +
+                                  shapeText(to.array));
         const std::size_t n = from.rows;
         py::array_t<bool> valid(static_cast<py::ssize_t>(n));
         py::array_t<double> lastValid(static_cast<py::ssize_t>(n));
@@ -572,8 +575,9 @@ world, with its start and goal. Raises FileNotFoundError or ValueError.)doc");
     py::class_<PyChecker>(m, "Checker", R"doc(Decides whether configurations of a problem's robot collide with its scene
 or with itself. Thread safe: several Python threads may call one checker at
 once (the GIL is released while it works).)doc")
-        .def(py::init<PyProblemPtr, const std::string &, double, const std::string &, int>(), py::arg("problem"),
-             py::arg("mode") = "safe", py::arg("padding") = 0.0, py::arg("backend") = "auto", py::arg("threads") = 0,
+        .def(py::init<PyProblemPtr, const std::string &, double, const std::string &, int>(),
+             py::arg("problem").none(false), py::arg("mode") = "safe", py::arg("padding") = 0.0,
+             py::arg("backend") = "auto", py::arg("threads") = 0,
              R"doc(mode: "safe" (default: never calls a colliding state valid), "exact",
 "conservative" (may call a free state near an obstacle invalid) or "raster"
 (the paper's method alone: may miss overlaps thinner than a pixel).
@@ -647,7 +651,7 @@ fraction of edge i known valid (1.0 for a valid edge).)doc")
                  return text.str();
              });
 
-    m.def("plan", &plan, py::arg("problem"), py::arg("start") = py::none(), py::arg("goal") = py::none(),
+    m.def("plan", &plan, py::arg("problem").none(false), py::arg("start") = py::none(), py::arg("goal") = py::none(),
           py::arg("planner") = "batchrrtconnect", py::arg("time_limit") = 1.0, py::arg("seed") = py::none(),
           py::arg("simplify") = true, py::arg("mode") = "safe", py::arg("padding") = 0.0, py::arg("backend") = "auto",
           py::arg("threads") = 0, py::arg("params") = std::map<std::string, py::object>(),

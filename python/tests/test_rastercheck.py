@@ -217,6 +217,9 @@ def test_loader_errors_become_file_not_found_and_value_errors(rc, tmp_path):
         rc.load(broken)
     with pytest.raises(TypeError):
         rc.load(42)
+    for none in (lambda: rc.Checker(None), lambda: rc.plan(None)):
+        with pytest.raises(TypeError):
+            none()
 
 
 def test_options_shapes_dtypes_and_non_finite_values_are_value_errors(rc, crane, crane_checker):
@@ -235,8 +238,10 @@ def test_options_shapes_dtypes_and_non_finite_values_are_value_errors(rc, crane,
     states[2, 4] = np.inf
     with pytest.raises(ValueError, match="row 2"):
         crane_checker.contacts(states)
-    with pytest.raises(ValueError, match="same shape"):
+    with pytest.raises(ValueError, match=r"same shape, not \(2, 7\) and \(1, 7\)"):
         crane_checker.check_motions(states[:2], states[:1])
+    with pytest.raises(ValueError, match=r"same shape, not \(7,\) and \(1, 7\)"):
+        crane_checker.check_motions(crane.start, crane.goal[None, :])
     with pytest.raises(ValueError, match="row 2"):
         crane_checker.check_motions(states, states)
     with pytest.raises(ValueError, match="raster"):
