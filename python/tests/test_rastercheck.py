@@ -4,6 +4,7 @@ edge by edge, the error matrix, and several Python threads on one checker."""
 import os
 import subprocess
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -287,3 +288,28 @@ def test_python_threads_share_one_checker_and_get_the_single_thread_verdicts(rc,
     for got, want in zip(results, expected):
         for verdicts in got:
             np.testing.assert_array_equal(verdicts, want)
+
+
+def test_check_releases_the_gil_while_it_works(rc, crane):
+    """The main thread keeps running Python while another thread's check() decides a large batch:
+    with the GIL held, it would stand still for the whole batch."""
+    checker = rc.Checker(crane, threads=1)
+    batch = random_states(crane, 20_000, seed=9)
+    span = {}
+
+    def work():
+        span["start"] = time.perf_counter()
+        checker.check(batch)
+        span["end"] = time.perf_counter()
+
+    worker = threading.Thread(target=work)
+    ticks = []
+    worker.start()
+    while worker.is_alive():
+        ticks.append(time.perf_counter())
+    worker.join()
+    seconds = span["end"] - span["start"]
+    assert seconds > 0.05, "the batch is too small to tell"
+    during = [t for t in ticks if span["start"] <= t <= span["end"]]
+    gaps = np.diff([span["start"], *during, span["end"]])
+    assert gaps.max() < 0.5 * seconds, f"the main thread stood still {gaps.max():.3f} s of the {seconds:.3f} s batch"
