@@ -13,6 +13,8 @@ packages=(
     libboost-serialization-dev libboost-filesystem-dev libboost-system-dev libboost-program-options-dev
     libfcl-dev libccd-dev
     libgtest-dev libgmock-dev libbenchmark-dev
+    # the Python module (python/) for Debian's python3, and its tests
+    pybind11-dev python3-dev python3-numpy python3-pytest
     # scripts/sanitize.sh: ThreadSanitizer with clang, its runtime, LLVM's OpenMP (with the Archer
     # tool) and llvm-symbolizer for the reports (GCC's own sanitizers come with build-essential)
     clang libclang-rt-dev libomp-dev llvm

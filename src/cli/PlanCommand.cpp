@@ -11,7 +11,6 @@
 #include <CLI/CLI.hpp>
 
 #include <ompl/base/goals/GoalState.h>
-#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
 #include <ompl/geometric/PathGeometric.h>
 #include <ompl/tools/benchmark/Benchmark.h>
 #include <ompl/util/RandomNumbers.h>
@@ -163,15 +162,7 @@ int runPlan(const PlanOptions &options)
     {
         ompl::setStartAndGoal(*setup, *problem.omplApp);
         experiment = problem.omplApp->name.empty() ? stemOf(options.problem.cfgPath) : problem.omplApp->name;
-        if (problem.omplApp->objective == "length")
-        {
-            auto objective = std::make_shared<ob::PathLengthOptimizationObjective>(setup->getSpaceInformation());
-            if (problem.omplApp->objectiveThreshold > 0)
-                objective->setCostThreshold(ob::Cost(problem.omplApp->objectiveThreshold));
-            setup->setOptimizationObjective(objective);
-        }
-        else if (!problem.omplApp->objective.empty())
-            throw ConfigurationError("objective '" + problem.omplApp->objective + "' is not supported (only 'length')");
+        ompl::setObjective(*setup, *problem.omplApp);
     }
     else
     {

@@ -145,22 +145,6 @@ json rowsJson(const std::vector<double> &values, std::size_t dof)
     return rows;
 }
 
-std::string contactKind(Contact::Kind kind)
-{
-    switch (kind)
-    {
-        case Contact::Kind::None:
-            return "none";
-        case Contact::Kind::OutOfBounds:
-            return "out_of_bounds";
-        case Contact::Kind::Environment:
-            return "environment";
-        case Contact::Kind::SelfCollision:
-            return "self";
-    }
-    return "none";
-}
-
 double millisecondsSince(std::chrono::steady_clock::time_point start)
 {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -287,7 +271,7 @@ struct ViewServer::Impl
 
     json contactJson(const Contact &contact) const
     {
-        json entry{{"kind", contactKind(contact.kind)}, {"description", checker.describe(contact)}};
+        json entry{{"kind", toString(contact.kind)}, {"description", checker.describe(contact)}};
         if (contact.kind != Contact::Kind::Environment && contact.kind != Contact::Kind::SelfCollision)
             return entry;
         entry["component"] = robot().components[static_cast<std::size_t>(contact.component)].name;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <exception>
 #include <functional>
 #include <map>
 
@@ -125,7 +126,17 @@ void setPlannerParameters(ob::Planner &planner, const std::vector<std::pair<std:
     {
         if (!planner.params().hasParam(key))
             throw ConfigurationError("planner " + planner.getName() + " has no parameter '" + key + "'");
-        if (!planner.params().setParam(key, value))
+        bool accepted = false;
+        try
+        {
+            accepted = planner.params().setParam(key, value);
+        }
+        catch (const std::exception &e)  // OMPL throws for a value that is not a number
+        {
+            throw ConfigurationError("planner " + planner.getName() + " rejected " + key + "=" + value + ": " +
+                                     e.what());
+        }
+        if (!accepted)
             throw ConfigurationError("planner " + planner.getName() + " rejected " + key + "=" + value);
     }
 }

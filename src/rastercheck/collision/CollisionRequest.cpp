@@ -22,6 +22,22 @@ std::string toString(CollisionMode mode)
     return "unknown";
 }
 
+std::string toString(Contact::Kind kind)
+{
+    switch (kind)
+    {
+        case Contact::Kind::None:
+            return "none";
+        case Contact::Kind::OutOfBounds:
+            return "out_of_bounds";
+        case Contact::Kind::Environment:
+            return "environment";
+        case Contact::Kind::SelfCollision:
+            return "self";
+    }
+    return "none";
+}
+
 CollisionMode parseCollisionMode(const std::string &text)
 {
     if (text == "safe")

@@ -113,4 +113,8 @@ struct Contact
     int triangle = -1;
     Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< world frame
 };
+
+/** \brief "none", "out_of_bounds", "environment" or "self": the kind's name in the viewer's JSON API
+    and the Python module's contacts. */
+std::string toString(Contact::Kind kind);
 }  // namespace rastercheck

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <ompl/base/ScopedState.h>
+#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
@@ -22,7 +23,11 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
     StateMappingOptions mappingOptions;
     mappingOptions.heldCoordinates = options.heldCoordinates;
     auto mapping = std::make_shared<const StateMapping>(problem.robot, mappingOptions);
-    auto checker = std::make_shared<const Checker>(problem.robot, problem.scene, options.checker);
+    if (options.existingChecker && &options.existingChecker->robot() != problem.robot.get())
+        throw ConfigurationError("makeSimpleSetup: the existing checker checks another robot than the problem's");
+    CheckerConstPtr checker = options.existingChecker
+                                  ? options.existingChecker
+                                  : std::make_shared<const Checker>(problem.robot, problem.scene, options.checker);
 
     const ob::StateSpacePtr &space = mapping->getStateSpace();
     space->setLongestValidSegmentFraction(options.longestValidSegmentFraction);
@@ -121,6 +126,19 @@ void setStartAndGoal(og::SimpleSetup &setup, const std::vector<double> &start, c
 void setStartAndGoal(og::SimpleSetup &setup, const OmplAppProblem &problem)
 {
     setStartAndGoal(setup, problem.start, problem.goal);
+}
+
+void setObjective(og::SimpleSetup &setup, const OmplAppProblem &problem)
+{
+    if (problem.objective == "length")
+    {
+        auto objective = std::make_shared<ob::PathLengthOptimizationObjective>(setup.getSpaceInformation());
+        if (problem.objectiveThreshold > 0)
+            objective->setCostThreshold(ob::Cost(problem.objectiveThreshold));
+        setup.setOptimizationObjective(objective);
+    }
+    else if (!problem.objective.empty())
+        throw ConfigurationError("objective '" + problem.objective + "' is not supported (only 'length')");
 }
 
 void setStartAndGoal(og::SimpleSetup &setup, const MotionPlanRequest &request)

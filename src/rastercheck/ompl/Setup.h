@@ -40,6 +40,10 @@ struct SetupOptions
     /** \brief Backend and threads of the Checker (threads are used by batch calls: the motion
         validator's batches). */
     CheckerOptions checker;
+    /** \brief A Checker of the problem's robot to use instead of building one from \a checker
+        (which is then ignored): the Python module's Checker plans and checks edges over the
+        collision model it already built. Null: a new Checker. */
+    CheckerConstPtr existingChecker;
     /** \brief Mode, padding, ... of every state check. */
     CollisionRequest request;
     /** \brief Coordinates held fixed (StateMappingOptions::heldCoordinates). */
@@ -60,7 +64,8 @@ struct SetupOptions
 /** \brief A SimpleSetup for \a problem: the StateMapping's space (bounds = the model bounds; for an
     OMPL.app problem those are its volume bounds), a StateValidityChecker over a new Checker of the
     problem's robot and scene, and the motion validator chosen in \a options. Start and goal are
-    not set (see setStartAndGoal). Throws ConfigurationError on bad options. */
+    not set (see setStartAndGoal). Throws ConfigurationError on bad options, and when
+    options.existingChecker does not check the problem's robot. */
 ::ompl::geometric::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &options = {});
 
 /** \brief The rastercheck validity checker of \a setup (its mapping, checker and request). Throws
@@ -87,6 +92,10 @@ std::vector<double> configurationFromJoints(const StateMapping &mapping, const s
 
 /** \brief Start and goal of an OMPL.app problem (its start / goal configurations). */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
+
+/** \brief The optimization objective of an OMPL.app problem ([problem] objective): path length, with
+    its threshold, for "length"; nothing when absent. Throws ConfigurationError for another. */
+void setObjective(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
 
 /** \brief Start (start_state.joint_state) and goal (goal_constraints[0] joint positions) of a MoveIt
     request; coordinates a request does not name keep their neutral (or held) values. Start joints
