@@ -47,7 +47,7 @@ baseline() {
     mkdir -p .gpu/baseline/lib
     cp build-gpu-base/build/bench/rastercheck_bench_backends .gpu/baseline/
     # The project's own libraries at that revision; the rest comes from the bundle's lib/.
-    cp -L build-gpu-base/build/librastercheck*.so* .gpu/baseline/lib/
+    cp -L build-gpu-base/build/librastercheck*.so.0 .gpu/baseline/lib/  # by their SONAME
     git -C "$tree" rev-parse --short HEAD >.gpu/baseline/revision
     git worktree remove --force "$tree"
 }
@@ -57,6 +57,7 @@ run() {
     export RASTERCHECK_DATA=${RASTERCHECK_DATA:-$PWD/.gpu/data} RASTERCHECK_SOURCE=${RASTERCHECK_SOURCE:-$PWD}
     export RASTERCHECK_REQUIRE_GPU=1 PATH=$PATH:/usr/local/cuda/bin
     local out=${OUT:-$PWD/gpu-results}
+    local bench_states=${BENCH_STATES:-1000000}  # the largest batch of the safe-mode benches
     mkdir -p "$out"
     local steps=("$@")
     ((${#steps[@]})) || steps=(tests sanitize bench)
@@ -94,14 +95,14 @@ run() {
                     --gtest_filter='*To1000States*:*DeviceMemoryLimit*' ;;
             bench)
                 # The Panda scenes, the crane and FCL's env/rob meshes, FCL in the same run.
-                step bench-safe 280 .gpu/bin/rastercheck_bench_backends 1000000 safe
+                step bench-safe 280 .gpu/bin/rastercheck_bench_backends "$bench_states" safe
                 step bench-raster 200 .gpu/bin/rastercheck_bench_backends 100000 raster ;;
             plan)
                 # BatchRRTConnect on Panda problems 1-10 of every scenario, certified edges, 1 s: the
                 # checker on the GPU (batches of 8 and 256 samples) and on every CPU core.
-                step plan-cuda-8 150 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cuda 0
-                step plan-cuda-256 150 .gpu/bin/rastercheck_bench_planners panda 10 1 256 1 batch 2 0 300 cuda 0
-                step plan-cpu 150 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 0 ;;
+                step plan-cuda-8 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cuda 0
+                step plan-cuda-256 100 .gpu/bin/rastercheck_bench_planners panda 10 1 256 1 batch 2 0 300 cuda 0
+                step plan-cpu 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 0 ;;
             profile)
                 # Registers per thread and occupancy of every kernel of a few small and large Panda batches.
                 step profile 200 ncu --clock-control none --section LaunchStats --section Occupancy --launch-count 120 \
@@ -109,7 +110,7 @@ run() {
             baseline)
                 # The same benchmark at an earlier revision (scripts/gpu-check.sh baseline REV), same device.
                 step "baseline-$(cat .gpu/baseline/revision)" 280 env LD_LIBRARY_PATH=$PWD/.gpu/baseline/lib:$LD_LIBRARY_PATH \
-                    .gpu/baseline/rastercheck_bench_backends 1000000 safe ;;
+                    .gpu/baseline/rastercheck_bench_backends "$bench_states" safe ;;
             *) echo "gpu-check: unknown step $s (tests, sanitize, bench, plan, profile, baseline)" >&2; return 2 ;;
         esac
     done
