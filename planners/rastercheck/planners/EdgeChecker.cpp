@@ -40,30 +40,18 @@ EdgeChecker::EdgeChecker(const ob::SpaceInformationPtr &si) : si_(si)
     batch_ = owned_.get();
 }
 
-void EdgeChecker::check(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid,
-                        std::vector<double> *lastValid) const
+void EdgeChecker::check(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid) const
 {
     valid.assign(edges.size(), 0);
-    if (lastValid)
-        lastValid->assign(edges.size(), 0.0);
     if (edges.empty())
         return;
     if (batch_)
     {
-        batch_->checkMotions(edges.data(), edges.size(), valid.data(), lastValid ? lastValid->data() : nullptr);
+        batch_->checkMotions(edges.data(), edges.size(), valid.data());
         return;
     }
     for (std::size_t i = 0; i < edges.size(); ++i)
-    {
-        if (!lastValid)
-        {
-            valid[i] = si_->checkMotion(edges[i].from, edges[i].to) ? 1 : 0;
-            continue;
-        }
-        std::pair<ob::State *, double> last(nullptr, 0.0);
-        valid[i] = si_->checkMotion(edges[i].from, edges[i].to, last) ? 1 : 0;
-        (*lastValid)[i] = valid[i] ? 1.0 : last.second;
-    }
+        valid[i] = si_->checkMotion(edges[i].from, edges[i].to) ? 1 : 0;
 }
 
 void EdgeChecker::checkStates(const std::vector<const ob::State *> &states, std::vector<std::uint8_t> &valid) const
