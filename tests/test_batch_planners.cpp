@@ -463,4 +463,19 @@ TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Exact), "certified");
     // ... except in raster mode, which cannot certify: batched at the space's resolution.
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Raster), "batched");
+
+    // Any other reason certified edges cannot be made is an error, not a quiet fall back to
+    // batched edges: here rastercheck's validity checker on a space information of another space.
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true));
+    const auto other = std::make_shared<ob::SpaceInformation>(std::make_shared<ob::RealVectorStateSpace>(3));
+    other->setStateValidityChecker(setup->getStateValidityChecker());
+    try
+    {
+        rcp::EdgeChecker edges(other);
+        ADD_FAILURE() << "edges " << edges.description() << " on a foreign space";
+    }
+    catch (const rc::ConfigurationError &error)
+    {
+        EXPECT_EQ(std::string(error.what()).rfind("CertifiedMotionValidator: ", 0), 0u) << error.what();
+    }
 }

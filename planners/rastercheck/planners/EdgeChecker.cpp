@@ -2,9 +2,9 @@
 
 #include "rastercheck/planners/Log.h"
 
-#include "rastercheck/core/Error.h"
 #include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/MotionValidator.h"
+#include "rastercheck/ompl/Setup.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
 
 namespace ob = ::ompl::base;
@@ -26,16 +26,17 @@ EdgeChecker::EdgeChecker(const ob::SpaceInformationPtr &si) : si_(si)
         description_ = "one at a time";
         return;
     }
-    try
+    // Only raster mode falls back (it cannot certify an edge); any other setup error is the caller's.
+    if (ompl::resolveEdgeChecking(ompl::EdgeChecking::Auto, states_->getRequest().mode) == ompl::EdgeChecking::Batched)
+    {
+        OMPL_LOG(WARN, "raster mode cannot certify an edge; edges are checked at the space's resolution instead");
+        owned_ = std::make_shared<ompl::MotionValidator>(si_, *states_);
+        description_ = "batched";
+    }
+    else
     {
         owned_ = std::make_shared<ompl::CertifiedMotionValidator>(si_, *states_);
         description_ = "certified";
-    }
-    catch (const ConfigurationError &error)
-    {
-        OMPL_LOG(WARN, "%s; edges are checked at the space's resolution instead", error.what());
-        owned_ = std::make_shared<ompl::MotionValidator>(si_, *states_);
-        description_ = "batched";
     }
     batch_ = owned_.get();
 }

@@ -30,12 +30,9 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
     const ob::SpaceInformationPtr &si = setup->getSpaceInformation();
     auto validityChecker = std::make_shared<StateValidityChecker>(si, mapping, checker, options.request);
     setup->setStateValidityChecker(validityChecker);
-    EdgeChecking edges = options.edges;
-    if (edges == EdgeChecking::Auto)
-        edges = options.request.mode == CollisionMode::Raster ? EdgeChecking::Batched : EdgeChecking::Certified;
-    switch (edges)
+    switch (resolveEdgeChecking(options.edges, options.request.mode))
     {
-        case EdgeChecking::Auto:  // resolved above
+        case EdgeChecking::Auto:  // resolved: never returned
         case EdgeChecking::Batched:
             si->setMotionValidator(std::make_shared<MotionValidator>(si, *validityChecker, options.rakeWidth));
             break;
@@ -46,6 +43,13 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
             break;  // SpaceInformation's default
     }
     return setup;
+}
+
+EdgeChecking resolveEdgeChecking(EdgeChecking edges, CollisionMode mode)
+{
+    if (edges != EdgeChecking::Auto)
+        return edges;
+    return mode == CollisionMode::Raster ? EdgeChecking::Batched : EdgeChecking::Certified;
 }
 
 EdgeChecking parseEdgeChecking(const std::string &text)

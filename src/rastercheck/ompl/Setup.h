@@ -31,6 +31,10 @@ enum class EdgeChecking
     Certified
 };
 
+/** \brief \a edges with Auto resolved for \a mode: Certified, or Batched in raster mode (which
+    cannot certify an edge). */
+EdgeChecking resolveEdgeChecking(EdgeChecking edges, CollisionMode mode);
+
 /** \brief "auto", "batched", "discrete" or "certified"; throws ConfigurationError otherwise. */
 EdgeChecking parseEdgeChecking(const std::string &text);
 
