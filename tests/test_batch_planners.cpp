@@ -346,6 +346,11 @@ TEST(BatchRRTConnect, ParametersAndRegistry)
     EXPECT_TRUE(batch->getShortcut());
     EXPECT_THROW(rco::setPlannerParameters(*planner, {{"batch_size", "0"}}), rc::ConfigurationError);
     EXPECT_EQ(batch->getBatchSize(), 16u);
+    // Values OMPL cannot read: not a number, a number too large for the parameter's type.
+    for (const char *value : {"abc", "1e999"})
+        EXPECT_THROW(rco::setPlannerParameters(*planner, {{"range", value}}), rc::ConfigurationError) << value;
+    EXPECT_THROW(rco::setPlannerParameters(*planner, {{"batch_size", "99999999999999999999"}}), rc::ConfigurationError);
+    EXPECT_DOUBLE_EQ(batch->getRange(), 0.5);
 }
 
 TEST(BatchRRTConnect, SeveralPlannersShareOneChecker)

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <functional>
 #include <map>
+#include <stdexcept>
 
 #include <ompl/geometric/planners/est/BiEST.h>
 #include <ompl/geometric/planners/est/EST.h>
@@ -125,7 +126,17 @@ void setPlannerParameters(ob::Planner &planner, const std::vector<std::pair<std:
     {
         if (!planner.params().hasParam(key))
             throw ConfigurationError("planner " + planner.getName() + " has no parameter '" + key + "'");
-        if (!planner.params().setParam(key, value))
+        // OMPL returns false for a value that is not a number ("abc"), and lets std::stod's
+        // out_of_range through for one too large for the parameter's type ("1e999").
+        bool accepted = false;
+        try
+        {
+            accepted = planner.params().setParam(key, value);
+        }
+        catch (const std::out_of_range &)
+        {
+        }
+        if (!accepted)
             throw ConfigurationError("planner " + planner.getName() + " rejected " + key + "=" + value);
     }
 }
