@@ -46,22 +46,6 @@ struct CertifiedMotionValidator::EdgeSearch
 
 namespace
 {
-/** \brief Per-thread buffers of checkMotions (a validator is shared by planner threads). */
-struct Scratch
-{
-    std::vector<double> qa, qb;
-    std::vector<unsigned int> order;
-    std::vector<std::pair<unsigned int, unsigned int>> intervals;
-    std::vector<double> rows;
-    std::vector<std::uint8_t> verdicts;
-};
-
-Scratch &scratch()
-{
-    thread_local Scratch buffers;
-    return buffers;
-}
-
 /** \brief The most coarse intervals one edge is split into (an edge longer than margin x this gets
     intervals needing more than the margin). */
 constexpr double kMaxIntervals = 1 << 20;
@@ -122,20 +106,17 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
         w.finish(false);
         return;
     }
-    Scratch &scratchBuffers = scratch();
     const std::size_t dof = mapping_->numCoordinates();
-    scratchBuffers.qa.resize(dof);
-    scratchBuffers.qb.resize(dof);
-    mapping_->toConfiguration(edge.from, scratchBuffers.qa.data());
-    mapping_->toConfiguration(edge.to, scratchBuffers.qb.data());
+    std::vector<double> qa(dof), qb(dof);
+    mapping_->toConfiguration(edge.from, qa.data());
+    mapping_->toConfiguration(edge.to, qb.data());
     // Over an interval of length h, a component moves at most its sweep x h / 2 from where it is at
     // the midpoint, and two components close in by at most their pair's sweep x h / 2: a midpoint
     // clear by that much more than the padding, pair by pair, certifies the interval.
     const CollisionModel &model = checker_->collisionModel();
     w.componentSweeps.resize(model.numComponents());
     w.pairSweeps.resize(model.selfPairs.size());
-    bound_.sweeps(scratchBuffers.qa.data(), scratchBuffers.qb.data(), model.selfPairs, w.componentSweeps.data(),
-                  w.pairSweeps.data());
+    bound_.sweeps(qa.data(), qb.data(), model.selfPairs, w.componentSweeps.data(), w.pairSweeps.data());
     double fastest = 0.0;
     if (request_.checkEnvironment && !w.componentSweeps.empty())
         fastest = *std::max_element(w.componentSweeps.begin(), w.componentSweeps.end());
@@ -149,8 +130,10 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
     }
     const double coarse = std::clamp(std::ceil(0.5 * fastest / margin_), 1.0, kMaxIntervals);
     w.length = 1.0 / coarse;
-    detail::rakeOrder(static_cast<unsigned int>(coarse), scratchBuffers.order, scratchBuffers.intervals);
-    for (const unsigned int j : scratchBuffers.order)
+    std::vector<unsigned int> order;
+    std::vector<std::pair<unsigned int, unsigned int>> intervals;
+    detail::rakeOrder(static_cast<unsigned int>(coarse), order, intervals);
+    for (const unsigned int j : order)
         w.pending.push_back(static_cast<double>(j - 1) * w.length);
     // An edge sliding along an obstacle nearer than the margins resolve doubles its failing
     // intervals at every level; past this many midpoints it is given up as not certifiable.
@@ -227,14 +210,14 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
                                             double *lastValid) const
 {
     const bool wantFirst = lastValid != nullptr;
-    // Searches are reused per thread: their vectors keep their capacity between calls.
-    thread_local std::vector<std::unique_ptr<EdgeSearch>> pool;
-    while (pool.size() < n)
-        pool.push_back(std::make_unique<EdgeSearch>());
+    // The searches and buffers live for this call only (a validator is shared by planner threads):
+    // a few allocations per edge, against tens of microseconds of checks per edge, and no thread
+    // keeps the memory of the largest batch it ever decided.
+    std::vector<EdgeSearch> searches(n);
     for (std::size_t i = 0; i < n; ++i)
-        start(edges[i], *pool[i]);
-
-    Scratch &w = scratch();
+        start(edges[i], searches[i]);
+    std::vector<double> rows;
+    std::vector<std::uint8_t> verdicts;
     const CollisionModel &model = checker_->collisionModel();
     const std::size_t components = model.numComponents();
     const std::size_t selfPairs = model.selfPairs.size();
@@ -245,9 +228,9 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         open.clear();
         for (std::size_t i = 0; i < n; ++i)
         {
-            nextBatch(*pool[i], wantFirst);
-            if (!pool[i]->batch.empty())
-                open.push_back(pool[i].get());
+            nextBatch(searches[i], wantFirst);
+            if (!searches[i].batch.empty())
+                open.push_back(&searches[i]);
         }
         if (open.empty())
             break;
@@ -275,9 +258,9 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
             }
         CollisionRequest margin = request_;
         margin.pairPadding = std::move(extra);
-        midpointRows(open, false, w.rows);
-        w.verdicts.resize(count);
-        checker_->check(w.rows.data(), count, w.verdicts.data(), margin);
+        midpointRows(open, false, rows);
+        verdicts.resize(count);
+        checker_->check(rows.data(), count, verdicts.data(), margin);
         states_.fetch_add(count, std::memory_order_relaxed);
 
         // Nearer than the margin: checked at the padding itself, where a collision ends the search.
@@ -287,21 +270,21 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         {
             search->close.clear();
             for (const double start : search->batch)
-                if (!w.verdicts[row++])
+                if (!verdicts[row++])
                     search->close.push_back(start);
             closeCount += search->close.size();
         }
         if (closeCount == 0)
             continue;
-        midpointRows(open, true, w.rows);
-        w.verdicts.resize(closeCount);
-        checker_->check(w.rows.data(), closeCount, w.verdicts.data(), request_);
+        midpointRows(open, true, rows);
+        verdicts.resize(closeCount);
+        checker_->check(rows.data(), closeCount, verdicts.data(), request_);
         states_.fetch_add(closeCount, std::memory_order_relaxed);
         row = 0;
         for (EdgeSearch *search : open)
             for (const double start : search->close)
             {
-                if (w.verdicts[row++])
+                if (verdicts[row++])
                     search->failed.push_back(start);
                 else if (!search->finished)
                 {
@@ -313,10 +296,10 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
     }
     for (std::size_t i = 0; i < n; ++i)
     {
-        valid[i] = pool[i]->accepted ? 1 : 0;
+        valid[i] = searches[i].accepted ? 1 : 0;
         if (lastValid)
-            lastValid[i] = pool[i]->prefix;
-        detail::countMotion(valid_, invalid_, pool[i]->accepted);
+            lastValid[i] = searches[i].prefix;
+        detail::countMotion(valid_, invalid_, searches[i].accepted);
     }
 }
 }  // namespace rastercheck::ompl
