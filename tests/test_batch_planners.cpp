@@ -349,7 +349,8 @@ TEST(BatchRRTConnect, ParametersAndRegistry)
     // Values OMPL cannot read: not a number, a number too large for the parameter's type.
     for (const char *value : {"abc", "1e999"})
         EXPECT_THROW(rco::setPlannerParameters(*planner, {{"range", value}}), rc::ConfigurationError) << value;
-    EXPECT_THROW(rco::setPlannerParameters(*planner, {{"batch_size", "99999999999999999999"}}), rc::ConfigurationError);
+    for (const char *value : {"abc", "99999999999999999999"})
+        EXPECT_THROW(rco::setPlannerParameters(*planner, {{"batch_size", value}}), rc::ConfigurationError) << value;
     EXPECT_DOUBLE_EQ(batch->getRange(), 0.5);
 }
 

@@ -126,14 +126,19 @@ void setPlannerParameters(ob::Planner &planner, const std::vector<std::pair<std:
     {
         if (!planner.params().hasParam(key))
             throw ConfigurationError("planner " + planner.getName() + " has no parameter '" + key + "'");
-        // OMPL returns false for a value that is not a number ("abc"), and lets std::stod's
-        // out_of_range through for one too large for the parameter's type ("1e999").
+        // OMPL reads the value with its own conversions: a value that is not a number makes setParam
+        // return false or throw (std::runtime_error for a real parameter), and a number too large
+        // for the type ("1e999") throws std::out_of_range.
         bool accepted = false;
         try
         {
             accepted = planner.params().setParam(key, value);
         }
-        catch (const std::out_of_range &)
+        catch (const Error &)
+        {
+            throw;  // the planner's own refusal, with its reason
+        }
+        catch (const std::exception &)
         {
         }
         if (!accepted)
