@@ -46,6 +46,22 @@ struct CertifiedMotionValidator::EdgeSearch
 
 namespace
 {
+/** \brief Per-thread buffers of checkMotions (a validator is shared by planner threads). */
+struct Scratch
+{
+    std::vector<double> qa, qb;
+    std::vector<unsigned int> order;
+    std::vector<std::pair<unsigned int, unsigned int>> intervals;
+    std::vector<double> rows;
+    std::vector<std::uint8_t> verdicts;
+};
+
+Scratch &scratch()
+{
+    thread_local Scratch buffers;
+    return buffers;
+}
+
 /** \brief The most coarse intervals one edge is split into (an edge longer than margin x this gets
     intervals needing more than the margin). */
 constexpr double kMaxIntervals = 1 << 20;
@@ -106,17 +122,20 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
         w.finish(false);
         return;
     }
+    Scratch &scratchBuffers = scratch();
     const std::size_t dof = mapping_->numCoordinates();
-    std::vector<double> qa(dof), qb(dof);
-    mapping_->toConfiguration(edge.from, qa.data());
-    mapping_->toConfiguration(edge.to, qb.data());
+    scratchBuffers.qa.resize(dof);
+    scratchBuffers.qb.resize(dof);
+    mapping_->toConfiguration(edge.from, scratchBuffers.qa.data());
+    mapping_->toConfiguration(edge.to, scratchBuffers.qb.data());
     // Over an interval of length h, a component moves at most its sweep x h / 2 from where it is at
     // the midpoint, and two components close in by at most their pair's sweep x h / 2: a midpoint
     // clear by that much more than the padding, pair by pair, certifies the interval.
     const CollisionModel &model = checker_->collisionModel();
     w.componentSweeps.resize(model.numComponents());
     w.pairSweeps.resize(model.selfPairs.size());
-    bound_.sweeps(qa.data(), qb.data(), model.selfPairs, w.componentSweeps.data(), w.pairSweeps.data());
+    bound_.sweeps(scratchBuffers.qa.data(), scratchBuffers.qb.data(), model.selfPairs, w.componentSweeps.data(),
+                  w.pairSweeps.data());
     double fastest = 0.0;
     if (request_.checkEnvironment && !w.componentSweeps.empty())
         fastest = *std::max_element(w.componentSweeps.begin(), w.componentSweeps.end());
@@ -130,10 +149,8 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
     }
     const double coarse = std::clamp(std::ceil(0.5 * fastest / margin_), 1.0, kMaxIntervals);
     w.length = 1.0 / coarse;
-    std::vector<unsigned int> order;
-    std::vector<std::pair<unsigned int, unsigned int>> intervals;
-    detail::rakeOrder(static_cast<unsigned int>(coarse), order, intervals);
-    for (const unsigned int j : order)
+    detail::rakeOrder(static_cast<unsigned int>(coarse), scratchBuffers.order, scratchBuffers.intervals);
+    for (const unsigned int j : scratchBuffers.order)
         w.pending.push_back(static_cast<double>(j - 1) * w.length);
     // An edge sliding along an obstacle nearer than the margins resolve doubles its failing
     // intervals at every level; past this many midpoints it is given up as not certifiable.
@@ -210,14 +227,14 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
                                             double *lastValid) const
 {
     const bool wantFirst = lastValid != nullptr;
-    // The searches and buffers live for this call only (a validator is shared by planner threads):
-    // a few allocations per edge, against tens of microseconds of checks per edge, and no thread
-    // keeps the memory of the largest batch it ever decided.
-    std::vector<EdgeSearch> searches(n);
+    // Searches are reused per thread: their vectors keep their capacity between calls.
+    thread_local std::vector<std::unique_ptr<EdgeSearch>> pool;
+    while (pool.size() < n)
+        pool.push_back(std::make_unique<EdgeSearch>());
     for (std::size_t i = 0; i < n; ++i)
-        start(edges[i], searches[i]);
-    std::vector<double> rows;
-    std::vector<std::uint8_t> verdicts;
+        start(edges[i], *pool[i]);
+
+    Scratch &w = scratch();
     const CollisionModel &model = checker_->collisionModel();
     const std::size_t components = model.numComponents();
     const std::size_t selfPairs = model.selfPairs.size();
@@ -228,9 +245,9 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         open.clear();
         for (std::size_t i = 0; i < n; ++i)
         {
-            nextBatch(searches[i], wantFirst);
-            if (!searches[i].batch.empty())
-                open.push_back(&searches[i]);
+            nextBatch(*pool[i], wantFirst);
+            if (!pool[i]->batch.empty())
+                open.push_back(pool[i].get());
         }
         if (open.empty())
             break;
@@ -258,9 +275,9 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
             }
         CollisionRequest margin = request_;
         margin.pairPadding = std::move(extra);
-        midpointRows(open, false, rows);
-        verdicts.resize(count);
-        checker_->check(rows.data(), count, verdicts.data(), margin);
+        midpointRows(open, false, w.rows);
+        w.verdicts.resize(count);
+        checker_->check(w.rows.data(), count, w.verdicts.data(), margin);
         states_.fetch_add(count, std::memory_order_relaxed);
 
         // Nearer than the margin: checked at the padding itself, where a collision ends the search.
@@ -270,21 +287,21 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         {
             search->close.clear();
             for (const double start : search->batch)
-                if (!verdicts[row++])
+                if (!w.verdicts[row++])
                     search->close.push_back(start);
             closeCount += search->close.size();
         }
         if (closeCount == 0)
             continue;
-        midpointRows(open, true, rows);
-        verdicts.resize(closeCount);
-        checker_->check(rows.data(), closeCount, verdicts.data(), request_);
+        midpointRows(open, true, w.rows);
+        w.verdicts.resize(closeCount);
+        checker_->check(w.rows.data(), closeCount, w.verdicts.data(), request_);
         states_.fetch_add(closeCount, std::memory_order_relaxed);
         row = 0;
         for (EdgeSearch *search : open)
             for (const double start : search->close)
             {
-                if (verdicts[row++])
+                if (w.verdicts[row++])
                     search->failed.push_back(start);
                 else if (!search->finished)
                 {
@@ -296,10 +313,22 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
     }
     for (std::size_t i = 0; i < n; ++i)
     {
-        valid[i] = searches[i].accepted ? 1 : 0;
+        valid[i] = pool[i]->accepted ? 1 : 0;
         if (lastValid)
-            lastValid[i] = searches[i].prefix;
-        detail::countMotion(valid_, invalid_, searches[i].accepted);
+            lastValid[i] = pool[i]->prefix;
+        detail::countMotion(valid_, invalid_, pool[i]->accepted);
     }
+    // Keep what a planner's next batch needs, not what the largest batch ever needed.
+    if (pool.size() > detail::kKeptEdges)
+        pool.resize(detail::kKeptEdges);
+    for (const auto &search : pool)
+        for (std::vector<double> *buffer : {&search->componentSweeps, &search->pairSweeps, &search->pending,
+                                            &search->failed, &search->batch, &search->close})
+            detail::releaseIfLarge(*buffer);
+    for (std::vector<double> *buffer : {&w.qa, &w.qb, &w.rows})
+        detail::releaseIfLarge(*buffer);
+    detail::releaseIfLarge(w.order);
+    detail::releaseIfLarge(w.intervals);
+    detail::releaseIfLarge(w.verdicts);
 }
 }  // namespace rastercheck::ompl

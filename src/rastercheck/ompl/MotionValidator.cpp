@@ -25,6 +25,24 @@ struct MotionValidator::EdgeScan
     std::vector<unsigned int> batch;
 };
 
+namespace
+{
+/** \brief Per-thread buffers of checkMotions (a validator is shared by planner threads). */
+struct Scratch
+{
+    std::vector<std::pair<unsigned int, unsigned int>> intervals;
+    std::vector<std::pair<std::size_t, unsigned int>> inBounds;  ///< (scan, index) of each checked row
+    std::vector<double> rows;                                    ///< inBounds.size() x dof
+    std::vector<std::uint8_t> verdicts;
+};
+
+Scratch &scratch()
+{
+    thread_local Scratch buffers;
+    return buffers;
+}
+}  // namespace
+
 MotionValidator::MotionValidator(const ob::SpaceInformationPtr &si, StateMappingConstPtr mapping,
                                  CheckerConstPtr checker, const CollisionRequest &request, unsigned int rakeWidth)
     : BatchMotionValidator(si),
@@ -69,19 +87,17 @@ void MotionValidator::nextBatch(EdgeScan &scan, bool wantFirst) const
 void MotionValidator::checkMotions(const Edge *edges, std::size_t n, std::uint8_t *valid, double *lastValid) const
 {
     const bool wantFirst = lastValid != nullptr;
-    // The scans and buffers live for this call only (a validator is shared by planner threads), so
-    // no thread keeps the memory of the largest batch it ever decided.
-    std::vector<EdgeScan> scans(n);
-    std::vector<std::pair<unsigned int, unsigned int>> intervals;
-    std::vector<std::pair<std::size_t, unsigned int>> inBounds;  // (scan, index) of each checked row
-    std::vector<double> rows;                                    // inBounds.size() x dof
-    std::vector<std::uint8_t> verdicts;
+    Scratch &w = scratch();
+    // Scans are reused per thread: their vectors keep their capacity between calls.
+    thread_local std::vector<std::unique_ptr<EdgeScan>> pool;
+    while (pool.size() < n)
+        pool.push_back(std::make_unique<EdgeScan>());
     for (std::size_t i = 0; i < n; ++i)
     {
-        EdgeScan &scan = scans[i];
+        EdgeScan &scan = *pool[i];
         scan.edge = edges[i];
         scan.nd = std::max(1u, space_->validSegmentCount(edges[i].from, edges[i].to));
-        detail::rakeOrder(scan.nd, scan.order, intervals);
+        detail::rakeOrder(scan.nd, scan.order, w.intervals);
         scan.next = 0;
         scan.width = rakeWidth_;
         scan.found = 0;
@@ -91,12 +107,12 @@ void MotionValidator::checkMotions(const Edge *edges, std::size_t n, std::uint8_
     ob::State *test = si_->allocState();
     for (;;)
     {
-        inBounds.clear();
-        rows.clear();
+        w.inBounds.clear();
+        w.rows.clear();
         std::size_t batched = 0;
         for (std::size_t i = 0; i < n; ++i)
         {
-            EdgeScan &scan = scans[i];
+            EdgeScan &scan = *pool[i];
             nextBatch(scan, wantFirst);
             batched += scan.batch.size();
             for (const unsigned int j : scan.batch)
@@ -113,22 +129,22 @@ void MotionValidator::checkMotions(const Edge *edges, std::size_t n, std::uint8_
                     scan.found = scan.found == 0 ? j : std::min(scan.found, j);
                     continue;
                 }
-                rows.resize(rows.size() + dof);
-                mapping_->toConfiguration(state, rows.data() + rows.size() - dof);
-                inBounds.emplace_back(i, j);
+                w.rows.resize(w.rows.size() + dof);
+                mapping_->toConfiguration(state, w.rows.data() + w.rows.size() - dof);
+                w.inBounds.emplace_back(i, j);
             }
         }
         if (batched == 0)
             break;
-        verdicts.resize(inBounds.size());
-        if (!inBounds.empty())
-            checker_->check(rows.data(), inBounds.size(), verdicts.data(), request_);
+        w.verdicts.resize(w.inBounds.size());
+        if (!w.inBounds.empty())
+            checker_->check(w.rows.data(), w.inBounds.size(), w.verdicts.data(), request_);
         states_.fetch_add(batched, std::memory_order_relaxed);
-        for (std::size_t k = 0; k < inBounds.size(); ++k)
-            if (!verdicts[k])
+        for (std::size_t k = 0; k < w.inBounds.size(); ++k)
+            if (!w.verdicts[k])
             {
-                EdgeScan &scan = scans[inBounds[k].first];
-                const unsigned int j = inBounds[k].second;
+                EdgeScan &scan = *pool[w.inBounds[k].first];
+                const unsigned int j = w.inBounds[k].second;
                 scan.found = scan.found == 0 ? j : std::min(scan.found, j);
             }
     }
@@ -136,11 +152,23 @@ void MotionValidator::checkMotions(const Edge *edges, std::size_t n, std::uint8_
 
     for (std::size_t i = 0; i < n; ++i)
     {
-        const EdgeScan &scan = scans[i];
+        const EdgeScan &scan = *pool[i];
         valid[i] = scan.found == 0 ? 1 : 0;
         if (lastValid)
             lastValid[i] = scan.found == 0 ? 1.0 : static_cast<double>(scan.found - 1) / static_cast<double>(scan.nd);
         detail::countMotion(valid_, invalid_, scan.found == 0);
     }
+    // Keep what a planner's next batch needs, not what the largest batch ever needed.
+    if (pool.size() > detail::kKeptEdges)
+        pool.resize(detail::kKeptEdges);
+    for (const auto &scan : pool)
+    {
+        detail::releaseIfLarge(scan->order);
+        detail::releaseIfLarge(scan->batch);
+    }
+    detail::releaseIfLarge(w.intervals);
+    detail::releaseIfLarge(w.inBounds);
+    detail::releaseIfLarge(w.rows);
+    detail::releaseIfLarge(w.verdicts);
 }
 }  // namespace rastercheck::ompl
