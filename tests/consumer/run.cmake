@@ -4,6 +4,7 @@
 # CMakeLists.txt, each ```cpp block the file its first line names). The shared data (Panda) is
 # used when RASTERCHECK_DATA, else DATA_DIR, holds it; the crane and an OMPL.app problem written here need nothing else.
 # Arguments: BUILD_DIR, SOURCE_DIR (this folder), REPO_DIR, WORK_DIR, DATA_DIR, LAUNCHER (optional).
+cmake_minimum_required(VERSION 3.22)  # policies: while(TRUE), if(MATCHES) on variables
 file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
 
@@ -26,7 +27,7 @@ endif()
 function(build_project name source)
     run("${name}: configure" ${CMAKE_COMMAND} -S ${source} -B ${WORK_DIR}/${name}-build -DCMAKE_PREFIX_PATH=${prefix}
         -DCMAKE_BUILD_TYPE=Release ${launcher})
-    run("${name}: build" ${CMAKE_COMMAND} --build ${WORK_DIR}/${name}-build)
+    run("${name}: build" ${CMAKE_COMMAND} --build ${WORK_DIR}/${name}-build --parallel 2)
 endfunction()
 
 run("install" ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
