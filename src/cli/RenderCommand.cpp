@@ -27,10 +27,9 @@ struct RenderOptions
     std::string outDir;
     std::string view = "all";
     std::string trackedLink;
-    std::string mode = "safe";
+    CheckingArguments checking;
     int interpolate = 0;
     int ghosts = 6;
-    double padding = 0.0;
     double pixel = 0.0;
 };
 
@@ -110,9 +109,7 @@ int runRender(const RenderOptions &options)
     if (all || options.view == "raster")
     {
         const Checker checker(problem.robot, problem.scene);
-        CollisionRequest request;
-        request.mode = parseCollisionMode(options.mode);
-        request.padding = options.padding;
+        CollisionRequest request = options.checking.request();
         request.pixelSize = options.pixel;
         std::vector<std::uint8_t> valid(rows);
         std::vector<Contact> contacts(rows);
@@ -121,7 +118,8 @@ int runRender(const RenderOptions &options)
             if (!valid[r])
                 colliding = static_cast<int>(r);
         if (colliding < 0)
-            std::cout << "no state collides (" << rows << " checked, mode " << options.mode << "): no raster picture\n";
+            std::cout << "no state collides (" << rows << " checked, mode " << options.checking.mode
+                      << "): no raster picture\n";
         else
         {
             const Contact &contact = contacts[static_cast<std::size_t>(colliding)];
@@ -186,12 +184,7 @@ void addRenderCommand(CLI::App &app)
     command->add_option("--track", options->trackedLink, "link whose path is drawn (default: the last link)");
     command->add_option("--ghosts", options->ghosts, "path states drawn as grey silhouettes (default 6)")
         ->check(CLI::NonNegativeNumber);
-    command
-        ->add_option("--mode", options->mode,
-                     "how states are checked for the raster view: safe (default), raster, exact "
-                     "or conservative")
-        ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
-    command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
+    options->checking.addModeAndPadding(*command, "how states are checked for the raster view");
     command->add_option("--pixel", options->pixel, "raster pixel size in scene units (0 = automatic)")
         ->check(CLI::NonNegativeNumber);
     command->callback([options]() { throw CommandResult{runRender(*options)}; });
