@@ -12,6 +12,8 @@
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/io/StatesCsv.h"
+#include "rastercheck/ompl/Setup.h"
+#include "rastercheck/ompl/StateMapping.h"
 #include "render/RasterPicture.h"
 #include "render/SitePicture.h"
 
@@ -32,20 +34,6 @@ struct RenderOptions
     int ghosts = 6;
     double pixel = 0.0;
 };
-
-std::vector<double> requestState(const RobotModel &robot, const std::map<std::string, double> &joints,
-                                 const std::string &path, const std::string &element)
-{
-    std::vector<double> q(robot.numCoordinates());
-    for (std::size_t i = 0; i < q.size(); ++i)
-    {
-        const auto found = joints.find(robot.coordinateNames[i]);
-        if (found == joints.end())
-            throw InputError(path, element, "no value for coordinate '" + robot.coordinateNames[i] + "'");
-        q[i] = found->second;
-    }
-    return q;
-}
 
 /** \brief \a rows states with \a between states inserted linearly between consecutive ones. */
 std::vector<double> interpolate(const std::vector<double> &states, std::size_t dof, int between)
@@ -83,10 +71,11 @@ int runRender(const RenderOptions &options)
     }
     else
     {
-        const MotionPlanRequest request = loadMoveItRequest(options.requestPath);
-        states = requestState(robot, request.startJoints, options.requestPath, "start_state");
-        const std::vector<double> goal =
-            requestState(robot, request.goalJoints, options.requestPath, "goal_constraints[0]");
+        // The configurations `plan` and `view` make of the request (StateMapping: quaternions, mimic
+        // joints, coordinates the request leaves out at their neutral values).
+        const auto [start, goal] =
+            ompl::startAndGoal(ompl::StateMapping(problem.robot), loadMoveItRequest(options.requestPath));
+        states = start;
         states.insert(states.end(), goal.begin(), goal.end());
         source = options.requestPath;
     }

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <tuple>
 
 #include <CLI/CLI.hpp>
 
@@ -53,10 +54,8 @@ int runView(const ViewCommandOptions &options)
     {
         // Start and goal of a MoveIt request, and the straight line between them as the path (as
         // `rastercheck render --request` draws it).
-        const MotionPlanRequest request = loadMoveItRequest(options.requestPath);
-        const ompl::StateMapping mapping(problem.robot);
-        content.start = ompl::configurationFromJoints(mapping, request.startJoints, "start");
-        content.goal = ompl::configurationFromJoints(mapping, request.goalJoints, "goal");
+        std::tie(content.start, content.goal) =
+            ompl::startAndGoal(ompl::StateMapping(problem.robot), loadMoveItRequest(options.requestPath));
         content.path = content.start;
         content.path.insert(content.path.end(), content.goal.begin(), content.goal.end());
     }

@@ -127,10 +127,16 @@ void setStartAndGoal(og::SimpleSetup &setup, const OmplAppProblem &problem)
     setStartAndGoal(setup, problem.start, problem.goal);
 }
 
+std::pair<std::vector<double>, std::vector<double>> startAndGoal(const StateMapping &mapping,
+                                                                 const MotionPlanRequest &request)
+{
+    return {configurationFromJoints(mapping, request.startJoints, "start", UnknownJoints::Skip),
+            configurationFromJoints(mapping, request.goalJoints, "goal")};
+}
+
 void setStartAndGoal(og::SimpleSetup &setup, const MotionPlanRequest &request)
 {
-    const StateMapping &mapping = getStateValidityChecker(setup)->getStateMapping();
-    setStartAndGoal(setup, configurationFromJoints(mapping, request.startJoints, "start", UnknownJoints::Skip),
-                    configurationFromJoints(mapping, request.goalJoints, "goal"));
+    const auto [start, goal] = startAndGoal(getStateValidityChecker(setup)->getStateMapping(), request);
+    setStartAndGoal(setup, start, goal);
 }
 }  // namespace rastercheck::ompl

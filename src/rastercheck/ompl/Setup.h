@@ -2,6 +2,7 @@
 
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <ompl/geometric/SimpleSetup.h>
@@ -89,13 +90,18 @@ enum class UnknownJoints
 std::vector<double> configurationFromJoints(const StateMapping &mapping, const std::map<std::string, double> &joints,
                                             const std::string &what, UnknownJoints unknown = UnknownJoints::Error);
 
+/** \brief Start (start_state.joint_state) and goal (goal_constraints[0] joint positions) of a MoveIt
+    request as configurations in robot coordinate order: coordinates the request does not name keep
+    their neutral (or held) values; start joints the robot lacks are skipped with a warning
+    (UnknownJoints::Skip); goal joints it lacks are a ConfigurationError. What setStartAndGoal sets,
+    and what `rastercheck view` and `render` show for a request. */
+std::pair<std::vector<double>, std::vector<double>> startAndGoal(const StateMapping &mapping,
+                                                                 const MotionPlanRequest &request);
+
 /** \brief Start and goal of an OMPL.app problem (its start / goal configurations). */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
 
-/** \brief Start (start_state.joint_state) and goal (goal_constraints[0] joint positions) of a MoveIt
-    request; coordinates a request does not name keep their neutral (or held) values. Start joints
-    the robot lacks are skipped with a warning (UnknownJoints::Skip); goal joints it lacks are a
-    ConfigurationError. */
+/** \brief Start and goal of a MoveIt request (startAndGoal). */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const MotionPlanRequest &request);
 
 /** \brief Start and goal from two configurations (robot coordinate order). */
