@@ -402,15 +402,18 @@ bool deviceUsable(std::string &description)
 {
     int count = 0;
     cudaError_t status = cudaGetDeviceCount(&count);
-    if (status != cudaSuccess)
+    // Without a driver the runtime says "CUDA driver version is insufficient for CUDA runtime
+    // version", which reads as an outdated driver; the plain fact is that there is none.
+    if (status == cudaErrorInsufficientDriver || status == cudaErrorNoDevice || (status == cudaSuccess && count == 0))
     {
-        description = std::string("no CUDA device: ") + cudaGetErrorString(status);
+        description = "no NVIDIA driver or device found";
         cudaGetLastError();  // clear the sticky error state
         return false;
     }
-    if (count == 0)
+    if (status != cudaSuccess)
     {
-        description = "no CUDA device";
+        description = std::string("CUDA unusable: ") + cudaGetErrorString(status);
+        cudaGetLastError();
         return false;
     }
     cudaDeviceProp properties{};

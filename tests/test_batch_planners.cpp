@@ -346,6 +346,12 @@ TEST(BatchRRTConnect, ParametersAndRegistry)
     EXPECT_TRUE(batch->getShortcut());
     EXPECT_THROW(rco::setPlannerParameters(*planner, {{"batch_size", "0"}}), rc::ConfigurationError);
     EXPECT_EQ(batch->getBatchSize(), 16u);
+    // Values OMPL cannot read: not a number, a number too large for the parameter's type.
+    for (const char *value : {"abc", "1e999"})
+        EXPECT_THROW(rco::setPlannerParameters(*planner, {{"range", value}}), rc::ConfigurationError) << value;
+    for (const char *value : {"abc", "99999999999999999999"})
+        EXPECT_THROW(rco::setPlannerParameters(*planner, {{"batch_size", value}}), rc::ConfigurationError) << value;
+    EXPECT_DOUBLE_EQ(batch->getRange(), 0.5);
 }
 
 TEST(BatchRRTConnect, SeveralPlannersShareOneChecker)
@@ -463,4 +469,19 @@ TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Exact), "certified");
     // ... except in raster mode, which cannot certify: batched at the space's resolution.
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Raster), "batched");
+
+    // Any other reason certified edges cannot be made is an error, not a quiet fall back to
+    // batched edges: here rastercheck's validity checker on a space information of another space.
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true));
+    const auto other = std::make_shared<ob::SpaceInformation>(std::make_shared<ob::RealVectorStateSpace>(3));
+    other->setStateValidityChecker(setup->getStateValidityChecker());
+    try
+    {
+        rcp::EdgeChecker edges(other);
+        ADD_FAILURE() << "edges " << edges.description() << " on a foreign space";
+    }
+    catch (const rc::ConfigurationError &error)
+    {
+        EXPECT_EQ(std::string(error.what()).rfind("CertifiedMotionValidator: ", 0), 0u) << error.what();
+    }
 }

@@ -9,6 +9,7 @@
 #include "BlindSpots.h"
 #include "Reference.h"
 #include "TestSupport.h"
+#include "rastercheck/BuildConfig.h"
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/core/Error.h"
@@ -492,6 +493,9 @@ TEST(Checker, WithoutAUsableDeviceTheCudaChoiceFallsBackToTheCpuWithAWarning)
         GTEST_SKIP() << "a CUDA device is usable here (" << checker.backendName() << "): nothing falls back";
     ASSERT_EQ(warnings.size(), 1u);
     EXPECT_NE(warnings[0].find("using the CPU backend"), std::string::npos) << warnings[0];
+    // Said plainly: not the CUDA runtime's "driver version is insufficient" for a missing driver.
+    EXPECT_EQ(warnings[0], RASTERCHECK_WITH_CUDA ? "no NVIDIA driver or device found; using the CPU backend"
+                                                 : "this build has no CUDA backend; using the CPU backend");
     // Decisions still come, from the CPU backend.
     EXPECT_FALSE(checker.isValid(at(0, 0, 0)));
     EXPECT_TRUE(checker.isValid(at(0, 0, 1)));

@@ -1,6 +1,5 @@
 // The exact oracle over whole meshes: BVH structure, surfacesWithin against brute force and FCL,
 // point-in-solid parity (grazing rays included) and containment in solidsOverlap.
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -807,49 +806,6 @@ TEST(SolidsOverlap, ContainmentNeedsAClosedContainer)
     outside.translation() = Vec(3, 0, 0);
     EXPECT_FALSE(rc::solidsOverlap(smallBvh, outside, true, bigBvh, identity, true, 0.0));
     EXPECT_FALSE(rc::solidsOverlap(bigBvh, identity, true, smallBvh, outside, true, 0.0));
-}
-
-TEST(SurfacesWithin, TimingOfTwoThousandTriangleQueries)
-{
-    // Not asserted: a sanity print for the hot path, with FCL on the same poses for scale.
-    const rc::Mesh a = sphereMesh(1.0, 3), b = sphereMesh(0.8, 3);  // 1280 triangles each
-    const rc::MeshBvh bvhA(a), bvhB(b);
-    const auto modelA = fclModel(a), modelB = fclModel(b);
-    std::mt19937_64 rng(99);
-    std::vector<std::pair<Eigen::Isometry3d, Eigen::Isometry3d>> poses;
-    for (int i = 0; i < 2000; ++i)
-        poses.emplace_back(randomPose(rng, 1.2), randomPose(rng, 1.2));
-    using Clock = std::chrono::steady_clock;
-    for (double padding : {0.0, 0.02})
-    {
-        int hits = 0;
-        double ours[2] = {0, 0};
-        int counts[2] = {0, 0};
-        for (const auto &[poseA, poseB] : poses)
-        {
-            const auto start = Clock::now();
-            const bool hit = rc::surfacesWithin(bvhA, poseA, bvhB, poseB, padding);
-            ours[hit] += std::chrono::duration<double, std::micro>(Clock::now() - start).count();
-            ++counts[hit];
-            hits += hit;
-        }
-        std::printf(
-            "[ info     ] surfacesWithin 1280 x 1280 triangles, padding %.2f: %.1f us per touching pose "
-            "(%d), %.1f us per separated pose (%d)\n",
-            padding, ours[1] / std::max(1, counts[1]), counts[1], ours[0] / std::max(1, counts[0]), counts[0]);
-    }
-    const auto start = Clock::now();
-    int fclHits = 0;
-    for (const auto &[poseA, poseB] : poses)
-    {
-        const fcl::CollisionObjectd objectA(modelA, poseA), objectB(modelB, poseB);
-        fcl::CollisionRequestd request;
-        fcl::CollisionResultd result;
-        fcl::collide(&objectA, &objectB, request, result);
-        fclHits += result.isCollision();
-    }
-    std::printf("[ info     ] fcl::collide (OBBRSS) on the same poses: %.1f us per pose (%d touching)\n",
-                std::chrono::duration<double, std::micro>(Clock::now() - start).count() / poses.size(), fclHits);
 }
 
 TEST(SurfacesWithin, TreesTooLargeForThePlacedNodeCacheGiveTheSameAnswers)

@@ -229,6 +229,45 @@ TEST(RenderCli, RequestStraightLineHitsTank1)
     }
 }
 
+TEST(RenderCli, ARequestMeansWhatPlanAndViewMakeOfIt)
+{
+    // The lift's request without the base joints (their neutral value is the request's 0) and
+    // with a start joint the crane lacks: the coordinates `plan` and `view` make of it (StateMapping:
+    // unnamed coordinates neutral, unknown start joints skipped), so the same first collision.
+    const std::string dir = rc::test::makeTempDir("render_cli_request");
+    const std::string partial = rc::test::writeFile(dir + "/partial.yaml", R"(start_state:
+  joint_state:
+    name: [slew, luff, telescope_1, hoist, outrigger]
+    position: [-1.570796326795, 0.834431313317, 5, 15.800257730247, 0]
+goal_constraints:
+  - joint_constraints:
+      - joint_name: slew
+        position: 1.570796326795
+      - joint_name: luff
+        position: 0.71942438464
+      - joint_name: telescope_1
+        position: 8.5
+      - joint_name: hoist
+        position: 20.933726302844
+)");
+    auto firstCollision = [&](const std::string &request)
+    {
+        int status = -1;
+        const std::string output =
+            runCli("render --robot " + rc::test::sourcePath("robots/crane/crane.urdf") + " --srdf " +
+                       rc::test::sourcePath("robots/crane/crane.srdf") + " --scene " +
+                       rc::test::sourcePath("robots/sites/plant.yaml") + " --request " + request +
+                       " --interpolate 49 --view raster --out-dir " + dir,
+                   status);
+        EXPECT_EQ(status, 0) << output;
+        const std::size_t line = output.find("first colliding state: row");
+        return line == std::string::npos ? output : output.substr(line, output.find('\n', line) - line);
+    };
+    const std::string full = firstCollision(rc::test::sourcePath("robots/sites/plant_lift.yaml"));
+    EXPECT_NE(full.find("load vs object 'tank_1'"), std::string::npos) << full;
+    EXPECT_EQ(firstCollision(partial), full);
+}
+
 TEST(RenderCli, ValidPathHasNoRasterPicture)
 {
     const std::string dir = rc::test::makeTempDir("render_cli_valid");

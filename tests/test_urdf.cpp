@@ -217,3 +217,23 @@ TEST(Urdf, CollisionElementsMergeWithOriginsScaleAndPackagePaths)
     EXPECT_EQ(rc::loadUrdf(path)->numComponents(), 1u);
     unsetenv("RASTERCHECK_PACKAGE_PATH");
 }
+
+TEST(Urdf, AnOpenMeshIsReportedOncePerFileAndProcess)
+{
+    // A cube with one face missing is open; a program that loads the same robot three times (a
+    // checker, a planner's setup, a picture) reads the notice once. Another file says it again.
+    const std::string folder = makeTempDir("urdf");
+    const std::string cube = kCubeObj;
+    writeFile(folder + "/open.obj", cube.substr(0, cube.rfind("\nf ") + 1));
+    const std::string robot = urdfRobot(urdfLink("a", rc::test::urdfCollisionMesh("open.obj")));
+    const std::string first = writeFile(folder + "/first.urdf", robot);
+    const std::string second = writeFile(folder + "/second.urdf", robot);
+    rc::test::LogCapture log;
+    for (int k = 0; k < 3; ++k)
+        EXPECT_FALSE(rc::loadUrdf(first)->components[0].topology.closed);
+    ASSERT_EQ(log.notices.size(), 1u) << ::testing::PrintToString(log.notices);
+    EXPECT_NE(log.notices[0].find(first + ": link 'a' collision geometry is open"), std::string::npos) << log.notices[0];
+    rc::loadUrdf(second);
+    ASSERT_EQ(log.notices.size(), 2u);
+    EXPECT_NE(log.notices[1].find(second + ": link 'a'"), std::string::npos) << log.notices[1];
+}

@@ -24,10 +24,7 @@ struct CheckOptions
     ProblemArguments problem;
     std::string statesPath;
     std::string outPath;
-    std::string mode = "safe";
-    std::string backend = "auto";
-    int threads = 0;
-    double padding = 0.0;
+    CheckingArguments checking;
     double pixel = 0.0;
     std::size_t deviceMemoryMiB = 0;
 };
@@ -57,19 +54,15 @@ void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<
 int runCheck(const CheckOptions &options)
 {
     // Before loading anything: CLI11 lets "nan" and "inf" through its range checks.
-    if (!(std::isfinite(options.padding) && options.padding >= 0))
+    if (!(std::isfinite(options.checking.padding) && options.checking.padding >= 0))
         throw ConfigurationError("--padding must be a finite number >= 0");
     if (!(std::isfinite(options.pixel) && options.pixel >= 0))
         throw ConfigurationError("--pixel must be a finite number >= 0");
     const Problem problem = loadProblem(options.problem.source());
-    CheckerOptions checkerOptions;
-    checkerOptions.backend = parseBackendChoice(options.backend);
-    checkerOptions.threads = options.threads;
+    CheckerOptions checkerOptions = options.checking.checker();
     checkerOptions.deviceMemoryLimit = options.deviceMemoryMiB << 20;
     const Checker checker(problem.robot, problem.scene, checkerOptions);
-    CollisionRequest request;
-    request.mode = parseCollisionMode(options.mode);
-    request.padding = options.padding;
+    CollisionRequest request = options.checking.request();
     request.pixelSize = options.pixel;
 
     const StatesTable states = readStatesCsv(options.statesPath, problem.robot->coordinateNames);
@@ -89,7 +82,7 @@ int runCheck(const CheckOptions &options)
     std::size_t invalid = 0;
     for (std::uint8_t v : valid)
         invalid += v == 0;
-    std::cerr << "rastercheck: backend " << checker.backendName() << ", mode " << options.mode << '\n';
+    std::cerr << "rastercheck: backend " << checker.backendName() << ", mode " << options.checking.mode << '\n';
     std::cout << "states=" << states.rows << " invalid=" << invalid << " seconds=" << seconds
               << " states_per_s=" << (seconds > 0 ? static_cast<double>(states.rows) / seconds : 0.0) << std::endl;
     return 0;
@@ -105,18 +98,12 @@ void addCheckCommand(CLI::App &app)
                         "CSV with a header row: the robot's coordinate names (x,y,z,qx,qy,qz,qw for rigid bodies)")
         ->required();
     command->add_option("--out", options->outPath, "verdicts CSV: valid,component,object,triangle,x,y,z");
-    command
-        ->add_option("--mode", options->mode,
-                     "safe (default, no false negatives), raster, exact, or conservative (proofs only: no false "
-                     "negatives, some false alarms)")
-        ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
-    command->add_option("--backend", options->backend, "auto, cpu or cuda")->check(CLI::IsMember({"auto", "cpu", "cuda"}));
-    command->add_option("--threads", options->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber);
+    options->checking.addModeAndPadding(*command, "how the states are checked");
+    options->checking.addBackendAndThreads(*command, "worker threads");
     command->add_option("--device-memory", options->deviceMemoryMiB,
                         "MiB of GPU memory the batch buffers may take (0 = half the free memory); a batch that "
                         "needs more runs in several passes, with the same verdicts")
         ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 30));
-    command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
     command->add_option("--pixel", options->pixel, "raster pixel size in scene units (0 = automatic)")
         ->check(CLI::NonNegativeNumber);
     command->callback([options]() { throw CommandResult{runCheck(*options)}; });

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "rastercheck/collision/Checker.h"
 #include "rastercheck/io/Problem.h"
 
 namespace rastercheck::cli
@@ -28,6 +29,25 @@ struct ProblemArguments
 
     void addTo(CLI::App &command);
     ProblemSource source() const;
+};
+
+/** \brief The checking options several subcommands share, each declared here once: --mode and
+    --padding (check, plan, render, view), --backend and --threads (check, plan). */
+struct CheckingArguments
+{
+    std::string mode = "safe";
+    double padding = 0.0;
+    std::string backend = "auto";
+    int threads = 0;
+
+    /** \brief Declares --mode (\a what: what the mode decides in this command) and --padding. */
+    void addModeAndPadding(CLI::App &command, const std::string &what);
+    /** \brief Declares --backend and --threads (\a threads: what the threads run). */
+    void addBackendAndThreads(CLI::App &command, const std::string &threads);
+    /** \brief A request of this mode and padding. */
+    CollisionRequest request() const;
+    /** \brief Checker options of this backend and thread count. */
+    CheckerOptions checker() const;
 };
 
 /** \brief `rastercheck info <urdf | problem.cfg | scene.yaml | request.yaml>`: what the loaders

@@ -45,10 +45,7 @@ struct PlanOptions
     int runs = 0;
     double timeLimit = 0.0;
     double memoryLimit = 0.0;
-    std::string backend = "auto";
-    std::string mode = "safe";
-    int threads = 0;
-    double padding = 0.0;
+    CheckingArguments checking;
     double segmentFraction = 0.01;
     std::string edges = "auto";
     double margin = 0.0;
@@ -139,15 +136,13 @@ int runPlan(const PlanOptions &options)
     const Problem problem = loadProblem(options.problem.source());
 
     ompl::SetupOptions setupOptions;
-    setupOptions.checker.backend = parseBackendChoice(options.backend);
-    setupOptions.checker.threads = options.threads;
-    setupOptions.request.mode = parseCollisionMode(options.mode);
-    setupOptions.request.padding = options.padding;
+    setupOptions.checker = options.checking.checker();
+    setupOptions.request = options.checking.request();
     setupOptions.longestValidSegmentFraction = options.segmentFraction;
     setupOptions.edges = ompl::parseEdgeChecking(options.edges);
     // What "auto" resolves to (certified edges unless raster mode cannot certify), for the log and messages.
     const std::string edges = options.edges != "auto"    ? options.edges
-                              : options.mode == "raster" ? "batched"
+                              : options.checking.mode == "raster" ? "batched"
                                                          : "certified";
     setupOptions.certified.margin = options.margin;
     for (const std::string &text : options.held)
@@ -216,7 +211,7 @@ int runPlan(const PlanOptions &options)
         benchmark.addPlanner(planner);
         labels.push_back(name);
     }
-    benchmark.addExperimentParameter("collision_mode", "ENUM", options.mode);
+    benchmark.addExperimentParameter("collision_mode", "ENUM", options.checking.mode);
     benchmark.addExperimentParameter("recheck_factor", "INTEGER", std::to_string(options.recheckFactor));
     benchmark.addExperimentParameter("edge_checking", "ENUM", edges);
 
@@ -263,7 +258,7 @@ int runPlan(const PlanOptions &options)
 
     ot::Benchmark::Request request(timeLimit, memoryLimit, static_cast<unsigned int>(runs), 0.05, false, false,
                                    !options.noSimplify);
-    std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.mode << ", "
+    std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.checking.mode << ", "
               << edges << " edges, " << runs << " run(s) of " << timeLimit << " s per planner\n";
     benchmark.benchmark(request);
     if (!options.logPath.empty() && !benchmark.saveResultsToFile(options.logPath.c_str()))
@@ -337,15 +332,8 @@ void addPlanCommand(CLI::App &app)
         ->check(CLI::PositiveNumber);
     command->add_option("--memory-limit", options->memoryLimit, "MB per run (default: the .cfg's mem_limit, else 4096)")
         ->check(CLI::PositiveNumber);
-    command->add_option("--backend", options->backend, "auto, cpu or cuda")
-        ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
-    command
-        ->add_option("--mode", options->mode,
-                     "collision mode while planning: safe (default), raster, exact or conservative")
-        ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
-    command->add_option("--threads", options->threads, "worker threads of batch checks (0 = all cores)")
-        ->check(CLI::NonNegativeNumber);
-    command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
+    options->checking.addBackendAndThreads(*command, "worker threads of batch checks");
+    options->checking.addModeAndPadding(*command, "collision mode while planning");
     command
         ->add_option("--segment-fraction", options->segmentFraction,
                      "longest valid segment, as a fraction of the space's extent (OMPL default 0.01)")

@@ -12,6 +12,8 @@
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/io/StatesCsv.h"
+#include "rastercheck/ompl/Setup.h"
+#include "rastercheck/ompl/StateMapping.h"
 #include "render/RasterPicture.h"
 #include "render/SitePicture.h"
 
@@ -27,26 +29,11 @@ struct RenderOptions
     std::string outDir;
     std::string view = "all";
     std::string trackedLink;
-    std::string mode = "safe";
+    CheckingArguments checking;
     int interpolate = 0;
     int ghosts = 6;
-    double padding = 0.0;
     double pixel = 0.0;
 };
-
-std::vector<double> requestState(const RobotModel &robot, const std::map<std::string, double> &joints,
-                                 const std::string &path, const std::string &element)
-{
-    std::vector<double> q(robot.numCoordinates());
-    for (std::size_t i = 0; i < q.size(); ++i)
-    {
-        const auto found = joints.find(robot.coordinateNames[i]);
-        if (found == joints.end())
-            throw InputError(path, element, "no value for coordinate '" + robot.coordinateNames[i] + "'");
-        q[i] = found->second;
-    }
-    return q;
-}
 
 /** \brief \a rows states with \a between states inserted linearly between consecutive ones. */
 std::vector<double> interpolate(const std::vector<double> &states, std::size_t dof, int between)
@@ -84,10 +71,11 @@ int runRender(const RenderOptions &options)
     }
     else
     {
-        const MotionPlanRequest request = loadMoveItRequest(options.requestPath);
-        states = requestState(robot, request.startJoints, options.requestPath, "start_state");
-        const std::vector<double> goal =
-            requestState(robot, request.goalJoints, options.requestPath, "goal_constraints[0]");
+        // The configurations `plan` and `view` make of the request (StateMapping: quaternions, mimic
+        // joints, coordinates the request leaves out at their neutral values).
+        const auto [start, goal] =
+            ompl::startAndGoal(ompl::StateMapping(problem.robot), loadMoveItRequest(options.requestPath));
+        states = start;
         states.insert(states.end(), goal.begin(), goal.end());
         source = options.requestPath;
     }
@@ -110,9 +98,7 @@ int runRender(const RenderOptions &options)
     if (all || options.view == "raster")
     {
         const Checker checker(problem.robot, problem.scene);
-        CollisionRequest request;
-        request.mode = parseCollisionMode(options.mode);
-        request.padding = options.padding;
+        CollisionRequest request = options.checking.request();
         request.pixelSize = options.pixel;
         std::vector<std::uint8_t> valid(rows);
         std::vector<Contact> contacts(rows);
@@ -121,7 +107,8 @@ int runRender(const RenderOptions &options)
             if (!valid[r])
                 colliding = static_cast<int>(r);
         if (colliding < 0)
-            std::cout << "no state collides (" << rows << " checked, mode " << options.mode << "): no raster picture\n";
+            std::cout << "no state collides (" << rows << " checked, mode " << options.checking.mode
+                      << "): no raster picture\n";
         else
         {
             const Contact &contact = contacts[static_cast<std::size_t>(colliding)];
@@ -186,12 +173,7 @@ void addRenderCommand(CLI::App &app)
     command->add_option("--track", options->trackedLink, "link whose path is drawn (default: the last link)");
     command->add_option("--ghosts", options->ghosts, "path states drawn as grey silhouettes (default 6)")
         ->check(CLI::NonNegativeNumber);
-    command
-        ->add_option("--mode", options->mode,
-                     "how states are checked for the raster view: safe (default), raster, exact "
-                     "or conservative")
-        ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
-    command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
+    options->checking.addModeAndPadding(*command, "how states are checked for the raster view");
     command->add_option("--pixel", options->pixel, "raster pixel size in scene units (0 = automatic)")
         ->check(CLI::NonNegativeNumber);
     command->callback([options]() { throw CommandResult{runRender(*options)}; });

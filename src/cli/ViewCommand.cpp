@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <tuple>
 
 #include <CLI/CLI.hpp>
 
@@ -26,8 +27,7 @@ struct ViewCommandOptions
     std::string requestPath;
     std::string host = "127.0.0.1";
     int port = 8080;
-    double padding = 0.0;
-    std::string mode = "safe";
+    CheckingArguments checking;
 };
 
 bool isLoopback(const std::string &host)
@@ -54,10 +54,8 @@ int runView(const ViewCommandOptions &options)
     {
         // Start and goal of a MoveIt request, and the straight line between them as the path (as
         // `rastercheck render --request` draws it).
-        const MotionPlanRequest request = loadMoveItRequest(options.requestPath);
-        const ompl::StateMapping mapping(problem.robot);
-        content.start = ompl::configurationFromJoints(mapping, request.startJoints, "start");
-        content.goal = ompl::configurationFromJoints(mapping, request.goalJoints, "goal");
+        std::tie(content.start, content.goal) =
+            ompl::startAndGoal(ompl::StateMapping(problem.robot), loadMoveItRequest(options.requestPath));
         content.path = content.start;
         content.path.insert(content.path.end(), content.goal.begin(), content.goal.end());
     }
@@ -74,8 +72,7 @@ int runView(const ViewCommandOptions &options)
     // The running binary, not argv[0] (which may be relative or found through PATH).
     serverOptions.webDir = view::findWebDir("/proc/self/exe");
     serverOptions.threeDir = view::findThreeDir();
-    serverOptions.request.mode = parseCollisionMode(options.mode);
-    serverOptions.request.padding = options.padding;
+    serverOptions.request = options.checking.request();
     view::ViewServer server(problem, std::move(content), serverOptions);
     server.bind();
     if (!isLoopback(options.host))
@@ -106,10 +103,7 @@ void addViewCommand(CLI::App &app)
     command->add_option("--host", options->host, "address to listen on (default 127.0.0.1: this machine only)");
     command->add_option("--port", options->port, "port (default 8080; 0 picks a free one)")
         ->check(CLI::Range(0, 65535));
-    command
-        ->add_option("--mode", options->mode, "how states are checked: safe (default), raster, exact or conservative")
-        ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
-    command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
+    options->checking.addModeAndPadding(*command, "how states are checked");
     command->callback([options]() { throw CommandResult{runView(*options)}; });
 }
 }  // namespace rastercheck::cli

@@ -5,6 +5,7 @@
 #include <exception>
 #include <functional>
 #include <map>
+#include <stdexcept>
 
 #include <ompl/geometric/planners/est/BiEST.h>
 #include <ompl/geometric/planners/est/EST.h>
@@ -126,15 +127,20 @@ void setPlannerParameters(ob::Planner &planner, const std::vector<std::pair<std:
     {
         if (!planner.params().hasParam(key))
             throw ConfigurationError("planner " + planner.getName() + " has no parameter '" + key + "'");
+        // OMPL reads the value with its own conversions: a value that is not a number makes setParam
+        // return false or throw (std::runtime_error for a real parameter), and a number too large
+        // for the type ("1e999") throws std::out_of_range.
         bool accepted = false;
         try
         {
             accepted = planner.params().setParam(key, value);
         }
-        catch (const std::exception &e)  // OMPL throws for a value that is not a number
+        catch (const Error &)
         {
-            throw ConfigurationError("planner " + planner.getName() + " rejected " + key + "=" + value + ": " +
-                                     e.what());
+            throw;  // the planner's own refusal, with its reason
+        }
+        catch (const std::exception &)
+        {
         }
         if (!accepted)
             throw ConfigurationError("planner " + planner.getName() + " rejected " + key + "=" + value);

@@ -87,9 +87,6 @@ public:
     unsigned int getCandidateCount() const { return candidates_; }
     unsigned int getRejectedCandidateCount() const { return rejectedCandidates_; }
     unsigned int getCutStateCount() const { return cutMotions_; }
-    /** \brief Lazy mode, the last solve: states checked on new edges, and along candidates' edges. */
-    std::uint64_t getLazyStateCount() const { return lazyStates_; }
-    std::uint64_t getRakedStateCount() const { return rakedStates_; }
 
 private:
     struct Motion;

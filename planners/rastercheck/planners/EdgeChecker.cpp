@@ -2,9 +2,9 @@
 
 #include "rastercheck/planners/Log.h"
 
-#include "rastercheck/core/Error.h"
 #include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/MotionValidator.h"
+#include "rastercheck/ompl/Setup.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
 
 namespace ob = ::ompl::base;
@@ -26,44 +26,33 @@ EdgeChecker::EdgeChecker(const ob::SpaceInformationPtr &si) : si_(si)
         description_ = "one at a time";
         return;
     }
-    try
+    // Only raster mode falls back (it cannot certify an edge); any other setup error is the caller's.
+    if (ompl::resolveEdgeChecking(ompl::EdgeChecking::Auto, states_->getRequest().mode) == ompl::EdgeChecking::Batched)
+    {
+        OMPL_LOG(WARN, "raster mode cannot certify an edge; edges are checked at the space's resolution instead");
+        owned_ = std::make_shared<ompl::MotionValidator>(si_, *states_);
+        description_ = "batched";
+    }
+    else
     {
         owned_ = std::make_shared<ompl::CertifiedMotionValidator>(si_, *states_);
         description_ = "certified";
     }
-    catch (const ConfigurationError &error)
-    {
-        OMPL_LOG(WARN, "%s; edges are checked at the space's resolution instead", error.what());
-        owned_ = std::make_shared<ompl::MotionValidator>(si_, *states_);
-        description_ = "batched";
-    }
     batch_ = owned_.get();
 }
 
-void EdgeChecker::check(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid,
-                        std::vector<double> *lastValid) const
+void EdgeChecker::check(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid) const
 {
     valid.assign(edges.size(), 0);
-    if (lastValid)
-        lastValid->assign(edges.size(), 0.0);
     if (edges.empty())
         return;
     if (batch_)
     {
-        batch_->checkMotions(edges.data(), edges.size(), valid.data(), lastValid ? lastValid->data() : nullptr);
+        batch_->checkMotions(edges.data(), edges.size(), valid.data());
         return;
     }
     for (std::size_t i = 0; i < edges.size(); ++i)
-    {
-        if (!lastValid)
-        {
-            valid[i] = si_->checkMotion(edges[i].from, edges[i].to) ? 1 : 0;
-            continue;
-        }
-        std::pair<ob::State *, double> last(nullptr, 0.0);
-        valid[i] = si_->checkMotion(edges[i].from, edges[i].to, last) ? 1 : 0;
-        (*lastValid)[i] = valid[i] ? 1.0 : last.second;
-    }
+        valid[i] = si_->checkMotion(edges[i].from, edges[i].to) ? 1 : 0;
 }
 
 void EdgeChecker::checkStates(const std::vector<const ob::State *> &states, std::vector<std::uint8_t> &valid) const

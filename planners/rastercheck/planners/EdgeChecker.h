@@ -23,10 +23,8 @@ class EdgeChecker
 public:
     explicit EdgeChecker(const ::ompl::base::SpaceInformationPtr &si);
 
-    /** \brief Decides \a edges: valid[i] = 1 when edge i is accepted. With \a lastValid, also the
-        fraction of each edge known valid (1 when accepted). */
-    void check(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid,
-               std::vector<double> *lastValid = nullptr) const;
+    /** \brief Decides \a edges: valid[i] = 1 when edge i is accepted. */
+    void check(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid) const;
 
     /** \brief Decides \a states alone (not the motions between them): valid[i] = 1 when
         SpaceInformation::isValid accepts states[i]. One Checker::check call when the validity

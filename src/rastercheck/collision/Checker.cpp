@@ -1,7 +1,6 @@
 #include "rastercheck/collision/Checker.h"
 
 #include <cmath>
-#include <mutex>
 #include <sstream>
 
 #include "rastercheck/BuildConfig.h"
@@ -76,11 +75,10 @@ Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOpt
         {
             const std::string notice = why + "; using the CPU backend";
             // Asked for CUDA: warn every time. Auto: say it once per process, not per checker.
-            static std::once_flag autoNotice;
             if (options.backend == BackendChoice::Cuda)
                 logWarning(notice);
             else
-                std::call_once(autoNotice, [&] { logInfo(notice); });
+                logOnce(LogLevel::Info, notice);
         }
     }
     if (!backend_)

@@ -160,9 +160,9 @@ public:
     /** \brief The convex separation cull's view of every solid: components first, then objects. */
     ConvexSolids convex;
 
-    /** \brief Raster pixel side used when a request gives none: 1/128 of the median diagonal of the
-        components' boxes (a few millimetres for an arm), so a typical link spans about a hundred
-        pixels. */
+    /** \brief Raster pixel side used when a request gives none: 1/32 of the median diagonal of the
+        components' boxes (about a centimetre for an arm), so a typical link's box spans about 32
+        pixels along its diagonal. */
     double defaultPixelSize = 0.0;
 
     /** \brief Per coordinate: 1 when bounds apply (continuous joints wrap and have none). */

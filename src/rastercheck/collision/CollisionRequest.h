@@ -63,7 +63,8 @@ struct PairPadding
     std::vector<double> self;
     /** \brief 1: one row for every state of a batch. n (the batch's size, Checker::check): row i for
         state i, so that one batch can hold states that need different paddings (the midpoints of
-        many edges, each with its own sweeps: BatchRRTConnect). */
+        many edges, each with its own sweeps: CertifiedMotionValidator::checkMotions, which the
+        batch planners call). */
     std::size_t rows = 1;
 };
 

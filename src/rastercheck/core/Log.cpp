@@ -2,6 +2,7 @@
 
 #include <iostream>
 #include <mutex>
+#include <set>
 
 namespace rastercheck
 {
@@ -17,6 +18,12 @@ LogHandler &handlerSlot()
 {
     static LogHandler handler;
     return handler;
+}
+
+std::set<std::string> &loggedOnce()
+{
+    static std::set<std::string> messages;
+    return messages;
 }
 }  // namespace
 
@@ -35,5 +42,15 @@ void logMessage(LogLevel level, const std::string &message)
         return;
     }
     std::cerr << "rastercheck: " << (level == LogLevel::Warning ? "warning: " : "") << message << '\n';
+}
+
+void logOnce(LogLevel level, const std::string &message)
+{
+    {
+        std::lock_guard<std::mutex> lock(logMutex());
+        if (!loggedOnce().insert(message).second)
+            return;
+    }
+    logMessage(level, message);
 }
 }  // namespace rastercheck

@@ -18,6 +18,9 @@ enum class LogLevel
 using LogHandler = std::function<void(LogLevel, const std::string &)>;
 void setLogHandler(LogHandler handler);
 void logMessage(LogLevel level, const std::string &message);
+/** \brief As logMessage, but a message already logged by this process is not logged again: what
+    loading a file reports (an open mesh) is read once, not at every load of the same file. */
+void logOnce(LogLevel level, const std::string &message);
 inline void logWarning(const std::string &message) { logMessage(LogLevel::Warning, message); }
 inline void logInfo(const std::string &message) { logMessage(LogLevel::Info, message); }
 }  // namespace rastercheck

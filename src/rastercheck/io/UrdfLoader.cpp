@@ -218,7 +218,7 @@ public:
         if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR)
             errors_ += (errors_.empty() ? "" : "; ") + text;
         else if (level == console_bridge::CONSOLE_BRIDGE_LOG_WARN)
-            logWarning(file_ + ": " + text);
+            logOnce(LogLevel::Warning, file_ + ": " + text);
     }
 
     const std::string &errors() const { return errors_; }
@@ -473,7 +473,8 @@ private:
         else if (options_.visualWhenNoCollision && !source->visual_array.empty())
         {
             kind = "visual";
-            logWarning(file_ + ": link '" + link.name + "' has no collision geometry; its visual geometry is used");
+            logOnce(LogLevel::Warning,
+                    file_ + ": link '" + link.name + "' has no collision geometry; its visual geometry is used");
             appendElements(source->visual_array, link.name, kind, parts);
         }
         else
@@ -485,8 +486,8 @@ private:
         if (component.mesh.empty())
             throw InputError(file_, "link '" + link.name + "' " + kind, "geometry has no triangles after cleaning");
         if (!component.topology.closed)
-            logInfo(file_ + ": link '" + link.name + "' " + kind + " geometry is " + component.topology.summary() +
-                    "; the exact narrow phase checks it");
+            logOnce(LogLevel::Info, file_ + ": link '" + link.name + "' " + kind + " geometry is " +
+                                        component.topology.summary() + "; the exact narrow phase checks it");
         link.component = static_cast<int>(model.components.size());
         model.components.push_back(std::move(component));
     }

@@ -318,5 +318,17 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
             lastValid[i] = pool[i]->prefix;
         detail::countMotion(valid_, invalid_, pool[i]->accepted);
     }
+    // Keep what a planner's next batch needs, not what the largest batch ever needed.
+    if (pool.size() > detail::kKeptEdges)
+        pool.resize(detail::kKeptEdges);
+    for (const auto &search : pool)
+        for (std::vector<double> *buffer : {&search->componentSweeps, &search->pairSweeps, &search->pending,
+                                            &search->failed, &search->batch, &search->close})
+            detail::releaseIfLarge(*buffer);
+    for (std::vector<double> *buffer : {&w.qa, &w.qb, &w.rows})
+        detail::releaseIfLarge(*buffer);
+    detail::releaseIfLarge(w.order);
+    detail::releaseIfLarge(w.intervals);
+    detail::releaseIfLarge(w.verdicts);
 }
 }  // namespace rastercheck::ompl

@@ -63,7 +63,8 @@ struct CertifiedMotionOptions
     (the start of the first interval that could not be), and that state. s1 is not assumed valid:
     it is certified with the rest.
 
-    Thread safe: scratch buffers are thread-local, the counters atomic. */
+    Thread safe: scratch buffers are thread-local (what a thread keeps between calls is bounded:
+    detail::kKeptEdges), the counters atomic. */
 class CertifiedMotionValidator : public BatchMotionValidator
 {
 public:

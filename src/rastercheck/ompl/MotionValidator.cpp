@@ -158,5 +158,17 @@ void MotionValidator::checkMotions(const Edge *edges, std::size_t n, std::uint8_
             lastValid[i] = scan.found == 0 ? 1.0 : static_cast<double>(scan.found - 1) / static_cast<double>(scan.nd);
         detail::countMotion(valid_, invalid_, scan.found == 0);
     }
+    // Keep what a planner's next batch needs, not what the largest batch ever needed.
+    if (pool.size() > detail::kKeptEdges)
+        pool.resize(detail::kKeptEdges);
+    for (const auto &scan : pool)
+    {
+        detail::releaseIfLarge(scan->order);
+        detail::releaseIfLarge(scan->batch);
+    }
+    detail::releaseIfLarge(w.intervals);
+    detail::releaseIfLarge(w.inBounds);
+    detail::releaseIfLarge(w.rows);
+    detail::releaseIfLarge(w.verdicts);
 }
 }  // namespace rastercheck::ompl

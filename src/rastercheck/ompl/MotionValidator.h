@@ -31,9 +31,9 @@ namespace rastercheck::ompl
     unchecked states before it. checkMotions runs the scans of many edges side by side, each
     round's states of all of them in one batch.
 
-    The implementation is thread safe: scratch buffers are thread-local, and the valid / invalid
-    motion counters of the base class are updated with atomic operations (OMPL's own getters and
-    the Benchmark's "valid segment fraction" read them). */
+    The implementation is thread safe: scratch buffers are thread-local (bounded between calls:
+    detail::kKeptEdges), and the valid / invalid motion counters of the base class are updated with
+    atomic operations (OMPL's own getters and the Benchmark's "valid segment fraction" read them). */
 class MotionValidator : public BatchMotionValidator
 {
 public:

@@ -35,12 +35,9 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
     const ob::SpaceInformationPtr &si = setup->getSpaceInformation();
     auto validityChecker = std::make_shared<StateValidityChecker>(si, mapping, checker, options.request);
     setup->setStateValidityChecker(validityChecker);
-    EdgeChecking edges = options.edges;
-    if (edges == EdgeChecking::Auto)
-        edges = options.request.mode == CollisionMode::Raster ? EdgeChecking::Batched : EdgeChecking::Certified;
-    switch (edges)
+    switch (resolveEdgeChecking(options.edges, options.request.mode))
     {
-        case EdgeChecking::Auto:  // resolved above
+        case EdgeChecking::Auto:  // resolved: never returned
         case EdgeChecking::Batched:
             si->setMotionValidator(std::make_shared<MotionValidator>(si, *validityChecker, options.rakeWidth));
             break;
@@ -51,6 +48,13 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
             break;  // SpaceInformation's default
     }
     return setup;
+}
+
+EdgeChecking resolveEdgeChecking(EdgeChecking edges, CollisionMode mode)
+{
+    if (edges != EdgeChecking::Auto)
+        return edges;
+    return mode == CollisionMode::Raster ? EdgeChecking::Batched : EdgeChecking::Certified;
 }
 
 EdgeChecking parseEdgeChecking(const std::string &text)
@@ -141,10 +145,16 @@ void setObjective(og::SimpleSetup &setup, const OmplAppProblem &problem)
         throw ConfigurationError("objective '" + problem.objective + "' is not supported (only 'length')");
 }
 
+std::pair<std::vector<double>, std::vector<double>> startAndGoal(const StateMapping &mapping,
+                                                                 const MotionPlanRequest &request)
+{
+    return {configurationFromJoints(mapping, request.startJoints, "start", UnknownJoints::Skip),
+            configurationFromJoints(mapping, request.goalJoints, "goal")};
+}
+
 void setStartAndGoal(og::SimpleSetup &setup, const MotionPlanRequest &request)
 {
-    const StateMapping &mapping = getStateValidityChecker(setup)->getStateMapping();
-    setStartAndGoal(setup, configurationFromJoints(mapping, request.startJoints, "start", UnknownJoints::Skip),
-                    configurationFromJoints(mapping, request.goalJoints, "goal"));
+    const auto [start, goal] = startAndGoal(getStateValidityChecker(setup)->getStateMapping(), request);
+    setStartAndGoal(setup, start, goal);
 }
 }  // namespace rastercheck::ompl

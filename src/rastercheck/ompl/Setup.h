@@ -2,6 +2,7 @@
 
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <ompl/geometric/SimpleSetup.h>
@@ -30,6 +31,10 @@ enum class EdgeChecking
         exact or conservative mode. */
     Certified
 };
+
+/** \brief \a edges with Auto resolved for \a mode: Certified, or Batched in raster mode (which
+    cannot certify an edge). */
+EdgeChecking resolveEdgeChecking(EdgeChecking edges, CollisionMode mode);
 
 /** \brief "auto", "batched", "discrete" or "certified"; throws ConfigurationError otherwise. */
 EdgeChecking parseEdgeChecking(const std::string &text);
@@ -90,6 +95,14 @@ enum class UnknownJoints
 std::vector<double> configurationFromJoints(const StateMapping &mapping, const std::map<std::string, double> &joints,
                                             const std::string &what, UnknownJoints unknown = UnknownJoints::Error);
 
+/** \brief Start (start_state.joint_state) and goal (goal_constraints[0] joint positions) of a MoveIt
+    request as configurations in robot coordinate order: coordinates the request does not name keep
+    their neutral (or held) values; start joints the robot lacks are skipped with a warning
+    (UnknownJoints::Skip); goal joints it lacks are a ConfigurationError. What setStartAndGoal sets,
+    and what `rastercheck view` and `render` show for a request. */
+std::pair<std::vector<double>, std::vector<double>> startAndGoal(const StateMapping &mapping,
+                                                                 const MotionPlanRequest &request);
+
 /** \brief Start and goal of an OMPL.app problem (its start / goal configurations). */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
 
@@ -97,10 +110,7 @@ void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem
     its threshold, for "length"; nothing when absent. Throws ConfigurationError for another. */
 void setObjective(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
 
-/** \brief Start (start_state.joint_state) and goal (goal_constraints[0] joint positions) of a MoveIt
-    request; coordinates a request does not name keep their neutral (or held) values. Start joints
-    the robot lacks are skipped with a warning (UnknownJoints::Skip); goal joints it lacks are a
-    ConfigurationError. */
+/** \brief Start and goal of a MoveIt request (startAndGoal). */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const MotionPlanRequest &request);
 
 /** \brief Start and goal from two configurations (robot coordinate order). */

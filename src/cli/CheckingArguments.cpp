@@ -1,0 +1,36 @@
+#include "Commands.h"
+
+namespace rastercheck::cli
+{
+void CheckingArguments::addModeAndPadding(CLI::App &command, const std::string &what)
+{
+    command
+        .add_option("--mode", mode,
+                    what + ": safe (default, no false negatives), raster, exact, or conservative (proofs only: no "
+                           "false negatives, some false alarms)")
+        ->check(CLI::IsMember({"safe", "raster", "exact", "conservative"}));
+    command.add_option("--padding", padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
+}
+
+void CheckingArguments::addBackendAndThreads(CLI::App &command, const std::string &threadsHelp)
+{
+    command.add_option("--backend", backend, "auto, cpu or cuda")->check(CLI::IsMember({"auto", "cpu", "cuda"}));
+    command.add_option("--threads", threads, threadsHelp + " (0 = all cores)")->check(CLI::NonNegativeNumber);
+}
+
+CollisionRequest CheckingArguments::request() const
+{
+    CollisionRequest request;
+    request.mode = parseCollisionMode(mode);
+    request.padding = padding;
+    return request;
+}
+
+CheckerOptions CheckingArguments::checker() const
+{
+    CheckerOptions options;
+    options.backend = parseBackendChoice(backend);
+    options.threads = threads;
+    return options;
+}
+}  // namespace rastercheck::cli
