@@ -182,6 +182,8 @@ int main(int argc, char **argv)
             rastercheck::ompl::SetupOptions options;  // certified edges: the default
             options.checker.backend = backend;
             options.checker.threads = checkerThreads;
+            if (backend == BackendChoice::Cuda)
+                options.checker.minDeviceBatch = 32;  // planning on the device: every batch it can take
             og::SimpleSetupPtr ours = rastercheck::ompl::makeSimpleSetup(problem, options);
             setStartAndGoal(*ours);
             const rastercheck::ompl::StateValidityCheckerPtr oracle = rastercheck::ompl::getStateValidityChecker(*ours);

@@ -1,7 +1,9 @@
 #include "rastercheck/collision/Checker.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <thread>
 
 #include "rastercheck/BuildConfig.h"
 #include "rastercheck/collision/CpuBackend.h"
@@ -63,7 +65,11 @@ Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOpt
     : model_(std::make_shared<const CollisionModel>(std::move(robot), std::move(scene))),
       reference_(model_),
       threads_(options.threads),
-      minDeviceBatch_(options.minDeviceBatch)
+      minDeviceBatch_(options.minDeviceBatch > 0
+                          ? options.minDeviceBatch
+                          : kDeviceBatchPerCpuThread * static_cast<std::size_t>(options.threads > 0
+                                                                                  ? options.threads
+                                                                                  : std::max(1u, std::thread::hardware_concurrency())))
 {
     if (options.threads < 0)
         throw ConfigurationError("CheckerOptions::threads must be >= 0 (0 = all cores)");
