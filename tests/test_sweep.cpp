@@ -107,6 +107,15 @@ TEST(SweepCli, LocalSweepMergesResumesAndNamesMissingAndFailedRuns)
     EXPECT_NE(run.output.find("3/6 unit(s) logged, 2 failed, 1 missing"), std::string::npos) << run.output;
     const std::string kept = readFile(out + "/logs/task-0000/omplapp.a_boxes.seed1.log");
 
+    // A task inside a Slurm job takes the CPUs of its allocation, whatever the spec says.
+    run = rastercheck::test::runCommand("SLURM_CPUS_PER_TASK=2 " + std::string(RASTERCHECK_CLI) + " sweep task " +
+                                        out + " --index 1");
+    EXPECT_EQ(run.status, 0) << run.output;
+    EXPECT_NE(run.output.find("'--threads' '2'"), std::string::npos) << run.output;
+    EXPECT_NE(run.output.find("2/2 unit(s) logged, 2 CPU(s)"), std::string::npos) << run.output;
+    ASSERT_EQ(std::remove(lost.c_str()), 0);
+    std::remove((lost + ".status").c_str());
+
     run = runCli("sweep run " + spec + " --out " + out + " --local 2");
     EXPECT_EQ(run.status, 2) << run.output;
     EXPECT_NE(run.output.find("2 task(s) to run, 1 complete"), std::string::npos) << run.output;
