@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -59,6 +60,18 @@ std::string absolute(const std::string &path, const std::string &base)
     return base + "/" + path;
 }
 
+/** \brief \a path without "." and ".." steps or links: the runs' commands stay readable, and the mesh
+    loader resolves package:// paths from a URDF's folder, which ".." steps would confuse. */
+std::string canonical(const std::string &path)
+{
+    char *resolved = ::realpath(path.c_str(), nullptr);
+    if (!resolved)
+        return path;
+    std::string result = resolved;
+    std::free(resolved);
+    return result;
+}
+
 std::string currentFolder()
 {
     std::vector<char> buffer(4096);
@@ -78,7 +91,7 @@ std::vector<std::string> expandGlob(const std::string &spec, const std::string &
     if (status == 0)
         for (std::size_t i = 0; i < found.gl_pathc; ++i)
             if (isFile(found.gl_pathv[i]))
-                paths.emplace_back(found.gl_pathv[i]);
+                paths.push_back(canonical(found.gl_pathv[i]));
     ::globfree(&found);
     if (paths.empty())
         throw InputError(spec, key, "'" + pattern + "' matches no file (relative to " + base + ")");
@@ -92,7 +105,7 @@ std::string requireFile(const std::string &spec, const std::string &key, const s
     const std::string full = absolute(path, base);
     if (!isFile(full))
         throw InputError(spec, key, "no such file '" + full + "'");
-    return full;
+    return canonical(full);
 }
 
 /** \brief Throws naming the first key of \a node that is not in \a known (a typo would otherwise be
@@ -343,7 +356,7 @@ SweepPlan loadSweepSpec(const std::string &path)
         if (group["package_paths"])
             for (const YAML::Node &folder : group["package_paths"])
                 robotArguments.insert(robotArguments.end(),
-                                      {"--package-path", absolute(folder.as<std::string>(), base)});
+                                      {"--package-path", canonical(absolute(folder.as<std::string>(), base))});
         const std::string label = scalar<std::string>(path, group, "label", stemOf(robot));
         for (const std::string &request :
              expandGlob(path, "problems.requests", group["requests"].as<std::string>(), base))
