@@ -1,8 +1,6 @@
 // rastercheck sweep: benchmark sweeps over many problems, planners and seeds, as local processes or a
 // Slurm job array, every run a `rastercheck plan` run writing one OMPL benchmark log; `sweep merge`
 // (SweepMerge.cpp) makes one database of them.
-#include <fcntl.h>
-#include <spawn.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -26,18 +24,10 @@
 #include "SweepSpec.h"
 #include "rastercheck/core/Error.h"
 
-extern char **environ;
-
 namespace rastercheck::cli
 {
 namespace
 {
-bool exists(const std::string &path)
-{
-    struct stat info;
-    return ::stat(path.c_str(), &info) == 0;
-}
-
 void makeFolder(const std::string &path)
 {
     if (::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST)
@@ -104,7 +94,7 @@ int taskCpus(const SweepPlan &plan)
 bool taskComplete(const std::string &dir, const SweepTask &task)
 {
     for (const SweepUnit &unit : task.units)
-        if (!exists(dir + "/" + unitLogPath(task, unit)))
+        if (!pathExists(dir + "/" + unitLogPath(task, unit)))
             return false;
     return true;
 }
@@ -132,55 +122,6 @@ std::string shellQuote(const std::string &text)
     for (char c : text)
         quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return quoted + "'";
-}
-
-/** \brief Starts \a arguments[0] (searched on PATH) with stdout and stderr appended to \a outPath
-    (inherited when empty) and \a extraEnvironment added; returns its pid. */
-pid_t spawn(const std::vector<std::string> &arguments, const std::string &outPath,
-            const std::vector<std::string> &extraEnvironment)
-{
-    std::vector<char *> argv;
-    for (const std::string &argument : arguments)
-        argv.push_back(const_cast<char *>(argument.c_str()));
-    argv.push_back(nullptr);
-    std::vector<std::string> environmentText(extraEnvironment);
-    for (char **entry = environ; *entry; ++entry)
-    {
-        const std::string text = *entry;
-        bool replaced = false;
-        for (const std::string &extra : extraEnvironment)
-            replaced = replaced || text.compare(0, extra.find('=') + 1, extra, 0, extra.find('=') + 1) == 0;
-        if (!replaced)
-            environmentText.push_back(text);
-    }
-    std::vector<char *> envp;
-    for (const std::string &text : environmentText)
-        envp.push_back(const_cast<char *>(text.c_str()));
-    envp.push_back(nullptr);
-
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    if (!outPath.empty())
-    {
-        posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-        posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    }
-    pid_t pid = 0;
-    const int status = ::posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
-    posix_spawn_file_actions_destroy(&actions);
-    if (status != 0)
-        throw ConfigurationError("cannot start " + arguments[0] + ": " + std::strerror(status));
-    return pid;
-}
-
-/** \brief Waits for \a pid; its exit status, or 128 + the signal that ended it. */
-int waitFor(pid_t pid)
-{
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0)
-        if (errno != EINTR)
-            return 127;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 /** \brief Runs `command` and returns its stdout (the job id of `sbatch --parsable`); throws on failure. */
@@ -241,10 +182,10 @@ int runUnit(const std::string &dir, const SweepTask &task, const SweepUnit &unit
         std::cerr.flush();
         std::_Exit(status);
     }
-    const int status = waitFor(pid);
+    const int status = waitForProcess(pid);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     // 3: solution paths that collide (counted by the merge); the log is complete.
-    const bool logged = (status == 0 || status == 3) && exists(partial);
+    const bool logged = (status == 0 || status == 3) && pathExists(partial);
     if (logged && std::rename(partial.c_str(), log.c_str()) != 0)
         throw InputError(log, "", "cannot write");
     std::ostringstream record;
@@ -268,7 +209,7 @@ int runTask(const std::string &dir, std::size_t index)
     int failed = 0;
     for (const SweepUnit &unit : task.units)
     {
-        if (exists(dir + "/" + unitLogPath(task, unit)))
+        if (pathExists(dir + "/" + unitLogPath(task, unit)))
         {
             std::cout << "sweep task: " << unit.name << ": log present, skipped" << std::endl;
             continue;
@@ -355,7 +296,7 @@ int runLocal(const std::string &dir, const SweepPlan &plan, const std::vector<st
         while (next < pending.size() && static_cast<int>(running.size()) < workers)
         {
             const std::size_t index = pending[next++];
-            const pid_t pid = spawn({self, "sweep", "task", dir, "--index", std::to_string(index)},
+            const pid_t pid = spawnProcess({self, "sweep", "task", dir, "--index", std::to_string(index)},
                                     dir + "/out/" + plan.tasks[index].name + ".out", environment);
             running[pid] = index;
         }
@@ -396,7 +337,7 @@ int runSweep(const RunOptions &options)
     makeFolder(dir + "/out");
     const std::string manifest = dir + "/sweep.json";
     const std::string json = sweepPlanToJson(plan);
-    if (exists(manifest))
+    if (pathExists(manifest))
     {
         if (readText(manifest) != json)
             throw ConfigurationError(dir + " holds another sweep (its sweep.json differs from what " + options.spec +

@@ -1,10 +1,6 @@
 // rastercheck sweep merge: every log of a sweep into one SQLite database through OMPL's own
 // ompl_benchmark_statistics (what Planner Arena reads), then a summary per robot and planner read back
 // from that database, and a picture. Runs without a log are named and counted, never dropped.
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -24,18 +20,10 @@
 #include "rastercheck/core/Statistics.h"
 #include "render/SweepPicture.h"
 
-extern char **environ;
-
 namespace rastercheck::cli
 {
 namespace
 {
-bool exists(const std::string &path)
-{
-    struct stat info;
-    return ::stat(path.c_str(), &info) == 0;
-}
-
 /** \brief The tool from OMPL's ompl-demos package: on PATH, else Debian's place. */
 std::string statisticsTool()
 {
@@ -48,29 +36,6 @@ std::string statisticsTool()
     if (::access("/usr/bin/ompl_benchmark_statistics", X_OK) == 0)
         return "/usr/bin/ompl_benchmark_statistics";
     throw ConfigurationError("ompl_benchmark_statistics not found (Debian package ompl-demos)");
-}
-
-/** \brief Runs \a arguments with stdout and stderr appended to \a outPath; its exit status. */
-int runTool(const std::vector<std::string> &arguments, const std::string &outPath)
-{
-    std::vector<char *> argv;
-    for (const std::string &argument : arguments)
-        argv.push_back(const_cast<char *>(argument.c_str()));
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    pid_t pid = 0;
-    const int started = ::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    if (started != 0)
-        throw ConfigurationError("cannot start " + arguments[0] + ": " + std::strerror(started));
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0)
-        if (errno != EINTR)
-            return 127;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 /** \brief What became of one unit: its log, or why there is none. */
@@ -89,7 +54,7 @@ UnitOutcome outcomeOf(const std::string &dir, const SweepTask &task, const Sweep
     outcome.task = &task;
     outcome.unit = &unit;
     const std::string log = dir + "/" + unitLogPath(task, unit);
-    outcome.logged = exists(log);
+    outcome.logged = pathExists(log);
     std::ifstream record(log + ".status");
     std::string key;
     double value = 0.0;
@@ -225,7 +190,7 @@ int mergeSweep(const std::string &dir)
             std::vector<std::string> arguments = {tool, "-d", partial};
             arguments.insert(arguments.end(), logs.begin() + static_cast<long>(first),
                              logs.begin() + static_cast<long>(std::min(logs.size(), first + batch)));
-            const int status = runTool(arguments, toolOutput);
+            const int status = waitForProcess(spawnProcess(arguments, toolOutput));
             if (status != 0)
                 throw InputError(toolOutput, "", "ompl_benchmark_statistics failed (exit status " +
                                                      std::to_string(status) + ")");

@@ -1,13 +1,18 @@
 #include "SweepSpec.h"
 
+#include <fcntl.h>
 #include <glob.h>
+#include <spawn.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -23,6 +28,8 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/ompl/Planners.h"
+
+extern char **environ;
 
 namespace rastercheck::cli
 {
@@ -190,6 +197,61 @@ struct ProblemEntry
     std::vector<std::string> arguments;
 };
 }  // namespace
+
+bool pathExists(const std::string &path)
+{
+    struct stat info;
+    return ::stat(path.c_str(), &info) == 0;
+}
+
+/** \brief Starts \a arguments[0] (searched on PATH) with stdout and stderr appended to \a outPath
+    (inherited when empty) and \a extraEnvironment added; returns its pid. */
+pid_t spawnProcess(const std::vector<std::string> &arguments, const std::string &outPath,
+            const std::vector<std::string> &extraEnvironment)
+{
+    std::vector<char *> argv;
+    for (const std::string &argument : arguments)
+        argv.push_back(const_cast<char *>(argument.c_str()));
+    argv.push_back(nullptr);
+    std::vector<std::string> environmentText(extraEnvironment);
+    for (char **entry = environ; *entry; ++entry)
+    {
+        const std::string text = *entry;
+        bool replaced = false;
+        for (const std::string &extra : extraEnvironment)
+            replaced = replaced || text.compare(0, extra.find('=') + 1, extra, 0, extra.find('=') + 1) == 0;
+        if (!replaced)
+            environmentText.push_back(text);
+    }
+    std::vector<char *> envp;
+    for (const std::string &text : environmentText)
+        envp.push_back(const_cast<char *>(text.c_str()));
+    envp.push_back(nullptr);
+
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    if (!outPath.empty())
+    {
+        posix_spawn_file_actions_addopen(&actions, 1, outPath.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+        posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    }
+    pid_t pid = 0;
+    const int status = ::posix_spawnp(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
+    posix_spawn_file_actions_destroy(&actions);
+    if (status != 0)
+        throw ConfigurationError("cannot start " + arguments[0] + ": " + std::strerror(status));
+    return pid;
+}
+
+/** \brief Waits for \a pid; its exit status, or 128 + the signal that ended it. */
+int waitForProcess(pid_t pid)
+{
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0)
+        if (errno != EINTR)
+            return 127;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
 
 double SweepPlan::taskTimeLimit(const SweepTask &task) const
 {

@@ -3,6 +3,8 @@
 // one Slurm array task or one local worker runs: a shard of the problems, each with every seed, each
 // (problem, seed) pair one `rastercheck plan` run (a unit) writing one OMPL benchmark log.
 
+#include <sys/types.h>
+
 #include <string>
 #include <vector>
 
@@ -61,6 +63,18 @@ SweepPlan loadSweepManifest(const std::string &dir);
     ompl_benchmark_statistics, DIR/summary.md and DIR/summary.png; every missing or failed run named
     and counted. Returns 0 when every run has its log, 2 when some have none. */
 int mergeSweep(const std::string &dir);
+
+/** \brief Whether \a path exists (a file or a folder). */
+bool pathExists(const std::string &path);
+
+/** \brief Starts \a arguments[0] (searched on PATH) with stdout and stderr appended to \a outPath
+    (inherited when empty) and \a extraEnvironment (NAME=VALUE) added; returns its pid. Throws
+    ConfigurationError when it cannot start. */
+pid_t spawnProcess(const std::vector<std::string> &arguments, const std::string &outPath,
+                   const std::vector<std::string> &extraEnvironment = {});
+
+/** \brief Waits for \a pid; its exit status, or 128 + the signal that ended it. */
+int waitForProcess(pid_t pid);
 
 /** \brief Where unit \a unit of task \a task writes its log, relative to the sweep folder. */
 std::string unitLogPath(const SweepTask &task, const SweepUnit &unit);
