@@ -254,7 +254,8 @@ void writeSlurmScripts(const std::string &dir, const SweepPlan &plan, const std:
           << "#SBATCH --ntasks=1\n"
           << "#SBATCH --cpus-per-task=" << plan.cpusPerTask << "\n"
           << "#SBATCH --time=" << static_cast<long>(std::ceil(limit / 60.0)) << "\n"
-          << "#SBATCH --output=" << dir << "/out/task-%4a.out\n";
+          << "#SBATCH --output=" << dir << "/out/task-%4a.out\n"
+          << "#SBATCH --open-mode=append\n";  // a resumed task's output follows its first attempt's
     for (const std::string &option : plan.slurmOptions)
         array << "#SBATCH " << option << "\n";
     array << "# The checker's threads: the CPUs Slurm gave this task, not the node's cores.\n"

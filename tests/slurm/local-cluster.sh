@@ -17,7 +17,15 @@ dir=$(cd "$dir" && pwd)
 skip() { echo "local-cluster: cannot start Slurm here: $*" >&2; exit 77; }
 
 stop() {
-    # slurmd first (it reports to slurmctld), munged last; only the processes whose pid files are here.
+    # The jobs first: their steps (slurmstepd) outlive a stopped slurmd. Then slurmd (it reports to
+    # slurmctld), munged last; only the processes whose pid files are here.
+    if [[ -f $dir/slurm.conf && -f $dir/slurmctld.pid ]]; then
+        SLURM_CONF=$dir/slurm.conf scancel --user="$(id -un)" 2>/dev/null || true
+        for _ in $(seq 50); do
+            [[ -z $(SLURM_CONF=$dir/slurm.conf squeue -h 2>/dev/null) ]] && break
+            sleep 0.1
+        done
+    fi
     for daemon in slurmd slurmctld munged; do
         local pidfile=$dir/$daemon.pid
         [[ -f $pidfile ]] || continue
