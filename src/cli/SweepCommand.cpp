@@ -286,7 +286,9 @@ int runLocal(const std::string &dir, const SweepPlan &plan, const std::vector<st
                                  " CPU(s) per task needs " + std::to_string(workers * plan.cpusPerTask) +
                                  " cores; this machine has " + std::to_string(cores) +
                                  " (more would only make the runs wait for each other)");
-    const std::string self = selfPath();
+    // This very program, even when its file was rebuilt (replaced) during the sweep: every task of
+    // one run uses the same code.
+    const std::string self = "/proc/self/exe";
     const std::vector<std::string> environment = {"OMP_NUM_THREADS=" + std::to_string(plan.cpusPerTask)};
     std::map<pid_t, std::size_t> running;
     std::size_t next = 0;
@@ -297,10 +299,21 @@ int runLocal(const std::string &dir, const SweepPlan &plan, const std::vector<st
         while (next < pending.size() && static_cast<int>(running.size()) < workers)
         {
             const std::size_t index = pending[next++];
-            const pid_t pid = spawnProcess({self, "sweep", "task", dir, "--index", std::to_string(index)},
-                                    dir + "/out/" + plan.tasks[index].name + ".out", environment);
-            running[pid] = index;
+            try
+            {
+                const pid_t pid = spawnProcess({self, "sweep", "task", dir, "--index", std::to_string(index)},
+                                               dir + "/out/" + plan.tasks[index].name + ".out", environment);
+                running[pid] = index;
+            }
+            catch (const Error &e)
+            {
+                // Named by the merge as missing; the tasks already running still finish.
+                ++failedTasks;
+                std::cerr << "rastercheck: error: " << plan.tasks[index].name << ": " << e.what() << '\n';
+            }
         }
+        if (running.empty())
+            continue;
         int status = 0;
         const pid_t done = ::wait(&status);
         if (done < 0)

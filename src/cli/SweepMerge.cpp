@@ -178,7 +178,6 @@ int mergeSweep(const std::string &dir)
     const std::string database = dir + "/sweep.db";
     const std::string partial = database + ".partial";
     std::remove(partial.c_str());
-    std::remove(database.c_str());
     const std::string toolOutput = dir + "/out/statistics.out";
     std::remove(toolOutput.c_str());
     if (!logs.empty())
@@ -198,6 +197,8 @@ int mergeSweep(const std::string &dir)
         if (std::rename(partial.c_str(), database.c_str()) != 0)
             throw InputError(database, "", "cannot write");
     }
+    else
+        std::remove(database.c_str());  // an older merge's database would claim runs that have no log now
 
     // Runs and experiments back from the database: the summary counts what Planner Arena will show.
     std::vector<RunRow> runs;
