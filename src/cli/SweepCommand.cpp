@@ -34,16 +34,6 @@ void makeFolder(const std::string &path)
         throw InputError(path, "", "cannot create the folder");
 }
 
-std::string readText(const std::string &path)
-{
-    std::ifstream in(path);
-    if (!in)
-        throw InputError(path, "", "cannot read");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
 void writeText(const std::string &path, const std::string &text)
 {
     // Written beside and renamed: a reader (a task, the merge, a second `sweep run`) never sees half a file.
@@ -60,15 +50,12 @@ void writeText(const std::string &path, const std::string &text)
 
 std::string absoluteFolder(const std::string &path)
 {
-    char *resolved = ::realpath(path.c_str(), nullptr);
-    if (!resolved)
+    if (!pathExists(path))
         throw InputError(path, "", "no such folder");
-    std::string result = resolved;
-    std::free(resolved);
-    return result;
+    return canonicalPath(path);
 }
 
-/** \brief This program's own path, for the job scripts and the local workers. */
+/** \brief This program's own path, for the job scripts. */
 std::string selfPath()
 {
     std::vector<char> buffer(4096);
@@ -353,7 +340,7 @@ int runSweep(const RunOptions &options)
     const std::string json = sweepPlanToJson(plan);
     if (pathExists(manifest))
     {
-        if (readText(manifest) != json)
+        if (readTextFile(manifest) != json)
             throw ConfigurationError(dir + " holds another sweep (its sweep.json differs from what " + options.spec +
                                      " gives now): choose a new --out, or remove " + dir +
                                      " to start over; an unchanged spec resumes");

@@ -67,18 +67,6 @@ std::string absolute(const std::string &path, const std::string &base)
     return base + "/" + path;
 }
 
-/** \brief \a path without "." and ".." steps or links: the runs' commands stay readable, and the mesh
-    loader resolves package:// paths from a URDF's folder, which ".." steps would confuse. */
-std::string canonical(const std::string &path)
-{
-    char *resolved = ::realpath(path.c_str(), nullptr);
-    if (!resolved)
-        return path;
-    std::string result = resolved;
-    std::free(resolved);
-    return result;
-}
-
 std::string currentFolder()
 {
     std::vector<char> buffer(4096);
@@ -98,7 +86,7 @@ std::vector<std::string> expandGlob(const std::string &spec, const std::string &
     if (status == 0)
         for (std::size_t i = 0; i < found.gl_pathc; ++i)
             if (isFile(found.gl_pathv[i]))
-                paths.push_back(canonical(found.gl_pathv[i]));
+                paths.push_back(canonicalPath(found.gl_pathv[i]));
     ::globfree(&found);
     if (paths.empty())
         throw InputError(spec, key, "'" + pattern + "' matches no file (relative to " + base + ")");
@@ -112,7 +100,7 @@ std::string requireFile(const std::string &spec, const std::string &key, const s
     const std::string full = absolute(path, base);
     if (!isFile(full))
         throw InputError(spec, key, "no such file '" + full + "'");
-    return canonical(full);
+    return canonicalPath(full);
 }
 
 /** \brief Throws naming the first key of \a node that is not in \a known (a typo would otherwise be
@@ -197,6 +185,26 @@ struct ProblemEntry
     std::vector<std::string> arguments;
 };
 }  // namespace
+
+std::string canonicalPath(const std::string &path)
+{
+    char *resolved = ::realpath(path.c_str(), nullptr);
+    if (!resolved)
+        return path;
+    std::string result = resolved;
+    std::free(resolved);
+    return result;
+}
+
+std::string readTextFile(const std::string &path)
+{
+    std::ifstream in(path);
+    if (!in)
+        throw InputError(path, "", "cannot read");
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
 
 bool pathExists(const std::string &path)
 {
@@ -418,7 +426,7 @@ SweepPlan loadSweepSpec(const std::string &path)
         if (group["package_paths"])
             for (const YAML::Node &folder : group["package_paths"])
                 robotArguments.insert(robotArguments.end(),
-                                      {"--package-path", canonical(absolute(folder.as<std::string>(), base))});
+                                      {"--package-path", canonicalPath(absolute(folder.as<std::string>(), base))});
         const std::string label = scalar<std::string>(path, group, "label", stemOf(robot));
         for (const std::string &request :
              expandGlob(path, "problems.requests", group["requests"].as<std::string>(), base))
@@ -515,12 +523,9 @@ std::string sweepPlanToJson(const SweepPlan &plan)
 SweepPlan loadSweepManifest(const std::string &dir)
 {
     const std::string path = dir + "/sweep.json";
-    std::ifstream in(path);
-    if (!in)
+    if (!pathExists(path))
         throw InputError(path, "", "no sweep manifest: is " + dir + " the --out folder of `rastercheck sweep run`?");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return sweepPlanFromJson(text.str(), path);
+    return sweepPlanFromJson(readTextFile(path), path);
 }
 
 SweepPlan sweepPlanFromJson(const std::string &text, const std::string &path)

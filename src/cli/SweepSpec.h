@@ -64,6 +64,14 @@ SweepPlan loadSweepManifest(const std::string &dir);
     and counted. Returns 0 when every run has its log, 2 when some have none. */
 int mergeSweep(const std::string &dir);
 
+/** \brief \a path without "." and ".." steps or links (\a path itself when it does not exist): the
+    runs' commands stay readable, and the mesh loader resolves package:// paths from a URDF's folder,
+    which ".." steps confuse (a Panda URDF reached through ".." fails to read its OBJ meshes). */
+std::string canonicalPath(const std::string &path);
+
+/** \brief The whole of a text file; InputError naming it when it cannot be read. */
+std::string readTextFile(const std::string &path);
+
 /** \brief Whether \a path exists (a file or a folder). */
 bool pathExists(const std::string &path);
 
