@@ -38,6 +38,7 @@
 
 #include "BenchSupport.h"
 #include "FclValidity.h"
+#include "rastercheck/core/Statistics.h"
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/ompl/PathCheck.h"
 #include "rastercheck/ompl/Setup.h"
@@ -60,14 +61,6 @@ struct Tally
     std::vector<double> states;  ///< states the rastercheck checker decided per run
 };
 
-double quantile(std::vector<double> values, double q)
-{
-    if (values.empty())
-        return 0.0;
-    std::sort(values.begin(), values.end());
-    return values[std::min(values.size() - 1, static_cast<std::size_t>(q * static_cast<double>(values.size())))];
-}
-
 bool collisionFree(const og::PathGeometric &path, const rastercheck::ompl::StateValidityChecker &oracle)
 {
     CollisionRequest exact;
@@ -82,15 +75,6 @@ void seed(std::uint_fast32_t value)
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
 }
 
-std::uint64_t statesChecked(const og::SimpleSetup &setup)
-{
-    const auto edges = std::dynamic_pointer_cast<rastercheck::ompl::CertifiedMotionValidator>(
-        setup.getSpaceInformation()->getMotionValidator());
-    const auto validity =
-        std::dynamic_pointer_cast<rastercheck::ompl::StateValidityChecker>(setup.getStateValidityChecker());
-    return (edges ? edges->getCheckedStateCount() : 0) + (validity ? validity->getCallCount() : 0);
-}
-
 /** \brief One planning run of \a planner on \a setup, then its simplification; tallied. */
 void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortcut, double timeLimit,
          const rastercheck::ompl::StateValidityChecker &oracle, std::uint_fast32_t runSeed, const std::string &label,
@@ -98,19 +82,14 @@ void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortc
 {
     seed(runSeed);
     setup.clear();
-    if (auto edges = std::dynamic_pointer_cast<rastercheck::ompl::CertifiedMotionValidator>(
-            setup.getSpaceInformation()->getMotionValidator()))
-        edges->resetStateCounter();
-    if (auto validity =
-            std::dynamic_pointer_cast<rastercheck::ompl::StateValidityChecker>(setup.getStateValidityChecker()))
-        validity->resetCounters();
+    rastercheck::ompl::resetCheckedStates(setup);
     setup.setPlanner(planner);
     const auto begin = std::chrono::steady_clock::now();
     const ob::PlannerStatus status = setup.solve(timeLimit);
     const bool solved = status == ob::PlannerStatus::EXACT_SOLUTION;
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
     ++tally.attempts;
-    tally.states.push_back(static_cast<double>(statesChecked(setup)));
+    tally.states.push_back(static_cast<double>(rastercheck::ompl::checkedStates(setup)));
     if (!solved || !collisionFree(setup.getSolutionPath(), oracle))
     {
         // Named on stderr, before the problem's "done" line: which problems a planner misses.

@@ -24,6 +24,10 @@ packages=(
     # scripts/gpu-check.sh bundle: ../shared/tools/gpu-bundle copies with cpio (a fresh Debian 12
     # machine lacks it; the first GPU run, 2026-11-26, stopped there)
     cpio
+    # rastercheck sweep: ompl_benchmark_statistics (ompl-demos, above) merges the logs; the sweep's
+    # test starts a one-node Slurm (slurmctld, slurmd, sbatch) with MUNGE authentication
+    # (tests/slurm/local-cluster.sh), and sweep merge reads the database through SQLite
+    slurm-wlm munge libsqlite3-dev
 )
 # Node.js and npm for the browser test: Debian's, unless a node with npm is already installed (a
 # NodeSource nodejs, which carries its own npm, conflicts with Debian's npm package).

@@ -58,10 +58,17 @@ void addCheckCommand(CLI::App &app);
 /** \brief `rastercheck plan PROBLEM [--request R] [--planner NAME]... [--runs N] [--time-limit S] [--log F]
     ...`: OMPL planners through ompl::tools::Benchmark; solution paths re-checked by the exact oracle. */
 void addPlanCommand(CLI::App &app);
+/** \brief Runs `rastercheck plan` with \a arguments (what follows "plan" on its command line) and
+    returns its exit status: the sweep's runs go through the very code and checks of the command. Throws
+    what the command throws (CLI::ParseError for bad arguments). */
+int runPlanCommand(const std::vector<std::string> &arguments);
 /** \brief `rastercheck render PROBLEM (--states IN.csv | --request R.yaml) --out-dir DIR`: top and side
     views of the scene and the path, and the raster image of the first colliding state. */
 void addRenderCommand(CLI::App &app);
 /** \brief `rastercheck view PROBLEM [--path STATES.csv | --request R.yaml] [--port N] [--host H]`: a
     local HTTP server with a live 3D viewer of the problem (src/view). */
 void addViewCommand(CLI::App &app);
+/** \brief `rastercheck sweep run SPEC --out DIR (--local N | --slurm [--submit])`, `sweep task DIR
+    --index I` and `sweep merge DIR`: benchmark sweeps as local processes or a Slurm job array. */
+void addSweepCommand(CLI::App &app);
 }  // namespace rastercheck::cli

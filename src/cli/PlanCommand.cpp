@@ -34,6 +34,8 @@ namespace
 // Run properties this command adds to the log (OMPL's convention: the last word is the SQL type).
 const char *const kRecheckValid = "exact recheck collision free BOOLEAN";
 const char *const kRecheckStates = "exact recheck states INTEGER";
+// States the checker decided in the run (single states and edge states; not the re-check's).
+const char *const kStatesChecked = "states checked INTEGER";
 
 struct PlanOptions
 {
@@ -220,6 +222,7 @@ int runPlan(const PlanOptions &options)
     int collidingPaths = 0;
     int runIndex = 0;
     ob::PlannerPtr previous;
+    benchmark.setPreRunEvent([&](const ob::PlannerPtr &) { ompl::resetCheckedStates(*setup); });
     benchmark.setPostRunEvent(
         [&](const ob::PlannerPtr &planner, ot::Benchmark::RunProperties &run)
         {
@@ -229,6 +232,7 @@ int runPlan(const PlanOptions &options)
                 runIndex = 0;
             }
             const int thisRun = runIndex++;
+            run[kStatesChecked] = std::to_string(ompl::checkedStates(*setup));
             const ob::ProblemDefinitionPtr &pdef = planner->getProblemDefinition();
             if (!pdef->hasSolution())
                 return;
@@ -358,5 +362,23 @@ void addPlanCommand(CLI::App &app)
     command->add_flag("--no-simplify", options->noSimplify,
                       "do not simplify solutions (the re-check sees the raw path)");
     command->callback([options]() { throw CommandResult{runPlan(*options)}; });
+}
+
+int runPlanCommand(const std::vector<std::string> &arguments)
+{
+    CLI::App app;
+    addPlanCommand(app);
+    // CLI11 takes a vector of arguments last first.
+    std::vector<std::string> reversed(arguments.rbegin(), arguments.rend());
+    reversed.push_back("plan");
+    try
+    {
+        app.parse(reversed);
+    }
+    catch (const CommandResult &result)
+    {
+        return result.status;
+    }
+    return 0;
 }
 }  // namespace rastercheck::cli

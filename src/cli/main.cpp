@@ -16,6 +16,7 @@ int main(int argc, char **argv)
     rastercheck::cli::addPlanCommand(app);
     rastercheck::cli::addRenderCommand(app);
     rastercheck::cli::addViewCommand(app);
+    rastercheck::cli::addSweepCommand(app);
     try
     {
         app.parse(argc, argv);

@@ -91,6 +91,23 @@ std::string writeFile(const std::string &path, const std::string &text)
     return path;
 }
 
+std::string objBox(const std::string &name, double x0, double y0, double z0, double x1, double y1, double z1, int base)
+{
+    char text[1024];
+    std::snprintf(text, sizeof text,
+                  "o %s\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g %g\nv %g %g "
+                  "%g\n",
+                  name.c_str(), x0, y0, z0, x1, y0, z0, x1, y1, z0, x0, y1, z0, x0, y0, z1, x1, y0, z1, x1, y1, z1, x0,
+                  y1, z1);
+    std::string obj = text;
+    const int faces[12][3] = {{1, 4, 3}, {1, 3, 2}, {5, 6, 7}, {5, 7, 8}, {1, 2, 6}, {1, 6, 5},
+                              {4, 8, 7}, {4, 7, 3}, {1, 5, 8}, {1, 8, 4}, {2, 3, 7}, {2, 7, 6}};
+    for (const auto &f : faces)
+        obj += "f " + std::to_string(base + f[0]) + " " + std::to_string(base + f[1]) + " " +
+               std::to_string(base + f[2]) + "\n";
+    return obj;
+}
+
 LogCapture::LogCapture()
 {
     setLogHandler(

@@ -63,6 +63,11 @@ void seedOmpl(std::uint_fast32_t value);
 /** \brief Writes \a text to \a path (creating it) and returns the path. */
 std::string writeFile(const std::string &path, const std::string &text);
 
+/** \brief An axis-aligned box as OBJ text (object \a name), outward faces, vertex indices starting at
+    \a base + 1 (the vertices written before it in the same file). */
+std::string objBox(const std::string &name, double x0, double y0, double z0, double x1, double y1, double z1,
+                   int base);
+
 /** \brief Collects the library's warnings and notices while it lives (setLogHandler), then restores
     the default handler. */
 struct LogCapture

@@ -78,6 +78,29 @@ StateValidityCheckerPtr getStateValidityChecker(const og::SimpleSetup &setup)
     return checker;
 }
 
+std::uint64_t checkedStates(const og::SimpleSetup &setup)
+{
+    const ob::MotionValidatorPtr &edges = setup.getSpaceInformation()->getMotionValidator();
+    const auto validity = std::dynamic_pointer_cast<StateValidityChecker>(setup.getStateValidityChecker());
+    std::uint64_t states = validity ? validity->getCallCount() : 0;
+    if (auto batched = std::dynamic_pointer_cast<MotionValidator>(edges))
+        states += batched->getCheckedStateCount();
+    else if (auto certified = std::dynamic_pointer_cast<CertifiedMotionValidator>(edges))
+        states += certified->getCheckedStateCount();
+    return states;
+}
+
+void resetCheckedStates(const og::SimpleSetup &setup)
+{
+    const ob::MotionValidatorPtr &edges = setup.getSpaceInformation()->getMotionValidator();
+    if (auto validity = std::dynamic_pointer_cast<StateValidityChecker>(setup.getStateValidityChecker()))
+        validity->resetCounters();
+    if (auto batched = std::dynamic_pointer_cast<MotionValidator>(edges))
+        batched->resetStateCounter();
+    else if (auto certified = std::dynamic_pointer_cast<CertifiedMotionValidator>(edges))
+        certified->resetStateCounter();
+}
+
 std::vector<double> configurationFromJoints(const StateMapping &mapping, const std::map<std::string, double> &joints,
                                             const std::string &what, UnknownJoints unknown)
 {

@@ -77,6 +77,13 @@ struct SetupOptions
     ConfigurationError when \a setup's checker is not one. */
 StateValidityCheckerPtr getStateValidityChecker(const ::ompl::geometric::SimpleSetup &setup);
 
+/** \brief States the rastercheck checker of \a setup decided since the last resetCheckedStates() (0
+    for another validity checker and edge checker): single states
+    (isValid, areValid) and the states of edges (MotionValidator, CertifiedMotionValidator; OMPL's own
+    edge checker calls isValid). Not counted: the exact re-check of paths, which checks on its own. */
+std::uint64_t checkedStates(const ::ompl::geometric::SimpleSetup &setup);
+void resetCheckedStates(const ::ompl::geometric::SimpleSetup &setup);
+
 /** \brief What configurationFromJoints does with a joint the robot lacks. */
 enum class UnknownJoints
 {
