@@ -58,6 +58,7 @@ tsan() {
     OMP_TOOL_LIBRARIES=$archer \
         TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:ignore_noninstrumented_modules=1" \
         RASTERCHECK_CONCURRENCY_STATES=${RASTERCHECK_CONCURRENCY_STATES:-10000} \
+        RASTERCHECK_SOAK_SCALE=${RASTERCHECK_SOAK_SCALE:-0.02} \
         ctest --test-dir build-tsan -L concurrency --output-on-failure --no-tests=error
     elapsed "ThreadSanitizer (tests labelled concurrency)" "$start"
 }

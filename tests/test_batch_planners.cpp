@@ -2,8 +2,10 @@
 // oracle densely; seeded runs repeat; every kind of state space StateMapping builds (real vector,
 // SO2 inside the crane's compound, SE2, SE3); time limits; planners sharing one checker from
 // several threads; a foreign validity checker; shortcuts that would cross an obstacle are refused.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iostream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -463,4 +465,37 @@ TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Exact), "certified");
     // ... except in raster mode, which cannot certify: batched at the space's resolution.
     EXPECT_EQ(describe(rco::EdgeChecking::Discrete, rc::CollisionMode::Raster), "batched");
+}
+
+TEST(LongRunning, AThousandSolvesWithClearOnOneSetupKeepMemoryFlat)
+{
+    // A planner embedded in a larger system solves for hours on one setup. $RASTERCHECK_SOAK_SCALE
+    // shrinks the run (scripts/sanitize.sh).
+    const int solves = rc::test::scaledCount(1000, "RASTERCHECK_SOAK_SCALE");
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    options.checker.threads = 1;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    setAcrossTheWall(*setup);
+    setup->setPlanner(std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation()));
+    rc::test::seedOmpl(11);
+    const int warmUp = std::max(1, solves / 10);
+    int solved = 0;
+    const auto solve = [&]
+    {
+        setup->clear();
+        solved += setup->solve(10.0) == ob::PlannerStatus::EXACT_SOLUTION;
+    };
+    const auto begin = std::chrono::steady_clock::now();
+    for (int i = 0; i < warmUp; ++i)
+        solve();
+    const rc::test::ProcessFootprint warm = rc::test::ProcessFootprint::now();
+    for (int i = warmUp; i < solves; ++i)
+        solve();
+    const rc::test::ProcessFootprint after = rc::test::ProcessFootprint::now();
+    std::cout << solves << " solves in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count()
+              << " s; resident " << warm.residentBytes / 1048576.0 << " MiB after " << warmUp << ", "
+              << after.residentBytes / 1048576.0 << " MiB after all\n";
+    EXPECT_EQ(solved, solves);
+    EXPECT_TRUE(rc::test::footprintFlat(warm, after));
 }
