@@ -21,7 +21,10 @@
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/core/Error.h"
+#include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/ompl/Setup.h"
+#include "rastercheck/ompl/StateMapping.h"
 #include "view/ViewServer.h"
 // After Eigen: httplib.h brings in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
@@ -157,7 +160,12 @@ protected:
 
     static json post(const std::string &body, int expectedStatus = 200)
     {
-        httplib::Result result = client().Post("/api/check", body, "application/json");
+        return postTo("/api/check", body, expectedStatus);
+    }
+
+    static json postTo(const std::string &route, const std::string &body, int expectedStatus = 200)
+    {
+        httplib::Result result = client().Post(route.c_str(), body, "application/json");
         EXPECT_TRUE(result) << "no answer to " << body.substr(0, 200);
         if (!result)
             return json();
@@ -875,6 +883,85 @@ TEST_F(ViewServerTest, TenThousandRequestsKeepMemoryFlat)
     std::cout << total << " requests: resident " << warm.residentBytes / 1048576.0 << " MiB after " << warmUp
               << ", " << after.residentBytes / 1048576.0 << " MiB after all\n";
     EXPECT_TRUE(rastercheck::test::footprintFlat(warm, after));
+}
+
+TEST_F(ViewServerTest, PlanFindsALiftWhoseEveryStateIsValid)
+{
+    // The content's start and goal (the lift), BatchRRTConnect by default, on certified edges.
+    const json answer = postTo("/api/plan", json{{"time_limit", 30}}.dump());
+    ASSERT_EQ(answer["solved"], true) << answer.dump();
+    EXPECT_EQ(answer["planner"], "BatchRRTConnect");
+    const json &path = answer["path"];
+    ASSERT_GE(path.size(), 2u);
+    for (std::size_t i = 0; i < kStart.size(); ++i)
+    {
+        EXPECT_NEAR(path.front()[i].get<double>(), kStart[i], 1e-9);
+        EXPECT_NEAR(path.back()[i].get<double>(), kGoal[i], 1e-9);
+    }
+    const json verdicts = post(json{{"states", path}}.dump());
+    EXPECT_EQ(verdicts["valid"], json(std::vector<bool>(path.size(), true))) << path.dump();
+    EXPECT_GT(answer["seconds"].get<double>(), 0.0);
+}
+
+TEST_F(ViewServerTest, BadPlanRequestsAreRefusedAndAnInvalidStartIsNamed)
+{
+    expectRefused(postTo("/api/plan", R"({"planner": "warpdrive"})", 400), "warpdrive");
+    expectRefused(postTo("/api/plan", R"({"planner": 3})", 400), "planner must be a name");
+    expectRefused(postTo("/api/plan", R"({"time_limit": -1})", 400), "time_limit must be a number of seconds in (0, 60]");
+    expectRefused(postTo("/api/plan", R"({"time_limit": 1000})", 400), "time_limit must be");
+    expectRefused(postTo("/api/plan", R"({"time_limit": "1"})", 400), "time_limit must be");
+    expectRefused(postTo("/api/plan", R"({"start": [1, 2]})", 400), "start has 2 values");
+    expectRefused(postTo("/api/plan", R"({"goal": "up"})", 400), "goal must be an array");
+    expectRefused(postTo("/api/plan", R"({"goals": []})", 400), "unknown field \"goals\"");
+    expectRefused(postTo("/api/plan", "[1]", 400), "expected an object");
+    expectRefused(postTo("/api/plan", "{", 400), "malformed JSON");
+    // A start in the rack is a question with an answer: no path, and why.
+    const json answer = postTo("/api/plan", json{{"start", kBoomInRack}}.dump());
+    EXPECT_EQ(answer["solved"], false);
+    EXPECT_TRUE(answer["path"].empty());
+    EXPECT_NE(answer["message"].get<std::string>().find("the start is invalid: "), std::string::npos) << answer;
+}
+
+TEST(ViewServerPlan, PandaPlanOfAMotionBenchMakerProblemHasOnlyValidStates)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rastercheck::test::pandaProblem(root, "bookshelf_small");
+    const rc::MotionPlanRequest request =
+        rc::loadMoveItRequest(root + "/mbm/panda/problems/bookshelf_small_panda/request0001.yaml");
+    const rc::ompl::StateMapping mapping(problem.robot);
+    rc::view::ViewContent content;
+    content.start = rc::ompl::configurationFromJoints(mapping, request.startJoints, "start");
+    content.goal = rc::ompl::configurationFromJoints(mapping, request.goalJoints, "goal");
+    rc::view::ViewServerOptions options;
+    options.port = 0;
+    options.webDir = rastercheck::test::sourcePath("src/view/web");
+    options.threeDir = options.webDir;
+    rc::view::ViewServer server(problem, content, options);
+    const int port = server.bind();
+    server.start();
+    httplib::Client client("127.0.0.1", port);
+    client.set_read_timeout(120, 0);
+    httplib::Result result = client.Post("/api/plan", R"({"time_limit": 30})", "application/json");
+    ASSERT_TRUE(result);
+    ASSERT_EQ(result->status, 200) << result->body;
+    const json answer = json::parse(result->body);
+    ASSERT_EQ(answer["solved"], true) << answer.dump();
+    // The path's states and 10 states on each of its motions (the Panda's joints move linearly).
+    const json &path = answer["path"];
+    json dense = json::array();
+    for (std::size_t r = 0; r + 1 < path.size(); ++r)
+        for (int k = 0; k < 10; ++k)
+        {
+            std::vector<double> q(mapping.numCoordinates());
+            for (std::size_t i = 0; i < q.size(); ++i)
+                q[i] = path[r][i].get<double>() + (path[r + 1][i].get<double>() - path[r][i].get<double>()) * k / 10.0;
+            dense.push_back(q);
+        }
+    dense.push_back(path.back());
+    result = client.Post("/api/check", json{{"states", dense}}.dump(), "application/json");
+    ASSERT_TRUE(result);
+    ASSERT_EQ(result->status, 200) << result->body;
+    EXPECT_EQ(json::parse(result->body)["valid"], json(std::vector<bool>(dense.size(), true)));
 }
 
 TEST(ViewFiles, PageAndThreeJsAreFoundOrTheErrorNamesWhereTheyWereLookedFor)

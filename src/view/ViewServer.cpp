@@ -1,6 +1,7 @@
 #include "view/ViewServer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -15,10 +16,15 @@
 #include <utility>
 
 #include <nlohmann/json.hpp>
+#include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/geometric/SimpleSetup.h>
 
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/ompl/Planners.h"
+#include "rastercheck/ompl/Setup.h"
+#include "rastercheck/ompl/StateValidityChecker.h"
 #include "render/RasterPicture.h"
 // After Eigen: httplib.h brings in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
@@ -466,23 +472,121 @@ struct ViewServer::Impl
             {"valid", std::move(verdicts)}, {"contacts", std::move(firstContacts)}, {"milliseconds", milliseconds}};
     }
 
-    void handleCheck(const httplib::Request &request, httplib::Response &response) const
+    static json parseBody(const httplib::Request &request)
     {
-        json body;
         try
         {
-            body = json::parse(request.body);
+            return json::parse(request.body);
         }
         catch (const json::exception &e)  // a syntax error, or a number too large for a double
         {
             throw RequestError{400, std::string("malformed JSON: ") + e.what()};
         }
+    }
+
+    void handleCheck(const httplib::Request &request, httplib::Response &response) const
+    {
+        json body = parseBody(request);
         if (!body.is_object() || body.contains("q") == body.contains("states"))
             throw RequestError{400,
                                "expected an object with either \"q\": [one configuration] or \"states\": "
                                "[[configuration], ...]"};
         sendJson(response, body.contains("q") ? checkOne(configurationFromJson(body["q"], robot(), "q"))
                                               : checkBatch(body["states"]));
+    }
+
+    /** \brief POST /api/plan: one plan at a time, on a SimpleSetup made as `rastercheck plan` makes
+        it (ompl::makeSimpleSetup: the same options, certified edges by default), built at the first
+        plan. */
+    void handlePlan(const httplib::Request &request, httplib::Response &response) const
+    {
+        const json body = parseBody(request);
+        if (!body.is_object())
+            throw RequestError{400, "expected an object {\"start\", \"goal\", \"planner\", \"time_limit\"} (each "
+                                    "optional)"};
+        for (const auto &item : body.items())
+            if (item.key() != "start" && item.key() != "goal" && item.key() != "planner" && item.key() != "time_limit")
+                throw RequestError{400, "unknown field \"" + item.key() +
+                                            "\" (expected start, goal, planner, time_limit)"};
+        const auto endpoint = [&](const char *name, const std::vector<double> &fallback)
+        {
+            if (body.contains(name))
+                return configurationFromJson(body[name], robot(), name);
+            if (fallback.empty())
+                throw RequestError{400, std::string("no ") + name + ": the problem has none; give \"" + name + "\""};
+            return fallback;
+        };
+        const std::vector<double> start = endpoint("start", content.start);
+        const std::vector<double> goal = endpoint("goal", content.goal);
+        if (body.contains("planner") && !body["planner"].is_string())
+            throw RequestError{400, "planner must be a name (batchrrtconnect, rrtconnect, ...)"};
+        const std::string plannerName = body.value("planner", std::string("batchrrtconnect"));
+        double timeLimit = 1.0;
+        if (body.contains("time_limit"))
+        {
+            if (!body["time_limit"].is_number() || !(body["time_limit"].get<double>() > 0) ||
+                body["time_limit"].get<double>() > options.maxPlanSeconds)
+                throw RequestError{400, "time_limit must be a number of seconds in (0, " +
+                                            std::to_string(static_cast<int>(options.maxPlanSeconds)) + "]"};
+            timeLimit = body["time_limit"].get<double>();
+        }
+
+        std::unique_lock<std::mutex> lock(planMutex, std::try_to_lock);
+        if (!lock.owns_lock())
+            throw RequestError{409, "a plan is running: one at a time"};
+        if (!planSetup)
+        {
+            ompl::SetupOptions setupOptions;
+            setupOptions.checker = checkerOptionsFor(options);
+            setupOptions.request = options.request;
+            planSetup = ompl::makeSimpleSetup(problem, setupOptions);
+        }
+        ::ompl::base::PlannerPtr planner;
+        try
+        {
+            planner = ompl::allocatePlanner(plannerName, planSetup->getSpaceInformation());
+        }
+        catch (const ConfigurationError &e)
+        {
+            throw RequestError{400, e.what()};
+        }
+        json answer{{"solved", false}, {"path", json::array()}, {"seconds", 0.0}, {"planner", planner->getName()}};
+        // A planner cannot leave an invalid start or reach an invalid goal: say which and why.
+        for (const auto &[name, q] : {std::pair<const char *, const std::vector<double> &>{"start", start},
+                                      std::pair<const char *, const std::vector<double> &>{"goal", goal}})
+        {
+            Contact contact;
+            if (!checker.isValid(q, options.request, &contact))
+            {
+                answer["message"] = std::string("the ") + name + " is invalid: " + checker.describe(contact);
+                sendJson(response, answer);
+                return;
+            }
+        }
+        planSetup->clear();
+        ompl::setStartAndGoal(*planSetup, start, goal);
+        planSetup->setPlanner(planner);
+        const auto begin = std::chrono::steady_clock::now();
+        // stop() ends a plan early, so that it never waits for a long time limit.
+        const ::ompl::base::PlannerStatus status = planSetup->solve(::ompl::base::plannerOrTerminationCondition(
+            ::ompl::base::timedPlannerTerminationCondition(timeLimit),
+            ::ompl::base::PlannerTerminationCondition([this] { return cancelPlans.load(); })));
+        const bool solved = status == ::ompl::base::PlannerStatus::EXACT_SOLUTION;
+        if (solved)
+            planSetup->simplifySolution();
+        answer["seconds"] = millisecondsSince(begin) / 1000.0;
+        answer["solved"] = solved;
+        if (!solved)
+        {
+            answer["message"] = "no path found within " + json(timeLimit).dump() + " s (" + status.asString() + ")";
+            sendJson(response, answer);
+            return;
+        }
+        const ompl::StateMapping &mapping = ompl::getStateValidityChecker(*planSetup)->getStateMapping();
+        const ::ompl::geometric::PathGeometric &path = planSetup->getSolutionPath();
+        for (std::size_t i = 0; i < path.getStateCount(); ++i)
+            answer["path"].push_back(mapping.toConfiguration(path.getState(static_cast<unsigned int>(i))));
+        sendJson(response, answer);
     }
 
     void handleRaster(const httplib::Request &request, httplib::Response &response) const
@@ -650,6 +754,7 @@ struct ViewServer::Impl
                        response.set_content(modelJson, "application/json");
                    });
         server.Post("/api/check", guarded(&Impl::handleCheck));
+        server.Post("/api/plan", guarded(&Impl::handlePlan));
         server.Get("/api/raster", guarded(&Impl::handleRaster));
         // Every other failure (no such route or file, a body over the limit, a request httplib
         // cannot parse) gets a message too; answers the handlers wrote are left as they are.
@@ -662,7 +767,8 @@ struct ViewServer::Impl
                 std::string message;
                 if (response.status == 404)
                     message = "no route " + request.method + " " + request.path +
-                              " (routes: GET /api/model, POST /api/check, GET /api/raster?q=..., and the page)";
+                              " (routes: GET /api/model, POST /api/check, POST /api/plan, GET /api/raster?q=..., "
+                              "and the page)";
                 else if (response.status == 413)
                     message = "request body over the limit of " + std::to_string(maxBody) + " bytes";
                 else
@@ -679,6 +785,9 @@ struct ViewServer::Impl
     std::string modelJson;
     HttpServer server;
     mutable std::mutex cairoMutex;
+    mutable std::mutex planMutex;
+    mutable ::ompl::geometric::SimpleSetupPtr planSetup;  ///< under planMutex
+    std::atomic<bool> cancelPlans{false};
     int port = -1;
     std::unique_ptr<ConnectionLoop> loop;
     std::mutex stateMutex;  ///< loop (created once) and stopping
@@ -741,6 +850,7 @@ void ViewServer::stop()
 {
     // One stop at a time: the second waits until the threads are joined.
     std::lock_guard<std::mutex> stopping(impl_->stopMutex);
+    impl_->cancelPlans = true;
     {
         std::lock_guard<std::mutex> lock(impl_->stateMutex);
         impl_->stopping = true;

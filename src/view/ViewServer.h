@@ -53,6 +53,8 @@ struct ViewServerOptions
     /** \brief Threads of one batch; 0 = the machine's cores divided by maxConcurrentBatches (at
         least 1), so that the batches at once do not oversubscribe the machine. */
     int checkerThreads = 0;
+    /** \brief Longest time_limit POST /api/plan accepts (seconds). */
+    double maxPlanSeconds = 60.0;
     /** \brief Where the detail of an internal error (a 500) goes; empty = standard error. */
     std::function<void(const std::string &)> log;
 };
@@ -84,6 +86,11 @@ std::string findThreeDir();
       component;
     - POST /api/check {"states": [[...], ...]}: one batch (Checker::check): a verdict and the first
       contact per state;
+    - POST /api/plan {"start", "goal", "planner", "time_limit"} (each optional: the content's start
+      and goal, BatchRRTConnect, 1 s): plans as `rastercheck plan` does (ompl::makeSimpleSetup,
+      certified edges by default), one plan at a time (409 meanwhile); {"solved", "path": [[...],
+      ...] (simplified), "seconds", "planner"}, and "message" when it found nothing (or the start or
+      goal is invalid);
     - GET  /api/raster?q=v1,v2,...: the raster image (PNG, the paper's Fig. 6) of the state's first
       colliding pair;
     - GET  / and the page's files, and three.js under /vendor/three/.
