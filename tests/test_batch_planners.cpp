@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <iostream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -479,23 +478,12 @@ TEST(LongRunning, AThousandSolvesWithClearOnOneSetupKeepMemoryFlat)
     setAcrossTheWall(*setup);
     setup->setPlanner(std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation()));
     rc::test::seedOmpl(11);
-    const int warmUp = std::max(1, solves / 10);
     int solved = 0;
-    const auto solve = [&]
-    {
-        setup->clear();
-        solved += setup->solve(10.0) == ob::PlannerStatus::EXACT_SOLUTION;
-    };
-    const auto begin = std::chrono::steady_clock::now();
-    for (int i = 0; i < warmUp; ++i)
-        solve();
-    const rc::test::ProcessFootprint warm = rc::test::ProcessFootprint::now();
-    for (int i = warmUp; i < solves; ++i)
-        solve();
-    const rc::test::ProcessFootprint after = rc::test::ProcessFootprint::now();
-    std::cout << solves << " solves in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count()
-              << " s; resident " << warm.residentBytes / 1048576.0 << " MiB after " << warmUp << ", "
-              << after.residentBytes / 1048576.0 << " MiB after all\n";
+    EXPECT_TRUE(rc::test::footprintFlatOver(solves, "solves",
+                                            [&]
+                                            {
+                                                setup->clear();
+                                                solved += setup->solve(10.0) == ob::PlannerStatus::EXACT_SOLUTION;
+                                            }));
     EXPECT_EQ(solved, solves);
-    EXPECT_TRUE(rc::test::footprintFlat(warm, after));
 }

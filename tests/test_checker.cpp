@@ -1,9 +1,7 @@
 // The collision engine end to end on the CPU backend: known answers, every mode against the exact
 // oracle on the blind-spot suites and the Panda MotionBenchMaker scenes, determinism across threads.
-#include <chrono>
-#include <cstdlib>
 #include <cmath>
-#include <iostream>
+#include <cstdlib>
 #include <limits>
 #include <random>
 
@@ -511,23 +509,12 @@ TEST(LongRunning, CheckersBuiltAndDroppedKeepMemoryFlat)
     options.backend = rc::BackendChoice::Cpu;
     const char *count = std::getenv("RASTERCHECK_SOAK_CHECKERS");
     const int checkers = rc::test::scaledCount(count && *count ? std::atoi(count) : 30, "RASTERCHECK_SOAK_SCALE");
-    const int warmUp = std::max(1, checkers / 10);
     int right = 0;
-    const auto buildAndDrop = [&]
-    {
-        const rc::Checker checker(plant.robot, plant.scene, options);
-        right += !checker.isValid(boomInRack);
-    };
-    const auto begin = std::chrono::steady_clock::now();
-    for (int i = 0; i < warmUp; ++i)
-        buildAndDrop();
-    const rc::test::ProcessFootprint warm = rc::test::ProcessFootprint::now();
-    for (int i = warmUp; i < checkers; ++i)
-        buildAndDrop();
-    const rc::test::ProcessFootprint after = rc::test::ProcessFootprint::now();
-    std::cout << checkers << " checkers in " << std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count()
-              << " s; resident " << warm.residentBytes / 1048576.0 << " MiB after " << warmUp << ", "
-              << after.residentBytes / 1048576.0 << " MiB after all\n";
+    EXPECT_TRUE(rc::test::footprintFlatOver(checkers, "checkers built and dropped",
+                                            [&]
+                                            {
+                                                const rc::Checker checker(plant.robot, plant.scene, options);
+                                                right += !checker.isValid(boomInRack);
+                                            }));
     EXPECT_EQ(right, checkers);
-    EXPECT_TRUE(rc::test::footprintFlat(warm, after));
 }

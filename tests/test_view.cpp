@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -192,6 +193,28 @@ protected:
     }
 
     static json checkBody(const std::vector<double> &q) { return json{{"q", q}}; }
+
+    /** \brief \a clients threads at once, each with its own connection, each sending \a perClient
+        requests: request(client, t, r) sends request r of thread t and says whether the answer was
+        right. Returns how many were. */
+    static int fromClients(int clients, int perClient,
+                           const std::function<bool(httplib::Client &client, int t, int r)> &request)
+    {
+        std::atomic<int> right{0};
+        std::vector<std::thread> threads;
+        for (int t = 0; t < clients; ++t)
+            threads.emplace_back(
+                [&, t]
+                {
+                    httplib::Client client("127.0.0.1", port_);
+                    client.set_read_timeout(60, 0);  // a sanitized build is slow
+                    for (int r = 0; r < perClient; ++r)
+                        right += request(client, t, r);
+                });
+        for (std::thread &thread : threads)
+            thread.join();
+        return right.load();
+    }
 
     /** \brief Waits (2 s at most) until the server has closed every connection its clients closed. */
     static std::size_t openConnectionsAfterClientsLeft()
@@ -455,29 +478,19 @@ TEST_F(ViewServerTest, ServesThePageAndThreeJs)
 TEST_F(ViewServerTest, ManyRequestsAtOnceGetTheirOwnAnswers)
 {
     constexpr int kThreads = 8, kRequests = 20;
-    std::atomic<int> right{0};
-    std::vector<std::thread> threads;
-    for (int t = 0; t < kThreads; ++t)
-        threads.emplace_back(
-            [&, t]
-            {
-                httplib::Client client("127.0.0.1", port_);
-                client.set_read_timeout(60, 0);
-                for (int r = 0; r < kRequests; ++r)
-                {
-                    const bool colliding = (t + r) % 2 == 1;
-                    const std::string body = json{{"q", colliding ? kBoomInRack : kFree}}.dump();
-                    httplib::Result result = client.Post("/api/check", body, "application/json");
-                    if (!result || result->status != 200)
-                        continue;
-                    const json answer = json::parse(result->body);
-                    if (answer["valid"] == !colliding && answer["contacts"].size() == (colliding ? 12u : 0u))
-                        ++right;
-                }
-            });
-    for (std::thread &thread : threads)
-        thread.join();
-    EXPECT_EQ(right.load(), kThreads * kRequests);
+    const int right = fromClients(kThreads, kRequests,
+                                  [](httplib::Client &client, int t, int r)
+                                  {
+                                      const bool colliding = (t + r) % 2 == 1;
+                                      const std::string body = json{{"q", colliding ? kBoomInRack : kFree}}.dump();
+                                      httplib::Result result = client.Post("/api/check", body, "application/json");
+                                      if (!result || result->status != 200)
+                                          return false;
+                                      const json answer = json::parse(result->body);
+                                      return answer["valid"] == !colliding &&
+                                             answer["contacts"].size() == (colliding ? 12u : 0u);
+                                  });
+    EXPECT_EQ(right, kThreads * kRequests);
     // And the server is still there after every bad request above.
     EXPECT_EQ(get("/api/model")["robot"], "crawler_crane");
 }
@@ -561,27 +574,19 @@ TEST_F(ViewServerTest, ManyLargeBatchesAtOnceRunAtMostTheBoundAtATime)
     for (std::size_t i = 0; i < states; ++i)
         batch.push_back(i % 3 == 0 ? kBoomInRack : kFree);
     const std::string body = json{{"states", batch}}.dump();
-    std::atomic<int> right{0};
-    std::vector<std::thread> threads;
-    for (int t = 0; t < clients; ++t)
-        threads.emplace_back(
-            [&]
-            {
-                for (int b = 0; b < batches; ++b)
-                {
-                    httplib::Result result = client().Post("/api/check", body, "application/json");
-                    if (!result || result->status != 200)
-                        continue;
-                    const json answer = json::parse(result->body);
-                    bool all = answer["valid"].size() == states;
-                    for (std::size_t i = 0; all && i < states; ++i)
-                        all = answer["valid"][i] == (i % 3 != 0);
-                    right += all;
-                }
-            });
-    for (std::thread &thread : threads)
-        thread.join();
-    EXPECT_EQ(right.load(), clients * batches);
+    const int right = fromClients(clients, batches,
+                                  [&](httplib::Client &client, int, int)
+                                  {
+                                      httplib::Result result = client.Post("/api/check", body, "application/json");
+                                      if (!result || result->status != 200)
+                                          return false;
+                                      const json answer = json::parse(result->body);
+                                      bool all = answer["valid"].size() == states;
+                                      for (std::size_t i = 0; all && i < states; ++i)
+                                          all = answer["valid"][i] == (i % 3 != 0);
+                                      return all;
+                                  });
+    EXPECT_EQ(right, clients * batches);
     const rc::view::ViewServerStats stats = server_->stats();
     EXPECT_GE(stats.peakConcurrentBatches, 1);
     EXPECT_LE(stats.peakConcurrentBatches, kMaxBatches);
@@ -759,42 +764,31 @@ TEST(ViewServerLimits, IdleAndIncompleteConnectionsTimeOutAndTheIdlestMakesRoom)
 TEST_F(ViewServerTest, LoadWithIdleConnectionsEveryRequestAnsweredMemoryFlat)
 {
     const int clients = 8, requests = rastercheck::test::scaledCount(500, kLoadScale);
+    std::mutex mutex;
     const auto run = [&](int perClient, std::vector<double> *latencies)
     {
-        std::mutex mutex;
-        std::atomic<int> right{0};
-        std::vector<std::thread> threads;
-        for (int t = 0; t < clients; ++t)
-            threads.emplace_back(
-                [&, t]
+        return fromClients(
+            clients, perClient,
+            [&](httplib::Client &client, int t, int r)
+            {
+                const int kind = (t + r) % 10;  // 0: malformed; odd: colliding; else free
+                const std::string body =
+                    kind == 0 ? R"({"q": [0, 0, 0,)" : checkBody(kind % 2 ? kBoomInRack : kFree).dump();
+                const auto start = std::chrono::steady_clock::now();
+                httplib::Result result = client.Post("/api/check", body, "application/json");
+                const double milliseconds =
+                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+                if (latencies)
                 {
-                    httplib::Client client("127.0.0.1", port_);
-                    client.set_read_timeout(60, 0);
-                    std::vector<double> mine;
-                    for (int r = 0; r < perClient; ++r)
-                    {
-                        const int kind = (t + r) % 10;  // 0: malformed; odd: colliding; else free
-                        const std::string body =
-                            kind == 0 ? R"({"q": [0, 0, 0,)" : checkBody(kind % 2 ? kBoomInRack : kFree).dump();
-                        const auto start = std::chrono::steady_clock::now();
-                        httplib::Result result = client.Post("/api/check", body, "application/json");
-                        mine.push_back(std::chrono::duration<double, std::milli>(
-                                           std::chrono::steady_clock::now() - start)
-                                           .count());
-                        if (!result)
-                            continue;
-                        if (kind == 0)
-                            right += result->status == 400;
-                        else
-                            right += result->status == 200 && json::parse(result->body)["valid"] == (kind % 2 == 0);
-                    }
                     std::lock_guard<std::mutex> lock(mutex);
-                    if (latencies)
-                        latencies->insert(latencies->end(), mine.begin(), mine.end());
-                });
-        for (std::thread &thread : threads)
-            thread.join();
-        return right.load();
+                    latencies->push_back(milliseconds);
+                }
+                if (!result)
+                    return false;
+                if (kind == 0)
+                    return result->status == 400;
+                return result->status == 200 && json::parse(result->body)["valid"] == (kind % 2 == 0);
+            });
     };
     using rastercheck::test::ProcessFootprint;
     const ProcessFootprint before = ProcessFootprint::now();
@@ -840,44 +834,34 @@ TEST_F(ViewServerTest, TenThousandRequestsKeepMemoryFlat)
     const std::string batch = json{{"states", {kFree, kBoomInRack, kStart, kGoal}}}.dump();
     const auto run = [&](int from, int to)
     {
-        std::atomic<int> answered{0};
-        std::vector<std::thread> threads;
-        for (int t = 0; t < clients; ++t)
-            threads.emplace_back(
-                [&, t]
-                {
-                    httplib::Client client("127.0.0.1", port_);
-                    client.set_read_timeout(60, 0);
-                    for (int r = from + t; r < to; r += clients)
-                    {
-                        const auto send = [&]
-                        {
-                            switch (r % 200)
-                            {
-                                case 0:
-                                    return client.Get(raster.c_str());
-                                case 1:
-                                    return client.Get("/api/model");
-                                case 2:
-                                    return client.Post("/api/check", "{\"q\": [1, 2", "application/json");
-                                default:
-                                    return client.Post("/api/check", r % 2 ? batch : checkBody(kFree).dump(),
-                                                       "application/json");
-                            }
-                        };
-                        const httplib::Result result = send();
-                        answered += result && (result->status == 200 || (r % 200 == 2 && result->status == 400));
-                    }
-                });
-        for (std::thread &thread : threads)
-            thread.join();
-        return answered.load();
+        return fromClients(clients, (to - from) / clients,
+                           [&](httplib::Client &client, int t, int i)
+                           {
+                               const int r = from + i * clients + t;
+                               const auto send = [&]
+                               {
+                                   switch (r % 200)
+                                   {
+                                       case 0:
+                                           return client.Get(raster.c_str());
+                                       case 1:
+                                           return client.Get("/api/model");
+                                       case 2:
+                                           return client.Post("/api/check", "{\"q\": [1, 2", "application/json");
+                                       default:
+                                           return client.Post("/api/check", r % 2 ? batch : checkBody(kFree).dump(),
+                                                              "application/json");
+                                   }
+                               };
+                               const httplib::Result result = send();
+                               return result && (result->status == 200 || (r % 200 == 2 && result->status == 400));
+                           });
     };
-    const int warmUp = std::max(1, total / 5);
+    const int warmUp = std::max(clients, total / 5 / clients * clients);
     EXPECT_EQ(run(0, warmUp), warmUp);
     EXPECT_EQ(openConnectionsAfterClientsLeft(), 0u);
     const auto warm = rastercheck::test::ProcessFootprint::now();
-    EXPECT_EQ(run(warmUp, total), total - warmUp);
+    EXPECT_EQ(run(warmUp, total), (total - warmUp) / clients * clients);
     EXPECT_EQ(openConnectionsAfterClientsLeft(), 0u);
     const auto after = rastercheck::test::ProcessFootprint::now();
     std::cout << total << " requests: resident " << warm.residentBytes / 1048576.0 << " MiB after " << warmUp

@@ -851,13 +851,15 @@ void ViewServer::stop()
     // One stop at a time: the second waits until the threads are joined.
     std::lock_guard<std::mutex> stopping(impl_->stopMutex);
     impl_->cancelPlans = true;
+    ConnectionLoop *loop = nullptr;  // made once by start(), never replaced
     {
         std::lock_guard<std::mutex> lock(impl_->stateMutex);
         impl_->stopping = true;
+        loop = impl_->loop.get();
     }
     impl_->stopped.notify_all();
-    if (impl_->loop)
-        impl_->loop->stop();
+    if (loop)
+        loop->stop();
 }
 
 ViewServerStats ViewServer::stats() const

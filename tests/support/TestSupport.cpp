@@ -1,6 +1,8 @@
 #include "TestSupport.h"
 
 #include <algorithm>
+#include <chrono>
+#include <iostream>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -204,5 +206,21 @@ ProcessFootprint ProcessFootprint::now()
     if (why.str().empty())
         return ::testing::AssertionSuccess();
     return ::testing::AssertionFailure() << why.str();
+}
+::testing::AssertionResult footprintFlatOver(int count, const std::string &what, const std::function<void()> &step)
+{
+    const int warmUp = std::max(1, count / 10);
+    const auto begin = std::chrono::steady_clock::now();
+    for (int i = 0; i < std::min(warmUp, count); ++i)
+        step();
+    const ProcessFootprint warm = ProcessFootprint::now();
+    for (int i = warmUp; i < count; ++i)
+        step();
+    const ProcessFootprint after = ProcessFootprint::now();
+    std::cout << count << " " << what << " in "
+              << std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count() << " s; resident "
+              << warm.residentBytes / 1048576.0 << " MiB after " << warmUp << ", " << after.residentBytes / 1048576.0
+              << " MiB after all" << std::endl;
+    return footprintFlat(warm, after);
 }
 }  // namespace rastercheck::test

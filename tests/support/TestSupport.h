@@ -81,6 +81,11 @@ struct ProcessFootprint
     threads and descriptors. */
 ::testing::AssertionResult footprintFlat(const ProcessFootprint &warm, const ProcessFootprint &after);
 
+/** \brief Calls \a step \a count times (a long-running use: solves, checkers built and dropped),
+    prints what it took, and returns footprintFlat between the end of a warm-up (a tenth of the
+    calls, at least one) and the end. \a what names the calls in the printout ("solves"). */
+::testing::AssertionResult footprintFlatOver(int count, const std::string &what, const std::function<void()> &step);
+
 /** \brief Writes \a text to \a path (creating it) and returns the path. */
 std::string writeFile(const std::string &path, const std::string &text);
 
