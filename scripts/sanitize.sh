@@ -9,8 +9,10 @@
 # Both: -O1 -g, assertions on (ours, Eigen's, and libstdc++'s bounds checks), no benchmarks,
 # examples or CUDA (sanitizers check host code). Both run tests/test_concurrency.cpp at a tenth of
 # its size (RASTERCHECK_CONCURRENCY_STATES), and asan tests/test_nonconvex.cpp at a quarter
-# (RASTERCHECK_NONCONVEX_SCALE): the sanitizers slow the checker 10 to 50 times. asan leaves out the
-# test labelled slurm (a real Slurm's daemons; the sweep's code itself is in test_sweep).
+# (RASTERCHECK_NONCONVEX_SCALE), the viewer's load tests at a twentieth (RASTERCHECK_VIEW_LOAD_SCALE)
+# and the long-running tests at a fiftieth (RASTERCHECK_SOAK_SCALE): the sanitizers slow the
+# checker 10 to 50 times. asan leaves out the test labelled slurm (a real Slurm's daemons; the
+# sweep's code itself is in test_sweep).
 # Usage: scripts/sanitize.sh [asan] [tsan]   (default: both). Needs scripts/install-deps.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -36,6 +38,8 @@ asan() {
     export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
     export RASTERCHECK_CONCURRENCY_STATES=${RASTERCHECK_CONCURRENCY_STATES:-10000}
     export RASTERCHECK_NONCONVEX_SCALE=${RASTERCHECK_NONCONVEX_SCALE:-0.25}
+    export RASTERCHECK_VIEW_LOAD_SCALE=${RASTERCHECK_VIEW_LOAD_SCALE:-0.05}
+    export RASTERCHECK_SOAK_SCALE=${RASTERCHECK_SOAK_SCALE:-0.02}
     configure build-asan -DCMAKE_CXX_COMPILER=g++ -DRASTERCHECK_SANITIZE=ON
     cmake --build build-asan -j2
     # Not the test labelled slurm (test_sweep_slurm): it starts Slurm's daemons and drives the
@@ -57,6 +61,7 @@ tsan() {
     OMP_TOOL_LIBRARIES=$archer \
         TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:ignore_noninstrumented_modules=1" \
         RASTERCHECK_CONCURRENCY_STATES=${RASTERCHECK_CONCURRENCY_STATES:-10000} \
+        RASTERCHECK_SOAK_SCALE=${RASTERCHECK_SOAK_SCALE:-0.02} \
         ctest --test-dir build-tsan -L concurrency --output-on-failure --no-tests=error
     elapsed "ThreadSanitizer (tests labelled concurrency)" "$start"
 }

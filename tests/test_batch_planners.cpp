@@ -2,6 +2,7 @@
 // oracle densely; seeded runs repeat; every kind of state space StateMapping builds (real vector,
 // SO2 inside the crane's compound, SE2, SE3); time limits; planners sharing one checker from
 // several threads; a foreign validity checker; shortcuts that would cross an obstacle are refused.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -484,4 +485,26 @@ TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)
     {
         EXPECT_EQ(std::string(error.what()).rfind("CertifiedMotionValidator: ", 0), 0u) << error.what();
     }
+}
+
+TEST(LongRunning, AThousandSolvesWithClearOnOneSetupKeepMemoryFlat)
+{
+    // A planner embedded in a larger system solves for hours on one setup. $RASTERCHECK_SOAK_SCALE
+    // shrinks the run (scripts/sanitize.sh).
+    const int solves = rc::test::scaledCount(1000, "RASTERCHECK_SOAK_SCALE");
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    options.checker.threads = 1;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    setAcrossTheWall(*setup);
+    setup->setPlanner(std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation()));
+    rc::test::seedOmpl(11);
+    int solved = 0;
+    EXPECT_TRUE(rc::test::footprintFlatOver(solves, "solves",
+                                            [&]
+                                            {
+                                                setup->clear();
+                                                solved += setup->solve(10.0) == ob::PlannerStatus::EXACT_SOLUTION;
+                                            }));
+    EXPECT_EQ(solved, solves);
 }

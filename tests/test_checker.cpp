@@ -1,6 +1,7 @@
 // The collision engine end to end on the CPU backend: known answers, every mode against the exact
 // oracle on the blind-spot suites and the Panda MotionBenchMaker scenes, determinism across threads.
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <random>
 
@@ -499,4 +500,25 @@ TEST(Checker, WithoutAUsableDeviceTheCudaChoiceFallsBackToTheCpuWithAWarning)
     // Decisions still come, from the CPU backend.
     EXPECT_FALSE(checker.isValid(at(0, 0, 0)));
     EXPECT_TRUE(checker.isValid(at(0, 0, 1)));
+}
+
+TEST(LongRunning, CheckersBuiltAndDroppedKeepMemoryFlat)
+{
+    // A system that rebuilds its checker (a scene update, a reconfigured robot) for hours. One build
+    // for the crane in the plant takes about 0.13 s here: ctest builds 30, RASTERCHECK_SOAK_CHECKERS
+    // sets the count (1000 in docs/benchmarks.md), RASTERCHECK_SOAK_SCALE shrinks it (scripts/sanitize.sh).
+    const rc::Problem &plant = rc::test::plant();
+    const std::vector<double> boomInRack = {0, 0, 0, 1.570796326795, 0.3, 5, 1};
+    rc::CheckerOptions options;
+    options.backend = rc::BackendChoice::Cpu;
+    const char *count = std::getenv("RASTERCHECK_SOAK_CHECKERS");
+    const int checkers = rc::test::scaledCount(count && *count ? std::atoi(count) : 30, "RASTERCHECK_SOAK_SCALE");
+    int right = 0;
+    EXPECT_TRUE(rc::test::footprintFlatOver(checkers, "checkers built and dropped",
+                                            [&]
+                                            {
+                                                const rc::Checker checker(plant.robot, plant.scene, options);
+                                                right += !checker.isValid(boomInRack);
+                                            }));
+    EXPECT_EQ(right, checkers);
 }

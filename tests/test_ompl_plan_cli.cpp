@@ -5,10 +5,18 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 
+#include <ompl/base/ScopedState.h>
+#include <ompl/geometric/SimpleSetup.h>
+
 #include "TestSupport.h"
+#include "rastercheck/io/StatesCsv.h"
+#include "rastercheck/ompl/Setup.h"
+#include "rastercheck/ompl/StateValidityChecker.h"
 
 using rastercheck::test::makeTempDir;
 using rastercheck::test::objBox;
@@ -87,6 +95,62 @@ TEST(PlanCli, OmplAppProblemLogIsReadByOmplBenchmarkStatistics)
     EXPECT_EQ(countRows(database, ""), 4);
     EXPECT_EQ(countRows(database, "where exact_recheck_collision_free = 1"), countRows(database, "where solved = 1"));
     EXPECT_GE(countRows(database, "where solved = 1"), 2);
+}
+
+TEST(PlanCli, PathOutWritesEveryRunsPathsWhichCheckAndCertifiedEdgesAccept)
+{
+    const std::string folder = makeTempDir("plan_cli_paths");
+    writeFile(folder + "/robot.obj", objBox("robot", -0.1, -0.1, -0.1, 0.1, 0.1, 0.1, 0));
+    writeFile(folder + "/world.obj",
+              objBox("pillar", -0.3, -0.6, -2, 0.3, 0.6, 2, 0) + objBox("shelf", -0.8, -1.2, -0.5, 0.8, -0.7, 0.5, 8));
+    const std::string problem = writeFile(folder + "/boxes.cfg", cfg("batchrrtconnect=\n"));
+    const CliRun run = runCli("plan " + problem + " --seed 3 --path-out " + folder + "/paths");
+    ASSERT_EQ(run.status, 0) << run.output;
+    EXPECT_TRUE(contains(run.output, "batchrrtconnect       2/2         0")) << run.output;
+
+    // The index: both runs, raw and simplified, each re-checked collision-free.
+    std::ifstream index(folder + "/paths/paths.csv");
+    std::string line;
+    std::getline(index, line);
+    EXPECT_EQ(line, "planner,run,path,file,states,exact_recheck");
+    std::vector<std::string> files;
+    for (const char *expected : {"BatchRRTConnect,0,raw,BatchRRTConnect_run0_raw.csv,",
+                                 "BatchRRTConnect,0,simplified,BatchRRTConnect_run0_simplified.csv,",
+                                 "BatchRRTConnect,1,raw,BatchRRTConnect_run1_raw.csv,",
+                                 "BatchRRTConnect,1,simplified,BatchRRTConnect_run1_simplified.csv,"})
+    {
+        ASSERT_TRUE(std::getline(index, line));
+        EXPECT_EQ(line.rfind(expected, 0), 0u) << line;
+        EXPECT_TRUE(contains(line, ",collision_free")) << line;
+        std::istringstream cells(line);
+        std::string cell;
+        for (int c = 0; c < 4 && std::getline(cells, cell, ','); ++c)
+        {
+        }
+        files.push_back(folder + "/paths/" + cell);
+    }
+
+    // Each file as `check --states` reads it: every state valid. Each motion between consecutive
+    // states: accepted by certified edges (the default of makeSimpleSetup, as of plan).
+    rastercheck::ProblemSource source;
+    source.cfgPath = problem;
+    const ompl::geometric::SimpleSetupPtr setup = rastercheck::ompl::makeSimpleSetup(rastercheck::loadProblem(source));
+    const rastercheck::ompl::StateMapping &mapping = rastercheck::ompl::getStateValidityChecker(*setup)->getStateMapping();
+    for (const std::string &file : files)
+    {
+        const CliRun checked = runCli("check " + problem + " --states " + file);
+        EXPECT_EQ(checked.status, 0) << checked.output;
+        EXPECT_TRUE(contains(checked.output, " invalid=0 ")) << file << ": " << checked.output;
+        const rastercheck::StatesTable states = rastercheck::readStatesCsv(file, mapping.robot().coordinateNames);
+        ASSERT_GE(states.rows, 2u) << file;
+        ompl::base::ScopedState<> from(setup->getStateSpace()), to(setup->getStateSpace());
+        for (std::size_t r = 0; r + 1 < states.rows; ++r)
+        {
+            mapping.fromConfiguration(states.values.data() + r * states.dof, from.get());
+            mapping.fromConfiguration(states.values.data() + (r + 1) * states.dof, to.get());
+            EXPECT_TRUE(setup->getSpaceInformation()->checkMotion(from.get(), to.get())) << file << " motion " << r;
+        }
+    }
 }
 
 TEST(PlanCli, CollidingSolutionIsReportedLoudly)

@@ -16,6 +16,7 @@
 #include <ompl/util/RandomNumbers.h>
 
 #include "Commands.h"
+#include "PlannedPaths.h"
 #include "rastercheck/core/Statistics.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/io/MoveItYaml.h"
@@ -53,6 +54,7 @@ struct PlanOptions
     double margin = 0.0;
     unsigned int recheckFactor = 10;
     std::string logPath;
+    std::string pathOut;
     long long seed = -1;
     bool noSimplify = false;
 };
@@ -210,6 +212,8 @@ int runPlan(const PlanOptions &options)
     {
         ob::PlannerPtr planner = ompl::allocatePlanner(name, setup->getSpaceInformation());
         ompl::setPlannerParameters(*planner, parameters);
+        if (!options.pathOut.empty())
+            planner = std::make_shared<RawPathRecorder>(planner);
         benchmark.addPlanner(planner);
         labels.push_back(name);
     }
@@ -219,6 +223,10 @@ int runPlan(const PlanOptions &options)
 
     CollisionRequest exact = setupOptions.request;
     exact.mode = CollisionMode::Exact;
+    std::unique_ptr<PathFolder> pathFolder;
+    if (!options.pathOut.empty())
+        pathFolder = std::make_unique<PathFolder>(options.pathOut, checker->getStateMapping(), checker->getChecker(),
+                                                  exact, options.recheckFactor);
     int collidingPaths = 0;
     int runIndex = 0;
     ob::PlannerPtr previous;
@@ -243,6 +251,8 @@ int runPlan(const PlanOptions &options)
                 *path, checker->getStateMapping(), checker->getChecker(), exact, options.recheckFactor);
             run[kRecheckValid] = result.valid ? "1" : "0";
             run[kRecheckStates] = std::to_string(result.statesChecked);
+            if (pathFolder)
+                pathFolder->addRun(*planner, thisRun, *path, result, !options.noSimplify);
             if (!result.valid)
             {
                 ++collidingPaths;
@@ -358,6 +368,10 @@ void addPlanCommand(CLI::App &app)
                      "solution paths are re-checked at this many times the planner's resolution (default 10)")
         ->check(CLI::PositiveNumber);
     command->add_option("--log", options->logPath, "OMPL benchmark log (for ompl_benchmark_statistics)");
+    command->add_option("--path-out", options->pathOut,
+                        "folder for every solved run's path as a states CSV, raw and simplified "
+                        "(PLANNER_runN_raw.csv, ..._simplified.csv; paths.csv lists them with the exact re-check's "
+                        "verdict): what render --states and view --path read");
     command->add_option("--seed", options->seed, "OMPL random seed")->check(CLI::NonNegativeNumber);
     command->add_flag("--no-simplify", options->noSimplify,
                       "do not simplify solutions (the re-check sees the raw path)");

@@ -53,7 +53,8 @@ int runView(const ViewCommandOptions &options)
     if (!options.requestPath.empty())
     {
         // Start and goal of a MoveIt request, and the straight line between them as the path (as
-        // `rastercheck render --request` draws it).
+        // `rastercheck render --request` draws it) unless --path gives one (a planned path: Plan
+        // can plan again from the request's start to its goal).
         std::tie(content.start, content.goal) =
             ompl::startAndGoal(ompl::StateMapping(problem.robot), loadMoveItRequest(options.requestPath));
         content.path = content.start;
@@ -94,12 +95,12 @@ void addViewCommand(CLI::App &app)
     CLI::App *command = app.add_subcommand(
         "view", "Live 3D viewer in the browser: joints on sliders, collisions and contacts shown as they happen");
     options->problem.addTo(*command);
-    CLI::Option *states =
-        command->add_option("--path", options->statesPath,
-                            "CSV of states to play back (as `check --states`: header row of coordinate names)");
-    CLI::Option *request = command->add_option("--request", options->requestPath,
-                                               "MoveIt MotionPlanRequest YAML: start, goal and the line between them");
-    states->excludes(request);
+    command->add_option("--path", options->statesPath,
+                        "CSV of states to play back (as `check --states`: header row of coordinate names; "
+                        "`plan --path-out` writes them)");
+    command->add_option("--request", options->requestPath,
+                        "MoveIt MotionPlanRequest YAML: start and goal (Plan's), and the line between them "
+                        "unless --path is given");
     command->add_option("--host", options->host, "address to listen on (default 127.0.0.1: this machine only)");
     command->add_option("--port", options->port, "port (default 8080; 0 picks a free one)")
         ->check(CLI::Range(0, 65535));

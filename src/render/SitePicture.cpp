@@ -275,13 +275,23 @@ SitePictureInfo writeSitePicture(const std::string &pngPath, const RobotModel &r
                                  " is not one of the " + std::to_string(rows) + " states");
     const bool top = options.view == SiteView::Top;
 
+    // The tracked link's trajectory through every state and between them: a planner's path has few
+    // states, and the link moves on a curve between two of them (the coordinates move linearly, as
+    // the path's motions do), not on the chord.
+    constexpr int kTraceSteps = 24;
     RobotData data(robot);
-    std::vector<Eigen::Vector3d> trace(rows);
+    std::vector<Eigen::Vector3d> trace;
+    trace.reserve((rows - 1) * kTraceSteps + 1);
+    std::vector<double> q(dof);
     for (std::size_t r = 0; r < rows; ++r)
-    {
-        forwardKinematics(robot, data, states.data() + r * dof);
-        trace[r] = data.oMl[static_cast<std::size_t>(tracked)].translation();
-    }
+        for (int k = 0; k < (r + 1 < rows ? kTraceSteps : 1); ++k)
+        {
+            const double t = static_cast<double>(k) / kTraceSteps;
+            for (std::size_t d = 0; d < dof; ++d)
+                q[d] = k == 0 ? states[r * dof + d] : (1 - t) * states[r * dof + d] + t * states[(r + 1) * dof + d];
+            forwardKinematics(robot, data, q.data());
+            trace.push_back(data.oMl[static_cast<std::size_t>(tracked)].translation());
+        }
 
     SitePictureInfo info;
     if (top)
@@ -474,7 +484,8 @@ SitePictureInfo writeSitePicture(const std::string &pngPath, const RobotModel &r
     if (rows > 1)
         marker(trace.back(), kGoalColour, "goal");
     if (options.collidingState >= 0)
-        marker(trace[static_cast<std::size_t>(options.collidingState)], kCollisionColour, options.collidingLabel);
+        marker(trace[static_cast<std::size_t>(options.collidingState) * kTraceSteps], kCollisionColour,
+               options.collidingLabel);
 
     labelObjects(cr, scene, objectShapes, plot, top, markerLabels);
 

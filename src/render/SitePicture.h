@@ -62,10 +62,11 @@ struct SitePictureInfo
 /** \brief Draws the scene and a robot path into a PNG: every object as the filled union of its
     triangles' projections with its convex outline (painted far to near), the robot at the first
     state ("start", blue) and the last ("goal", green), \a options.ghosts states between them as
-    grey silhouettes, the tracked link's trajectory through all states in order, axes with ticks in
-    metres, a scale bar, object labels and a legend. \a states: rows x robot.numCoordinates() values
-    (row-major, the robot's coordinate order); consecutive rows are joined by straight lines, so
-    pass a densely interpolated path for a faithful trajectory. One row draws the robot once.
+    grey silhouettes, the tracked link's trajectory through all states in order (and between them:
+    the coordinates move linearly from one state to the next, as a planned path's motions do), axes
+    with ticks in metres, a scale bar, object labels and a legend. \a states: rows x
+    robot.numCoordinates() values (row-major, the robot's coordinate order). One row draws the robot
+    once.
     Throws ConfigurationError on a bad size, an unknown tracked link or an empty drawing, InputError
     when the file cannot be written. */
 SitePictureInfo writeSitePicture(const std::string &pngPath, const RobotModel &robot, const Scene &scene,

@@ -1,19 +1,30 @@
 #include "view/ViewServer.h"
 
+#include <algorithm>
+#include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <iostream>
 #include <mutex>
 #include <sstream>
+#include <thread>
 #include <utility>
 
 #include <nlohmann/json.hpp>
+#include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/geometric/SimpleSetup.h>
 
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/ompl/Planners.h"
+#include "rastercheck/ompl/Setup.h"
+#include "rastercheck/ompl/StateValidityChecker.h"
 #include "render/RasterPicture.h"
 // After Eigen: httplib.h brings in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
@@ -173,6 +184,97 @@ fs::path environmentPath(const char *variable)
     const char *value = std::getenv(variable);
     return value && *value ? fs::path(value) : fs::path();
 }
+
+/** \brief httplib's request handling (parse, route, answer) without its listen(): ConnectionLoop
+    reads the requests and calls answer(). */
+class HttpServer : public httplib::Server
+{
+public:
+    bool answer(httplib::Stream &stream, bool closeConnection, bool &connectionClosed)
+    {
+        return process_request(stream, closeConnection, connectionClosed, nullptr);
+    }
+    /** \brief The bound socket, for ConnectionLoop (which closes it). */
+    int takeSocket() { return svr_sock_.exchange(INVALID_SOCKET); }
+};
+
+/** \brief At most \a limit holders at once; the others wait. */
+class Gate
+{
+public:
+    explicit Gate(int limit) : limit_(std::max(1, limit)) {}
+
+    class Pass
+    {
+    public:
+        explicit Pass(Gate &gate) : gate_(gate)
+        {
+            std::unique_lock<std::mutex> lock(gate_.mutex_);
+            gate_.free_.wait(lock, [&] { return gate_.running_ < gate_.limit_; });
+            gate_.peak_ = std::max(gate_.peak_, ++gate_.running_);
+        }
+        ~Pass()
+        {
+            {
+                std::lock_guard<std::mutex> lock(gate_.mutex_);
+                --gate_.running_;
+            }
+            gate_.free_.notify_one();
+        }
+        Pass(const Pass &) = delete;
+        Pass &operator=(const Pass &) = delete;
+
+    private:
+        Gate &gate_;
+    };
+
+    int peak() const
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return peak_;
+    }
+
+private:
+    const int limit_;
+    mutable std::mutex mutex_;
+    std::condition_variable free_;
+    int running_ = 0;
+    int peak_ = 0;
+};
+
+std::string lowerCase(std::string text)
+{
+    std::transform(text.begin(), text.end(), text.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return text;
+}
+
+bool isLoopbackHost(const std::string &host)
+{
+    return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+}
+
+bool isWildcardHost(const std::string &host)
+{
+    return host.empty() || host == "0.0.0.0" || host == "::";
+}
+
+/** \brief An IPv4 literal, or an IPv6 one in brackets (as a Host header writes it). */
+bool isAddressLiteral(const std::string &name)
+{
+    if (name.size() > 2 && name.front() == '[' && name.back() == ']')
+        return name.find_first_not_of("0123456789abcdef:.", 1) == name.size() - 1;
+    return !name.empty() && name.find_first_not_of("0123456789.") == std::string::npos;
+}
+
+CheckerOptions checkerOptionsFor(const ViewServerOptions &options)
+{
+    CheckerOptions checker;
+    const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+    checker.threads =
+        options.checkerThreads > 0 ? options.checkerThreads : std::max(1, cores / std::max(1, options.maxConcurrentBatches));
+    return checker;
+}
 }  // namespace
 
 std::string findWebDir(const std::string &executable)
@@ -205,7 +307,8 @@ struct ViewServer::Impl
         : problem(std::move(problemIn)),
           content(std::move(contentIn)),
           options(std::move(optionsIn)),
-          checker(problem.robot, problem.scene)
+          checker(problem.robot, problem.scene, checkerOptionsFor(options)),
+          batches(options.maxConcurrentBatches)
     {
         const std::size_t dof = robot().numCoordinates();
         const auto checkSize = [&](const std::vector<double> &values, const std::string &what)
@@ -334,11 +437,15 @@ struct ViewServer::Impl
                 configurationFromJson(states[i], robot(), "states[" + std::to_string(i) + "]");
             q.insert(q.end(), row.begin(), row.end());
         }
-        const auto start = std::chrono::steady_clock::now();
         std::vector<std::uint8_t> valid(n);
         std::vector<Contact> contacts(n);
-        checker.check(q.data(), n, valid.data(), options.request, contacts.data());
-        const double milliseconds = millisecondsSince(start);
+        double milliseconds = 0;
+        {
+            const Gate::Pass pass(batches);
+            const auto start = std::chrono::steady_clock::now();
+            checker.check(q.data(), n, valid.data(), options.request, contacts.data());
+            milliseconds = millisecondsSince(start);
+        }
         json verdicts = json::array(), firstContacts = json::array();
         for (std::size_t i = 0; i < n; ++i)
         {
@@ -349,23 +456,121 @@ struct ViewServer::Impl
             {"valid", std::move(verdicts)}, {"contacts", std::move(firstContacts)}, {"milliseconds", milliseconds}};
     }
 
-    void handleCheck(const httplib::Request &request, httplib::Response &response) const
+    static json parseBody(const httplib::Request &request)
     {
-        json body;
         try
         {
-            body = json::parse(request.body);
+            return json::parse(request.body);
         }
         catch (const json::exception &e)  // a syntax error, or a number too large for a double
         {
             throw RequestError{400, std::string("malformed JSON: ") + e.what()};
         }
+    }
+
+    void handleCheck(const httplib::Request &request, httplib::Response &response) const
+    {
+        json body = parseBody(request);
         if (!body.is_object() || body.contains("q") == body.contains("states"))
             throw RequestError{400,
                                "expected an object with either \"q\": [one configuration] or \"states\": "
                                "[[configuration], ...]"};
         sendJson(response, body.contains("q") ? checkOne(configurationFromJson(body["q"], robot(), "q"))
                                               : checkBatch(body["states"]));
+    }
+
+    /** \brief POST /api/plan: one plan at a time, on a SimpleSetup made as `rastercheck plan` makes
+        it (ompl::makeSimpleSetup: the same options, certified edges by default), built at the first
+        plan. */
+    void handlePlan(const httplib::Request &request, httplib::Response &response) const
+    {
+        const json body = parseBody(request);
+        if (!body.is_object())
+            throw RequestError{400, "expected an object {\"start\", \"goal\", \"planner\", \"time_limit\"} (each "
+                                    "optional)"};
+        for (const auto &item : body.items())
+            if (item.key() != "start" && item.key() != "goal" && item.key() != "planner" && item.key() != "time_limit")
+                throw RequestError{400, "unknown field \"" + item.key() +
+                                            "\" (expected start, goal, planner, time_limit)"};
+        const auto endpoint = [&](const char *name, const std::vector<double> &fallback)
+        {
+            if (body.contains(name))
+                return configurationFromJson(body[name], robot(), name);
+            if (fallback.empty())
+                throw RequestError{400, std::string("no ") + name + ": the problem has none; give \"" + name + "\""};
+            return fallback;
+        };
+        const std::vector<double> start = endpoint("start", content.start);
+        const std::vector<double> goal = endpoint("goal", content.goal);
+        if (body.contains("planner") && !body["planner"].is_string())
+            throw RequestError{400, "planner must be a name (batchrrtconnect, rrtconnect, ...)"};
+        const std::string plannerName = body.value("planner", std::string("batchrrtconnect"));
+        double timeLimit = 1.0;
+        if (body.contains("time_limit"))
+        {
+            if (!body["time_limit"].is_number() || !(body["time_limit"].get<double>() > 0) ||
+                body["time_limit"].get<double>() > options.maxPlanSeconds)
+                throw RequestError{400, "time_limit must be a number of seconds in (0, " +
+                                            std::to_string(static_cast<int>(options.maxPlanSeconds)) + "]"};
+            timeLimit = body["time_limit"].get<double>();
+        }
+
+        std::unique_lock<std::mutex> lock(planMutex, std::try_to_lock);
+        if (!lock.owns_lock())
+            throw RequestError{409, "a plan is running: one at a time"};
+        if (!planSetup)
+        {
+            ompl::SetupOptions setupOptions;
+            setupOptions.checker = checkerOptionsFor(options);
+            setupOptions.request = options.request;
+            planSetup = ompl::makeSimpleSetup(problem, setupOptions);
+        }
+        ::ompl::base::PlannerPtr planner;
+        try
+        {
+            planner = ompl::allocatePlanner(plannerName, planSetup->getSpaceInformation());
+        }
+        catch (const ConfigurationError &e)
+        {
+            throw RequestError{400, e.what()};
+        }
+        json answer{{"solved", false}, {"path", json::array()}, {"seconds", 0.0}, {"planner", planner->getName()}};
+        // A planner cannot leave an invalid start or reach an invalid goal: say which and why.
+        for (const auto &[name, q] : {std::pair<const char *, const std::vector<double> &>{"start", start},
+                                      std::pair<const char *, const std::vector<double> &>{"goal", goal}})
+        {
+            Contact contact;
+            if (!checker.isValid(q, options.request, &contact))
+            {
+                answer["message"] = std::string("the ") + name + " is invalid: " + checker.describe(contact);
+                sendJson(response, answer);
+                return;
+            }
+        }
+        planSetup->clear();
+        ompl::setStartAndGoal(*planSetup, start, goal);
+        planSetup->setPlanner(planner);
+        const auto begin = std::chrono::steady_clock::now();
+        // stop() ends a plan early, so that it never waits for a long time limit.
+        const ::ompl::base::PlannerStatus status = planSetup->solve(::ompl::base::plannerOrTerminationCondition(
+            ::ompl::base::timedPlannerTerminationCondition(timeLimit),
+            ::ompl::base::PlannerTerminationCondition([this] { return cancelPlans.load(); })));
+        const bool solved = status == ::ompl::base::PlannerStatus::EXACT_SOLUTION;
+        if (solved)
+            planSetup->simplifySolution();
+        answer["seconds"] = millisecondsSince(begin) / 1000.0;
+        answer["solved"] = solved;
+        if (!solved)
+        {
+            answer["message"] = "no path found within " + json(timeLimit).dump() + " s (" + status.asString() + ")";
+            sendJson(response, answer);
+            return;
+        }
+        const ompl::StateMapping &mapping = ompl::getStateValidityChecker(*planSetup)->getStateMapping();
+        const ::ompl::geometric::PathGeometric &path = planSetup->getSolutionPath();
+        for (std::size_t i = 0; i < path.getStateCount(); ++i)
+            answer["path"].push_back(mapping.toConfiguration(path.getState(static_cast<unsigned int>(i))));
+        sendJson(response, answer);
     }
 
     void handleRaster(const httplib::Request &request, httplib::Response &response) const
@@ -398,8 +603,25 @@ struct ViewServer::Impl
         response.set_content(png, "image/png");
     }
 
-    /** \brief Runs \a handler, answering a RequestError with its status and any other exception with
-        500, both as {"error": message}: no request stops the server. */
+    void log(const std::string &line) const
+    {
+        if (options.log)
+            options.log(line);
+        else
+            std::cerr << "rastercheck view: " << line << std::endl;
+    }
+
+    /** \brief A 500 for an unexpected failure: its detail goes to the log, not to a client (it may
+        name files and internals). */
+    void answerInternalError(const httplib::Request &request, httplib::Response &response,
+                             const std::string &detail) const
+    {
+        log("internal error answering " + request.method + " " + request.path + ": " + detail);
+        sendError(response, 500, "internal error (the server's log has the detail)");
+    }
+
+    /** \brief Runs \a handler, answering a RequestError with its status and {"error": message}, and
+        any other exception with a generic 500: no request stops the server. */
     httplib::Server::Handler guarded(void (Impl::*handler)(const httplib::Request &, httplib::Response &) const) const
     {
         return [this, handler](const httplib::Request &request, httplib::Response &response)
@@ -414,9 +636,57 @@ struct ViewServer::Impl
             }
             catch (const std::exception &e)
             {
-                sendError(response, 500, std::string("internal error: ") + e.what());
+                answerInternalError(request, response, e.what());
             }
         };
+    }
+
+    /** \brief The names a Host header may give this server: the bound address, and for a loopback
+        or wildcard bind the loopback names. */
+    std::vector<std::string> hostNames() const
+    {
+        std::vector<std::string> names;
+        const std::string &host = options.host;
+        names.push_back(lowerCase(host.find(':') != std::string::npos ? "[" + host + "]" : host));
+        if (isLoopbackHost(host) || isWildcardHost(host))
+            for (const char *name : {"localhost", "127.0.0.1", "[::1]"})
+                names.emplace_back(name);
+        return names;
+    }
+
+    /** \brief Why a request may not be served (empty when it may): a Host other than this server's
+        (DNS rebinding), a cross-origin call of the API, a POST body that is not JSON. */
+    std::pair<int, std::string> refusal(const httplib::Request &request) const
+    {
+        const std::string host = lowerCase(request.get_header_value("Host"));
+        const std::size_t colon = host.rfind(':');
+        const bool hasPort = colon != std::string::npos && host.find(']', colon) == std::string::npos;
+        const std::string name = hasPort ? host.substr(0, colon) : host;
+        const std::string portText = hasPort ? host.substr(colon + 1) : "80";
+        const std::vector<std::string> names = hostNames();
+        const bool knownName = std::find(names.begin(), names.end(), name) != names.end() ||
+                               (isWildcardHost(options.host) && isAddressLiteral(name));
+        if (!knownName || portText != std::to_string(port))
+            return {403, "Host '" + host + "' is not this server (" + names.front() + ":" + std::to_string(port) +
+                             "): requests are served only for the address it listens on"};
+        if (request.path.rfind("/api/", 0) != 0)
+            return {};
+        const std::string origin = lowerCase(request.get_header_value("Origin"));
+        if (request.has_header("Origin") && origin != "http://" + host)
+            return {403, "cross-origin request from '" + origin + "' refused: the API answers its own page only"};
+        const std::string site = lowerCase(request.get_header_value("Sec-Fetch-Site"));
+        if (site == "cross-site" || site == "same-site")
+            return {403, "request from another site (Sec-Fetch-Site: " + site +
+                             ") refused: the API answers its own page only"};
+        if (request.method == "POST")
+        {
+            const std::string type = lowerCase(request.get_header_value("Content-Type"));
+            std::string mediaType = type.substr(0, type.find(';'));  // parameters (charset) aside
+            mediaType.erase(mediaType.find_last_not_of(" \t") + 1);
+            if (mediaType != "application/json")
+                return {415, "Content-Type '" + type + "' refused: POST bodies must be application/json"};
+        }
+        return {};
     }
 
     void addRoutes()
@@ -430,10 +700,33 @@ struct ViewServer::Impl
                 const int yes = 1;
                 setsockopt(socket, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
             });
-        // An answer goes out in two writes (head, body); with Nagle's algorithm the second waits for
-        // the client's delayed ACK, and every check took 40 ms more in Chromium.
-        server.set_tcp_nodelay(true);
         server.set_payload_max_length(options.maxBodyBytes);
+        server.set_pre_routing_handler(
+            [this](const httplib::Request &request, httplib::Response &response)
+            {
+                const auto [status, message] = refusal(request);
+                if (status == 0)
+                    return httplib::Server::HandlerResponse::Unhandled;
+                sendError(response, status, message);
+                return httplib::Server::HandlerResponse::Handled;
+            });
+        server.set_exception_handler(
+            [this](const httplib::Request &request, httplib::Response &response, std::exception_ptr failure)
+            {
+                std::string detail = "unknown exception";
+                try
+                {
+                    std::rethrow_exception(failure);
+                }
+                catch (const std::exception &e)
+                {
+                    detail = e.what();
+                }
+                catch (...)
+                {
+                }
+                answerInternalError(request, response, detail);
+            });
         // Module scripts load only with a JavaScript type.
         server.set_file_extension_and_mimetype_mapping("js", "text/javascript");
         server.set_mount_point("/vendor/three", options.threeDir);
@@ -445,6 +738,7 @@ struct ViewServer::Impl
                        response.set_content(modelJson, "application/json");
                    });
         server.Post("/api/check", guarded(&Impl::handleCheck));
+        server.Post("/api/plan", guarded(&Impl::handlePlan));
         server.Get("/api/raster", guarded(&Impl::handleRaster));
         // Every other failure (no such route or file, a body over the limit, a request httplib
         // cannot parse) gets a message too; answers the handlers wrote are left as they are.
@@ -457,7 +751,8 @@ struct ViewServer::Impl
                 std::string message;
                 if (response.status == 404)
                     message = "no route " + request.method + " " + request.path +
-                              " (routes: GET /api/model, POST /api/check, GET /api/raster?q=..., and the page)";
+                              " (routes: GET /api/model, POST /api/check, POST /api/plan, GET /api/raster?q=..., "
+                              "and the page)";
                 else if (response.status == 413)
                     message = "request body over the limit of " + std::to_string(maxBody) + " bytes";
                 else
@@ -470,10 +765,19 @@ struct ViewServer::Impl
     ViewContent content;
     ViewServerOptions options;
     Checker checker;
+    mutable Gate batches;
     std::string modelJson;
-    httplib::Server server;
+    HttpServer server;
     mutable std::mutex cairoMutex;
+    mutable std::mutex planMutex;
+    mutable ::ompl::geometric::SimpleSetupPtr planSetup;  ///< under planMutex
+    std::atomic<bool> cancelPlans{false};
     int port = -1;
+    std::unique_ptr<ConnectionLoop> loop;
+    std::mutex stateMutex;  ///< loop (created once) and stopping
+    std::mutex stopMutex;
+    std::condition_variable stopped;
+    bool stopping = false;
 };
 
 ViewServer::ViewServer(Problem problem, ViewContent content, ViewServerOptions options)
@@ -501,14 +805,57 @@ int ViewServer::bind()
     return impl_->port;
 }
 
+void ViewServer::start()
+{
+    Impl &impl = *impl_;
+    std::lock_guard<std::mutex> lock(impl.stateMutex);
+    if (impl.loop || impl.stopping || impl.port <= 0)
+        return;
+    ConnectionLimits limits = impl.options.connections;
+    limits.maxBodyBytes = impl.options.maxBodyBytes;
+    impl.loop = std::make_unique<ConnectionLoop>(
+        impl.server.takeSocket(), limits,
+        [&impl](httplib::Stream &stream, bool closeConnection, bool &connectionClosed)
+        { return impl.server.answer(stream, closeConnection, connectionClosed); });
+    impl.loop->start();
+}
+
 bool ViewServer::serve()
 {
-    return impl_->server.listen_after_bind();
+    start();
+    std::unique_lock<std::mutex> lock(impl_->stateMutex);
+    if (!impl_->loop)
+        return false;
+    impl_->stopped.wait(lock, [&] { return impl_->stopping; });
+    return true;
 }
 
 void ViewServer::stop()
 {
-    impl_->server.stop();
+    // One stop at a time: the second waits until the threads are joined.
+    std::lock_guard<std::mutex> stopping(impl_->stopMutex);
+    impl_->cancelPlans = true;
+    ConnectionLoop *loop = nullptr;  // made once by start(), never replaced
+    {
+        std::lock_guard<std::mutex> lock(impl_->stateMutex);
+        impl_->stopping = true;
+        loop = impl_->loop.get();
+    }
+    impl_->stopped.notify_all();
+    if (loop)
+        loop->stop();
+}
+
+ViewServerStats ViewServer::stats() const
+{
+    ViewServerStats stats;
+    {
+        std::lock_guard<std::mutex> lock(impl_->stateMutex);
+        if (impl_->loop)
+            stats.connections = impl_->loop->stats();
+    }
+    stats.peakConcurrentBatches = impl_->batches.peak();
+    return stats;
 }
 
 std::string ViewServer::url() const

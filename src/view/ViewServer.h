@@ -4,12 +4,14 @@
 // ("Live 3D viewer") and in docs/viewer.md.
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "rastercheck/collision/CollisionRequest.h"
 #include "rastercheck/io/Problem.h"
+#include "view/ConnectionLoop.h"
 
 namespace rastercheck::view
 {
@@ -43,6 +45,26 @@ struct ViewServerOptions
     std::size_t maxBatchStates = 100000;
     /** \brief How every state is checked (mode, padding). */
     CollisionRequest request;
+    /** \brief Connections: how many, how long idle or slow, and the worker threads that answer. */
+    ConnectionLimits connections;
+    /** \brief Batches (POST /api/check {"states"}) checked at once; more wait for one to finish. A
+        single state or a raster picture runs on its request's worker thread. */
+    int maxConcurrentBatches = 2;
+    /** \brief Threads of one batch; 0 = the machine's cores divided by maxConcurrentBatches (at
+        least 1), so that the batches at once do not oversubscribe the machine. */
+    int checkerThreads = 0;
+    /** \brief Longest time_limit POST /api/plan accepts (seconds). */
+    double maxPlanSeconds = 60.0;
+    /** \brief Where the detail of an internal error (a 500) goes; empty = standard error. */
+    std::function<void(const std::string &)> log;
+};
+
+/** \brief What a ViewServer has done since start(): its connection loop's counts and the most
+    batches that ran at once. */
+struct ViewServerStats
+{
+    ConnectionStats connections;
+    int peakConcurrentBatches = 0;
 };
 
 /** \brief The folder of the page's files: $RASTERCHECK_WEB_DIR when set (and then only it), else
@@ -64,12 +86,22 @@ std::string findThreeDir();
       component;
     - POST /api/check {"states": [[...], ...]}: one batch (Checker::check): a verdict and the first
       contact per state;
+    - POST /api/plan {"start", "goal", "planner", "time_limit"} (each optional: the content's start
+      and goal, BatchRRTConnect, 1 s): plans as `rastercheck plan` does (ompl::makeSimpleSetup,
+      certified edges by default), one plan at a time (409 meanwhile); {"solved", "path": [[...],
+      ...] (simplified), "seconds", "planner"}, and "message" when it found nothing (or the start or
+      goal is invalid);
     - GET  /api/raster?q=v1,v2,...: the raster image (PNG, the paper's Fig. 6) of the state's first
       colliding pair;
     - GET  / and the page's files, and three.js under /vendor/three/.
     A malformed request (bad JSON, a configuration of the wrong length or not finite, a body over
     the limit, an unknown route) gets a 4xx answer {"error": message}; a handler never stops the
-    server. Requests are served concurrently by a pool of threads (the Checker is thread-safe). */
+    server; an unexpected failure gets 500 with a generic message (the detail goes to the log).
+    Only requests for the host and port bound are served (Host header: against DNS rebinding);
+    /api/ refuses requests from another origin (Origin, Sec-Fetch-Site: a page elsewhere cannot
+    drive it, not even through an <img>); POST bodies must be application/json. Requests are
+    served concurrently (the Checker is thread-safe) by ConnectionLoop: idle or slow connections
+    hold no thread. */
 class ViewServer
 {
 public:
@@ -83,11 +115,15 @@ public:
     /** \brief Binds the options' host and port and returns the port (the one the system picked
         when the options say 0). Throws ConfigurationError when it cannot bind. */
     int bind();
-    /** \brief Serves requests until stop(); call after bind(). Returns false when the server
-        could not listen. */
+    /** \brief Starts serving on the server's own threads and returns; call after bind(). */
+    void start();
+    /** \brief start(), then waits until stop() (from another thread). Returns false when the
+        server was not bound. */
     bool serve();
-    /** \brief Makes serve() return (from another thread); safe to call more than once. */
+    /** \brief Stops serving: closes every connection, lets the requests being answered finish and
+        joins the server's threads. Idempotent; the destructor calls it. Not from a handler. */
     void stop();
+    ViewServerStats stats() const;
     /** \brief http://host:port/ once bound. */
     std::string url() const;
     /** \brief "cpu" or "cuda (<device>)": the checker's backend. */

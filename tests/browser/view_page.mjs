@@ -2,7 +2,8 @@
 // loads the page for the crane in the plant, types a luff angle that swings the boom into the pipe
 // rack, and checks that the page reports the collision (status, contacts, raster image) and draws it
 // (the view is not blank and has red in it); Ctrl+Z must bring back the free state, the Redo and
-// Undo buttons must go back and forth, and the request's path must play back to its goal.
+// Undo buttons must go back and forth, the request's path must play back to its goal, and Plan must
+// fill the timeline with a planned path that plays to the goal.
 //
 // Usage: node tests/browser/view_page.mjs RASTERCHECK_CLI SOURCE_DIR [SCREENSHOT.png]
 // Exit status: 0 passed, 1 failed, 77 skipped (only when Chromium is not installed or cannot start).
@@ -250,6 +251,26 @@ async function main()
         await page.keyboard.up('Control');
         status = await answerFor(page, FREE);
         expect(status.state === 'valid', 'Ctrl+Z after the playback returns to the state it started from');
+
+        // Plan from here to the request's goal (POST api/plan): the planned path fills the timeline,
+        // all its states free, and plays to the goal.
+        await page.$eval('#time-limit', (input) => { input.value = '20'; });
+        await page.click('#plan');
+        await page.waitForFunction(() => ['solved', 'failed'].includes(document.getElementById('plan-info').dataset.state),
+                                   {timeout: TIMEOUT_MS});
+        const planInfo = await page.$eval('#plan-info', (info) => `${info.dataset.state}: ${info.textContent}`);
+        expect(planInfo.startsWith('solved: BatchRRTConnect: '), `Plan finds a path (${planInfo})`);
+        const planned = await page.$eval('#path-info', (info) => info.textContent);
+        const timelineMax = await page.$eval('#timeline', (timeline) => Number(timeline.max));
+        const states = Number(planned.split(' ')[0]);
+        expect(/^\d+ path states, 0 colliding$/.test(planned) && states >= 2 && timelineMax === states - 1,
+               `the timeline holds the planned path (${planned}, timeline max ${timelineMax})`);
+        await page.waitForFunction(() => document.getElementById('play').textContent === 'Play', {timeout: TIMEOUT_MS});
+        status = await answerFor(page, GOAL);
+        expect(status.state === 'valid', 'the planned path plays to the goal, free');
+        await page.click('#set-goal');
+        const goalInfo = await page.$eval('#plan-info', (info) => info.textContent);
+        expect(goalInfo === 'Goal set to the current configuration.', `Set goal says so (${goalInfo})`);
         expect(pageErrors.length === 0, `no script errors on the page (${pageErrors.join('; ')})`);
         return 0;
     }

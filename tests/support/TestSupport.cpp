@@ -1,10 +1,16 @@
 #include "TestSupport.h"
 
+#include <algorithm>
+#include <chrono>
+#include <iostream>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <cstdio>
+#include <sstream>
 #include <stdexcept>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <ompl/util/Console.h>
 #include <ompl/util/RandomNumbers.h>
@@ -156,5 +162,82 @@ std::string urdfJoint(const std::string &name, const std::string &type, const st
 std::string urdfCollisionMesh(const std::string &file, const std::string &extra)
 {
     return "<collision><geometry><mesh filename=\"" + file + "\"" + extra + "/></geometry></collision>";
+}
+double scaleFromEnvironment(const char *variable)
+{
+    const char *text = std::getenv(variable);
+    const double scale = text && *text ? std::atof(text) : 1.0;
+    return scale > 0 ? scale : 1.0;
+}
+
+int scaledCount(int count, const char *variable)
+{
+    return std::max(1, static_cast<int>(count * scaleFromEnvironment(variable) + 0.5));
+}
+
+// AddressSanitizer (GCC defines the first macro, clang answers __has_feature) keeps freed memory
+// in quarantine, ThreadSanitizer in its own allocator: resident memory grows there by design.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define RASTERCHECK_SANITIZED_ALLOCATOR 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define RASTERCHECK_SANITIZED_ALLOCATOR 1
+#endif
+#endif
+
+namespace
+{
+std::size_t entriesIn(const char *folder)
+{
+    std::size_t count = 0;
+    for ([[maybe_unused]] const auto &entry : std::filesystem::directory_iterator(folder))
+        ++count;
+    return count;
+}
+}  // namespace
+
+ProcessFootprint ProcessFootprint::now()
+{
+    ProcessFootprint footprint;
+    std::ifstream statm("/proc/self/statm");
+    std::size_t pages = 0, resident = 0;
+    statm >> pages >> resident;
+    footprint.residentBytes = resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+    footprint.threads = entriesIn("/proc/self/task");
+    footprint.descriptors = entriesIn("/proc/self/fd");
+    return footprint;
+}
+
+::testing::AssertionResult footprintFlat(const ProcessFootprint &warm, const ProcessFootprint &after)
+{
+    std::ostringstream why;
+    if (after.threads != warm.threads)
+        why << "threads " << warm.threads << " -> " << after.threads << "; ";
+    if (after.descriptors != warm.descriptors)
+        why << "descriptors " << warm.descriptors << " -> " << after.descriptors << "; ";
+#ifndef RASTERCHECK_SANITIZED_ALLOCATOR
+    if (static_cast<double>(after.residentBytes) > 1.1 * static_cast<double>(warm.residentBytes))
+        why << "resident memory " << warm.residentBytes / 1048576.0 << " -> " << after.residentBytes / 1048576.0
+            << " MiB (more than 10 % above)";
+#endif
+    if (why.str().empty())
+        return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << why.str();
+}
+::testing::AssertionResult footprintFlatOver(int count, const std::string &what, const std::function<void()> &step)
+{
+    const int warmUp = std::max(1, count / 10);
+    const auto begin = std::chrono::steady_clock::now();
+    for (int i = 0; i < std::min(warmUp, count); ++i)
+        step();
+    const ProcessFootprint warm = ProcessFootprint::now();
+    for (int i = warmUp; i < count; ++i)
+        step();
+    const ProcessFootprint after = ProcessFootprint::now();
+    std::cout << count << " " << what << " in "
+              << std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count() << " s; resident "
+              << warm.residentBytes / 1048576.0 << " MiB after " << warmUp << ", " << after.residentBytes / 1048576.0
+              << " MiB after all" << std::endl;
+    return footprintFlat(warm, after);
 }
 }  // namespace rastercheck::test

@@ -60,6 +60,32 @@ void expectInputError(const std::function<void()> &load, const std::string &file
     way). Silences OMPL's warning that RNGs already exist (other tests in the same program). */
 void seedOmpl(std::uint_fast32_t value);
 
+/** \brief $\a variable as a factor that shrinks a long test (scripts/sanitize.sh sets it: the
+    sanitizers slow the checker 10 to 50 times), else 1. */
+double scaleFromEnvironment(const char *variable);
+/** \brief \a count times scaleFromEnvironment(\a variable), at least 1. */
+int scaledCount(int count, const char *variable);
+
+/** \brief What a long run could leak, as this process stands now: resident memory (bytes, from
+    /proc/self/statm), threads (/proc/self/task) and open descriptors (/proc/self/fd). */
+struct ProcessFootprint
+{
+    std::size_t residentBytes = 0;
+    std::size_t threads = 0;
+    std::size_t descriptors = 0;
+    static ProcessFootprint now();
+};
+
+/** \brief Whether \a after keeps resident memory within 10 % of \a warm (skipped under
+    AddressSanitizer and ThreadSanitizer, whose allocators keep freed memory by design) and as many
+    threads and descriptors. */
+::testing::AssertionResult footprintFlat(const ProcessFootprint &warm, const ProcessFootprint &after);
+
+/** \brief Calls \a step \a count times (a long-running use: solves, checkers built and dropped),
+    prints what it took, and returns footprintFlat between the end of a warm-up (a tenth of the
+    calls, at least one) and the end. \a what names the calls in the printout ("solves"). */
+::testing::AssertionResult footprintFlatOver(int count, const std::string &what, const std::function<void()> &step);
+
 /** \brief Writes \a text to \a path (creating it) and returns the path. */
 std::string writeFile(const std::string &path, const std::string &text);
 

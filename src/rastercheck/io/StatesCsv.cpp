@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include "rastercheck/core/Error.h"
@@ -100,5 +101,21 @@ StatesTable readStatesCsv(const std::string &path, const std::vector<std::string
     std::ostringstream text;
     text << file.rdbuf();
     return parseStatesCsv(text.str(), coordinateNames, path);
+}
+void writeStatesCsv(const std::string &path, const std::vector<std::string> &coordinateNames,
+                    const std::vector<double> &values)
+{
+    const std::size_t dof = coordinateNames.size();
+    std::ofstream out(path);
+    if (!out)
+        throw InputError(path, "", "cannot write the states file");
+    for (std::size_t i = 0; i < dof; ++i)
+        out << (i ? "," : "") << coordinateNames[i];
+    out << '\n' << std::setprecision(17);
+    for (std::size_t r = 0; dof > 0 && r + dof <= values.size(); r += dof)
+        for (std::size_t i = 0; i < dof; ++i)
+            out << values[r + i] << (i + 1 < dof ? ',' : '\n');
+    if (!out.flush())
+        throw InputError(path, "", "cannot write the states file");
 }
 }  // namespace rastercheck

@@ -22,4 +22,10 @@ struct StatesTable
 StatesTable readStatesCsv(const std::string &path, const std::vector<std::string> &coordinateNames);
 StatesTable parseStatesCsv(const std::string &text, const std::vector<std::string> &coordinateNames,
                            const std::string &sourceName = "<csv>");
+
+/** \brief Writes \a values (rows x coordinateNames.size(), row-major) as the CSV readStatesCsv reads:
+    a header row of \a coordinateNames, one state per row, every value with 17 significant digits
+    (read back, the same doubles). Throws InputError when \a path cannot be written. */
+void writeStatesCsv(const std::string &path, const std::vector<std::string> &coordinateNames,
+                    const std::vector<double> &values);
 }  // namespace rastercheck

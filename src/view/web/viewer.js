@@ -619,14 +619,9 @@ function togglePlay(play = !playing)
     $('play').textContent = playing ? 'Pause' : 'Play';
 }
 
-async function buildPlayback()
+function setupPlayback()
 {
-    if (!model.path.length)
-        return;
     const timeline = $('timeline');
-    timeline.max = Math.max(0, model.path.length - 1);
-    $('playback').hidden = false;
-    $('play').disabled = model.path.length < 2;
     $('play').addEventListener('click', () => togglePlay());
     timeline.addEventListener('input', () => {
         togglePlay(false);
@@ -635,7 +630,19 @@ async function buildPlayback()
         setTimeline(Number(timeline.value));
     });
     timeline.addEventListener('change', () => commitEdit());
-    // The path's own states in one batch: red marks on the timeline where they collide.
+}
+
+/** Shows model.path on the timeline: its own states checked in one batch, red marks where they collide. */
+async function showPath()
+{
+    if (!model.path.length)
+        return;
+    togglePlay(false);
+    const timeline = $('timeline');
+    timeline.max = Math.max(0, model.path.length - 1);
+    timeline.value = 0;
+    $('playback').hidden = false;
+    $('play').disabled = model.path.length < 2;
     const response = await fetch('api/check', {
         method: 'POST',
         headers: {'Content-Type': 'application/json'},
@@ -653,11 +660,60 @@ async function buildPlayback()
     const canvas = $('path-verdicts');
     canvas.width = canvas.clientWidth || 600;
     const context = canvas.getContext('2d');
+    context.clearRect(0, 0, canvas.width, canvas.height);
     const segments = Math.max(1, model.path.length - 1);
     answer.valid.forEach((valid, r) => {
         context.fillStyle = valid ? '#1a8a3a' : '#e01010';
         const x = (r / segments) * canvas.width;
         context.fillRect(Math.min(x, canvas.width - 3), 0, 3, canvas.height);
+    });
+}
+
+// ---- planning ----------------------------------------------------------------------------------
+let goal = null;  // what Plan aims at: the problem's goal, or one set with "Set goal"
+
+function showGoal(text)
+{
+    $('plan').disabled = !goal;
+    $('plan-info').textContent = text || (goal ? '' : 'No goal: set one with "Set goal".');
+}
+
+/** POST api/plan from the current configuration to the goal; the path found replaces the timeline's
+    and plays. */
+async function plan()
+{
+    $('plan').disabled = true;
+    $('plan-info').dataset.state = 'planning';
+    $('plan-info').textContent = 'planning…';
+    const response = await fetch('api/plan', {
+        method: 'POST',
+        headers: {'Content-Type': 'application/json'},
+        body: JSON.stringify({start: q, goal, planner: $('planner').value, time_limit: Number($('time-limit').value)}),
+    });
+    const answer = await response.json();
+    $('plan').disabled = false;
+    if (!response.ok || !answer.solved)
+    {
+        $('plan-info').dataset.state = 'failed';
+        $('plan-info').textContent = response.ok ? `${answer.planner}: ${answer.message}` : answer.error;
+        return;
+    }
+    model.path = answer.path;
+    await showPath();
+    $('plan-info').textContent =
+        `${answer.planner}: ${answer.path.length} states in ${answer.seconds.toFixed(2)} s`;
+    $('plan-info').dataset.state = 'solved';  // after the timeline shows the path
+    togglePlay(true);
+}
+
+function setupPlanning()
+{
+    goal = model.goal ? model.goal.slice() : null;
+    showGoal();
+    $('plan').addEventListener('click', plan);
+    $('set-goal').addEventListener('click', () => {
+        goal = q.slice();
+        showGoal('Goal set to the current configuration.');
     });
 }
 
@@ -703,7 +759,9 @@ async function main()
     showConfiguration();
     resize();
     stateChanged();
-    buildPlayback();
+    setupPlayback();
+    showPath();
+    setupPlanning();
     animate();
     // The first answer places the robot: frame the view on it and the scene then.
     const framed = setInterval(() => {
