@@ -267,7 +267,7 @@ TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
     // Certified midpoints (CertifiedMotionValidator, BatchRRTConnect) give every (state, pair) its own
     // padding; the stages take them in every cull, proof and raster window, and the host's exact
     // phase takes the open pair's own. Chunks of 5 states check that each chunk reads its own rows.
-    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(30))
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(16))
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
