@@ -50,6 +50,7 @@ struct PlanOptions
     std::string mode = "safe";
     int threads = 0;
     double padding = 0.0;
+    double boundsTolerance = kDefaultBoundsTolerance;
     double segmentFraction = 0.01;
     std::string edges = "auto";
     double margin = 0.0;
@@ -144,6 +145,7 @@ int runPlan(const PlanOptions &options)
     setupOptions.checker.threads = options.threads;
     setupOptions.request.mode = parseCollisionMode(options.mode);
     setupOptions.request.padding = options.padding;
+    setupOptions.boundsTolerance = options.boundsTolerance;
     setupOptions.longestValidSegmentFraction = options.segmentFraction;
     setupOptions.edges = ompl::parseEdgeChecking(options.edges);
     // What "auto" resolves to (certified edges unless raster mode cannot certify), for the log and messages.
@@ -355,6 +357,11 @@ void addPlanCommand(CLI::App &app)
     command->add_option("--threads", options->threads, "worker threads of batch checks (0 = all cores)")
         ->check(CLI::NonNegativeNumber);
     command->add_option("--padding", options->padding, "safety margin in scene units")->check(CLI::NonNegativeNumber);
+    command
+        ->add_option("--bounds-tolerance", options->boundsTolerance,
+                     "a start or goal this far outside a joint limit (rad or m) is moved onto it with a warning; "
+                     "farther is an error (default 1e-4; a goal joint constraint's tolerance counts where larger)")
+        ->check(CLI::NonNegativeNumber);
     command
         ->add_option("--segment-fraction", options->segmentFraction,
                      "longest valid segment, as a fraction of the space's extent (OMPL default 0.01)")

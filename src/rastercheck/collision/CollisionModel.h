@@ -177,7 +177,10 @@ public:
 
     /** \brief True when every coordinate is finite, bounded coordinates lie within their bounds
         (OMPL's tolerance: one double epsilon), and no quaternion is zero. */
-    bool configurationAdmissible(const double *q) const;
+    bool configurationAdmissible(const double *q) const { return firstInadmissibleCoordinate(q) < 0; }
+    /** \brief The first coordinate that makes \a q inadmissible (a quaternion's qx when it is zero),
+        -1 when there is none: what a Contact::Kind::OutOfBounds contact names. */
+    int firstInadmissibleCoordinate(const double *q) const;
 
     std::size_t numComponents() const { return components.size(); }
     std::size_t numObjects() const { return objects.size(); }
