@@ -2,6 +2,10 @@
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/cone.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
@@ -84,21 +88,47 @@ bool distanceCallback(fcl::CollisionObjectd *a, fcl::CollisionObjectd *b, void *
 }
 }  // namespace
 
+std::shared_ptr<fcl::CollisionGeometryd> toFcl(const PrimitiveShape &shape)
+{
+    switch (shape.kind)
+    {
+        case PrimitiveShape::Kind::Box:
+            return std::make_shared<fcl::Boxd>(shape.size);
+        case PrimitiveShape::Kind::Sphere:
+            return std::make_shared<fcl::Sphered>(shape.size.x());
+        case PrimitiveShape::Kind::Cylinder:
+            return std::make_shared<fcl::Cylinderd>(shape.size.x(), shape.size.y());
+        case PrimitiveShape::Kind::Cone:
+            return std::make_shared<fcl::Coned>(shape.size.x(), shape.size.y());
+    }
+    return nullptr;
+}
+
 struct FclReference::Impl
 {
     const CollisionModel &model;
     RobotData data;
     std::vector<std::unique_ptr<fcl::CollisionObjectd>> components;
+    std::vector<Eigen::Isometry3d> componentOffsets;  // the FCL geometry's frame in the link frame
     std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
     fcl::DynamicAABBTreeCollisionManagerd manager;
 
-    explicit Impl(const CollisionModel &m) : model(m), data(*m.robot)
+    Impl(const CollisionModel &m, bool exactPrimitives) : model(m), data(*m.robot)
     {
         for (const Component &component : m.robot->components)
-            components.push_back(std::make_unique<fcl::CollisionObjectd>(toFcl(component.mesh)));
+        {
+            const bool primitive = exactPrimitives && component.shapes.size() == 1;
+            components.push_back(std::make_unique<fcl::CollisionObjectd>(
+                primitive ? toFcl(component.shapes[0]) : toFcl(component.mesh)));
+            componentOffsets.push_back(primitive ? component.shapes[0].pose : Eigen::Isometry3d::Identity());
+        }
         for (const SceneObject &object : m.scene->objects)
         {
-            objects.push_back(std::make_unique<fcl::CollisionObjectd>(toFcl(object.mesh)));
+            const bool primitive = exactPrimitives && object.shapes.size() == 1;
+            objects.push_back(std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(object.shapes[0])
+                                                                                : toFcl(object.mesh)));
+            if (primitive)
+                objects.back()->setTransform(object.shapes[0].pose);
             objects.back()->computeAABB();
             manager.registerObject(objects.back().get());
         }
@@ -106,7 +136,10 @@ struct FclReference::Impl
     }
 };
 
-FclReference::FclReference(const CollisionModel &model) : impl_(std::make_unique<Impl>(model)) {}
+FclReference::FclReference(const CollisionModel &model, bool exactPrimitives)
+    : impl_(std::make_unique<Impl>(model, exactPrimitives))
+{
+}
 
 FclReference::~FclReference() = default;
 
@@ -118,7 +151,7 @@ bool FclReference::collides(const double *q, double padding)
     forwardKinematics(*model.robot, impl_->data, q);
     for (std::size_t c = 0; c < impl_->components.size(); ++c)
     {
-        const Eigen::Isometry3d &pose = impl_->data.oMl[model.componentLink[c]];
+        const Eigen::Isometry3d pose = impl_->data.oMl[model.componentLink[c]] * impl_->componentOffsets[c];
         impl_->components[c]->setTransform(pose.linear(), pose.translation());
         impl_->components[c]->computeAABB();
     }

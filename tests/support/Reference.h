@@ -18,7 +18,10 @@ bool bruteForceCollides(const CollisionModel &model, const double *q, double pad
 class FclReference
 {
 public:
-    explicit FclReference(const CollisionModel &model);
+    /** \brief \a exactPrimitives: a component or object of one primitive shape (Component::shapes,
+        SceneObject::shapes) is that FCL shape (fcl::Boxd, Sphered, Cylinderd, Coned) instead of its
+        mesh, as MoveIt loads a scene's primitives. */
+    explicit FclReference(const CollisionModel &model, bool exactPrimitives = false);
     ~FclReference();
     bool collides(const double *q, double padding = 0.0);
 

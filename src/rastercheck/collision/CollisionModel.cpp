@@ -533,6 +533,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
             quaternionStarts.push_back(joint.firstCoordinate + 3);
     }
     selfPairTables = SelfPairTables(*this);  // reads selfPairs, convex, componentLink, quaternionStarts
+    curved = CurvedSolids(*this);            // reads selfPairs and the trees
 
     if (!diagonals.empty())
     {
