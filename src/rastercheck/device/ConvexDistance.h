@@ -2,6 +2,7 @@
 
 #include "rastercheck/device/HostDevice.h"
 #include "rastercheck/device/Pose.h"
+#include "rastercheck/device/Separation.h"
 
 namespace rastercheck::device
 {
@@ -70,100 +71,6 @@ RC_HD Vec3<double> supportPoint(const ConvexShape &shape, const Vec3<double> &d)
     return transformPoint(shape.pose, p);
 }
 
-/** \brief The point of the simplex \a w (count points, 1 to 4) nearest the origin, and the
-    smallest sub-simplex whose hull holds it (written back into \a w and \a count). Every face of
-    the simplex is tried: its affine hull's point nearest the origin is a candidate when its
-    barycentric coordinates are all positive, and the nearest candidate is the answer (it lies in
-    exactly one face's interior). The whole tetrahedron's candidate is the origin itself (count 4,
-    result zero). Degenerate faces (a zero Gram determinant) are skipped: a face of them has one. */
-RC_HD Vec3<double> nearestOnSimplex(Vec3<double> *w, int &count)
-{
-    Vec3<double> best{0.0, 0.0, 0.0};
-    double bestNorm2 = -1.0;
-    int bestMask = 0;
-    for (int mask = 1; mask < (1 << count); ++mask)
-    {
-        int index[4] = {0, 0, 0, 0}, k = 0;
-        for (int i = 0; i < count; ++i)
-            if (mask & (1 << i))
-                index[k++] = i;
-        const Vec3<double> p0 = w[index[0]];
-        Vec3<double> e[3];
-        for (int i = 1; i < k; ++i)
-            e[i - 1] = w[index[i]] - p0;
-        // Normal equations G mu = r of min |p0 + sum mu_i e_i|; lambda_0 = 1 - sum mu.
-        double mu[3] = {0.0, 0.0, 0.0};
-        const int n = k - 1;
-        if (n == 1)
-        {
-            const double g = dot(e[0], e[0]);
-            if (!(g > 0))
-                continue;
-            mu[0] = -dot(e[0], p0) / g;
-        }
-        else if (n == 2)
-        {
-            const double g00 = dot(e[0], e[0]), g01 = dot(e[0], e[1]), g11 = dot(e[1], e[1]);
-            const double r0 = -dot(e[0], p0), r1 = -dot(e[1], p0);
-            const double det = g00 * g11 - g01 * g01;
-            if (!(det > 1e-30 * g00 * g11))
-                continue;
-            mu[0] = (r0 * g11 - r1 * g01) / det;
-            mu[1] = (g00 * r1 - g01 * r0) / det;
-        }
-        else if (n == 3)
-        {
-            // The origin as p0 + E mu: Cramer's rule on E mu = -p0.
-            const Vec3<double> c12 = cross(e[1], e[2]);
-            const double det = dot(e[0], c12);
-            const double scale = sqrt(dot(e[0], e[0]) * dot(e[1], e[1]) * dot(e[2], e[2]));
-            if (!(det > 1e-15 * scale || det < -1e-15 * scale))
-                continue;
-            const Vec3<double> minus{-p0.x, -p0.y, -p0.z};
-            mu[0] = dot(minus, c12) / det;
-            mu[1] = dot(e[0], cross(minus, e[2])) / det;
-            mu[2] = dot(e[0], cross(e[1], minus)) / det;
-        }
-        double lambda0 = 1.0;
-        bool inside = true;
-        for (int i = 0; i < n; ++i)
-        {
-            inside = inside && mu[i] > 0;
-            lambda0 -= mu[i];
-        }
-        if (!inside || !(lambda0 > 0))
-            continue;
-        Vec3<double> point = p0;
-        for (int i = 0; i < n; ++i)
-            point = point + mu[i] * e[i];
-        if (n == 3)
-            point = {0.0, 0.0, 0.0};
-        const double norm2 = dot(point, point);
-        if (bestNorm2 < 0 || norm2 < bestNorm2)
-        {
-            best = point;
-            bestNorm2 = norm2;
-            bestMask = mask;
-        }
-    }
-    if (bestMask == 0)  // every face degenerate (repeated points): keep the nearest vertex
-    {
-        int nearest = 0;
-        for (int i = 1; i < count; ++i)
-            if (dot(w[i], w[i]) < dot(w[nearest], w[nearest]))
-                nearest = i;
-        w[0] = w[nearest];
-        count = 1;
-        return w[0];
-    }
-    int kept = 0;
-    for (int i = 0; i < count; ++i)
-        if (bestMask & (1 << i))
-            w[kept++] = w[i];
-    count = kept;
-    return best;
-}
-
 /** \brief Do the convex solids \a a and \a b come within \a padding (>= 0) of each other (touching
     or overlapping included)? GJK on their Minkowski difference: each step gives an upper bound on
     the distance (the nearest point of the simplex) and a lower bound (the support plane along it),
@@ -194,9 +101,11 @@ RC_HD bool convexWithin(const ConvexShape &a, const ConvexShape &b, double paddi
         if (vv - vw <= 1e-12 * vv)
             return true;  // converged with the distance within rounding of the padding or below it
         w[count++] = next;
-        v = nearestOnSimplex(w, count);
-        if (count == 4 || !(dot(v, v) < vv))
-            return count == 4 || lower <= padding;  // origin enclosed, or no progress: the bounds have met
+        Vec3<double> closest{0.0, 0.0, 0.0};
+        const detail::SimplexStep simplex = detail::closestOnSimplex(w, count, closest);
+        if (simplex != detail::SimplexStep::Closer || !(dot(closest, closest) < vv))
+            return true;  // the origin enclosed (they overlap), or no progress: the bounds have met
+        v = closest;
     }
     return true;
 }
