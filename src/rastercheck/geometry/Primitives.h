@@ -12,7 +12,8 @@ namespace rastercheck
     Curved primitives are tessellated so that the mesh *contains* the exact shape (vertices lie on
     the circumscribed polygon / polyhedron) and no point of the mesh is farther than
     \a maxError (metres) from the exact surface. A collision checker using these meshes therefore
-    never misses a contact of the exact primitive; it may report contacts up to maxError early.
+    never misses a contact of the exact primitive; it may report contacts up to maxError early
+    (safe and exact mode then decide the pair on the exact shapes: PrimitiveShape, CurvedSolids).
 
     Segment counts follow from maxError (the smallest that meet it for cylinders and cones), capped at
    kMaxPrimitiveSegments around the circumference; only a maxError below about 5e-6 of the radius reaches the cap, and
