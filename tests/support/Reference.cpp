@@ -20,19 +20,34 @@ bool bruteForceCollides(const CollisionModel &model, const double *q, double pad
     RobotData data(*model.robot);
     forwardKinematics(*model.robot, data, q);
     const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
-    for (std::size_t c = 0; c < model.numComponents(); ++c)
+    // The meshes of curved primitives lie outside the exact shapes: a pair they call colliding is
+    // decided on the shapes, as in safe and exact mode (CurvedSolids).
+    auto confirmed = [&](std::uint32_t pair, const Eigen::Isometry3d &poseA, const Eigen::Isometry3d &poseB)
+    {
+        return !model.curved.refines(pair) ||
+               model.curved.collide(model, pair, toDevicePose(poseA), toDevicePose(poseB), padding);
+    };
+    const std::size_t m = model.numComponents();
+    for (std::size_t c = 0; c < m; ++c)
     {
         const Eigen::Isometry3d &pose = data.oMl[model.componentLink[c]];
         for (std::size_t o = 0; o < model.numObjects(); ++o)
             if (solidsOverlap(*model.componentBvhs[c], pose, model.components[c].closed, *model.objectBvhs[o], identity,
-                              model.objects[o].closed, padding))
+                              model.objects[o].closed, padding) &&
+                confirmed(device::environmentPair(static_cast<int>(o), static_cast<int>(c), static_cast<int>(m)), pose,
+                          identity))
                 return true;
     }
-    for (const auto &[a, b] : model.selfPairs)
-        if (solidsOverlap(*model.componentBvhs[a], data.oMl[model.componentLink[a]], model.components[a].closed,
-                          *model.componentBvhs[b], data.oMl[model.componentLink[b]], model.components[b].closed,
-                          padding))
+    for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
+    {
+        const auto [a, b] = model.selfPairs[i];
+        const Eigen::Isometry3d &poseA = data.oMl[model.componentLink[a]], &poseB = data.oMl[model.componentLink[b]];
+        if (solidsOverlap(*model.componentBvhs[a], poseA, model.components[a].closed, *model.componentBvhs[b], poseB,
+                          model.components[b].closed, padding) &&
+            confirmed(device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()), static_cast<int>(m)),
+                      poseA, poseB))
             return true;
+    }
     return false;
 }
 

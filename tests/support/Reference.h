@@ -8,8 +8,9 @@
 namespace rastercheck::test
 {
 /** \brief The exact oracle with no culling at all: every component against every object and every
-    self pair the ACM does not allow, by solidsOverlap. Independent of the pipeline's box culls, so
-    it checks them too. Single-threaded; for tests and benches. */
+    self pair the ACM does not allow, by solidsOverlap, a pair with curved primitives then on their
+    exact shapes (CurvedSolids). Independent of the pipeline's box culls, so it checks them too.
+    Single-threaded; for tests and benches. */
 bool bruteForceCollides(const CollisionModel &model, const double *q, double padding);
 
 /** \brief FCL 0.7 as OMPL.app and MoveIt use it: BVHModel<OBBRSS> per component and object, a
