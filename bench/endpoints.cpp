@@ -27,8 +27,9 @@ int main(int argc, char **argv)
     const std::vector<std::string> robots = rc::bench::splitList(argc > 1 ? argv[1] : "fetch");
     const int problems = argc > 2 ? std::atoi(argv[2]) : 100;
     rc::setLogHandler([](rc::LogLevel, const std::string &) {});  // the robot's loader notes, per scene
-    std::printf("| robot | states | moved onto a bound | rastercheck invalid (safe) | of them self | FCL invalid | "
-                "verdicts equal | equal, raw |\n|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "| robot | states | moved onto a bound | rastercheck invalid (safe) | of them self | FCL invalid | "
+        "verdicts equal | equal, raw |\n|---|---|---|---|---|---|---|---|\n");
     for (const std::string &name : robots)
     {
         const rc::RobotModelConstPtr robot = rc::bench::loadMbmRobot(root, name);
@@ -57,9 +58,9 @@ int main(int argc, char **argv)
                     std::vector<double> q = rc::ompl::configurationFromJoints(
                         mapping, goal ? request.goalJoints : request.startJoints, what, rc::ompl::UnknownJoints::Skip);
                     const bool rawValid = checker.isValid(q);
-                    const rc::BoundsFit fit = goal ? rc::fitToBounds(*robot, q.data(), rc::kDefaultBoundsTolerance,
-                                                                     slackDown, slackUp)
-                                                   : rc::fitToBounds(*robot, q.data(), rc::kDefaultBoundsTolerance);
+                    const rc::BoundsFit fit =
+                        goal ? rc::fitToBounds(*robot, q.data(), rc::kDefaultBoundsTolerance, slackDown, slackUp)
+                             : rc::fitToBounds(*robot, q.data(), rc::kDefaultBoundsTolerance);
                     rc::Contact contact;
                     const bool valid = checker.isValid(q, {}, &contact);
                     const bool fclValid = !fcl.collides(q.data());

@@ -41,10 +41,11 @@ std::string box(const std::string &size, const std::string &xyz = "0 0 0")
 std::string rollArm()
 {
     const std::string roll = "<limit lower=\"-3.14159\" upper=\"3.14159\" effort=\"1\" velocity=\"1\"/>";
-    return urdfRobot(urdfLink("world") + urdfLink("base", box("0.1 0.1 0.1")) + urdfLink("middle", box("0.05 0.05 0.05")) +
-                     urdfLink("tip", box("0.1 0.1 0.1", "0.6 0 0")) + urdfJoint("mount", "fixed", "world", "base") +
-                     urdfJoint("roll", "revolute", "base", "middle", "<origin xyz=\"0.3 0 0\"/><axis xyz=\"0 0 1\"/>" + roll) +
-                     urdfJoint("j2", "revolute", "middle", "tip", "<origin xyz=\"0.3 0 0\"/><axis xyz=\"0 0 1\"/>" + roll));
+    return urdfRobot(
+        urdfLink("world") + urdfLink("base", box("0.1 0.1 0.1")) + urdfLink("middle", box("0.05 0.05 0.05")) +
+        urdfLink("tip", box("0.1 0.1 0.1", "0.6 0 0")) + urdfJoint("mount", "fixed", "world", "base") +
+        urdfJoint("roll", "revolute", "base", "middle", "<origin xyz=\"0.3 0 0\"/><axis xyz=\"0 0 1\"/>" + roll) +
+        urdfJoint("j2", "revolute", "middle", "tip", "<origin xyz=\"0.3 0 0\"/><axis xyz=\"0 0 1\"/>" + roll));
 }
 
 rc::Problem rollProblem()
@@ -111,10 +112,12 @@ TEST(Bounds, GoalAtPiOnALimitOfPlus314159Plans)
     LogCapture log;
     rco::setStartAndGoal(*setup, request(-kPi, kPi));
     ASSERT_EQ(log.warnings.size(), 2u);
-    EXPECT_TRUE(log.warned("start: joint 'roll' at -3.141592654 is 2.65e-06 below its lower bound -3.14159; "
-                           "moved onto the bound"));
-    EXPECT_TRUE(log.warned("goal: joint 'roll' at 3.141592654 is 2.65e-06 above its upper bound 3.14159; "
-                           "moved onto the bound"));
+    EXPECT_TRUE(
+        log.warned("start: joint 'roll' at -3.141592654 is 2.65e-06 below its lower bound -3.14159; "
+                   "moved onto the bound"));
+    EXPECT_TRUE(
+        log.warned("goal: joint 'roll' at 3.141592654 is 2.65e-06 above its upper bound 3.14159; "
+                   "moved onto the bound"));
     const ob::State *goal = setup->getGoal()->as<ob::GoalState>()->getState();
     const rco::StateValidityCheckerPtr checker = rco::getStateValidityChecker(*setup);
     EXPECT_EQ(checker->getStateMapping().toConfiguration(goal)[0], 3.14159);
@@ -146,7 +149,8 @@ TEST(Bounds, GoalJointConstraintToleranceIsHonoured)
     r.goalToleranceBelow["roll"] = 0.01;
     LogCapture log;
     EXPECT_NO_THROW(rco::setStartAndGoal(*setup, r));
-    EXPECT_TRUE(log.warned("goal: joint 'roll' at 3.14259 is 0.001 above its upper bound 3.14159")) << log.warnings.size();
+    EXPECT_TRUE(log.warned("goal: joint 'roll' at 3.14259 is 0.001 above its upper bound 3.14159"))
+        << log.warnings.size();
 }
 
 TEST(Bounds, CheckWritesWhyAStateIsInvalid)
@@ -154,10 +158,11 @@ TEST(Bounds, CheckWritesWhyAStateIsInvalid)
     const std::string folder = rc::test::makeTempDir("bounds");
     const std::string urdf = writeFile(folder + "/roll.urdf", rollArm());
     // A crate where the stretched arm's tip is (x = 1.2).
-    const std::string scene = writeFile(folder + "/scene.yaml",
-                                        "world:\n  collision_objects:\n    - id: crate\n"
-                                        "      primitives: [{type: box, dimensions: [0.2, 0.2, 0.2]}]\n"
-                                        "      primitive_poses: [{position: [1.2, 0, 0], orientation: [0, 0, 0, 1]}]\n");
+    const std::string scene =
+        writeFile(folder + "/scene.yaml",
+                  "world:\n  collision_objects:\n    - id: crate\n"
+                  "      primitives: [{type: box, dimensions: [0.2, 0.2, 0.2]}]\n"
+                  "      primitive_poses: [{position: [1.2, 0, 0], orientation: [0, 0, 0, 1]}]\n");
     // free, self (tip folded onto the base), environment (stretched), 2.65e-6 past a limit (moved:
     // free), 1e-3 past it (bounds).
     const std::string states =

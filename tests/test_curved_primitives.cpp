@@ -82,14 +82,14 @@ TEST(CurvedPrimitives, AnalyticPairsNearContact)
         // Sphere off a cylinder's rim (the circle edge), along the diagonal of the (radial, axial) plane.
         const double s = std::sqrt(0.5);
         const Eigen::Vector3d rim = tilt * Eigen::Vector3d(0.1 + s * (0.05 + d), 0, 0.2 + s * (0.05 + d));
-        expectDecided(shape(K::Cylinder, at(0, 0, 0, tilt), 0.1, 0.2), shape(K::Sphere, at(rim.x(), rim.y(), rim.z()), 0.05),
-                      d, "cylinder rim-sphere");
+        expectDecided(shape(K::Cylinder, at(0, 0, 0, tilt), 0.1, 0.2),
+                      shape(K::Sphere, at(rim.x(), rim.y(), rim.z()), 0.05), d, "cylinder rim-sphere");
         // Parallel cylinders side by side (radii 0.1 and 0.05), and crossed ones.
         expectDecided(shape(K::Cylinder, at(0, 0, 0), 0.1, 0.3), shape(K::Cylinder, at(0.15 + d, 0, 0.1), 0.05, 0.3), d,
                       "parallel cylinders");
         const Eigen::Matrix3d crossed = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
-        expectDecided(shape(K::Cylinder, at(0, 0, 0), 0.1, 0.3), shape(K::Cylinder, at(0.15 + d, 0, 0, crossed), 0.05, 0.3),
-                      d, "crossed cylinders");
+        expectDecided(shape(K::Cylinder, at(0, 0, 0), 0.1, 0.3),
+                      shape(K::Cylinder, at(0.15 + d, 0, 0, crossed), 0.05, 0.3), d, "crossed cylinders");
         // Cylinder end cap on a box; a sphere on a cone's apex.
         expectDecided(shape(K::Cylinder, at(0, 0, 0.5 + d), 0.1, 0.2), shape(K::Box, at(0, 0, 0), 0.5, 0.5, 0.3), d,
                       "cylinder cap-box");
@@ -172,21 +172,20 @@ namespace
 std::string sphereOnSlider(const std::string &extraLinks = "", const std::string &extraJoints = "")
 {
     // A sphere (r = 0.1) that slides along x, and whatever the caller adds.
-    return urdfRobot(
-        urdfLink("world") +
-        urdfLink("ball", "<collision><geometry><sphere radius=\"0.1\"/></geometry></collision>") + extraLinks +
-        urdfJoint("slide", "prismatic", "world", "ball",
-                  "<axis xyz=\"1 0 0\"/><limit lower=\"-2\" upper=\"2\" effort=\"1\" velocity=\"1\"/>") +
-        extraJoints);
+    return urdfRobot(urdfLink("world") +
+                     urdfLink("ball", "<collision><geometry><sphere radius=\"0.1\"/></geometry></collision>") +
+                     extraLinks +
+                     urdfJoint("slide", "prismatic", "world", "ball",
+                               "<axis xyz=\"1 0 0\"/><limit lower=\"-2\" upper=\"2\" effort=\"1\" velocity=\"1\"/>") +
+                     extraJoints);
 }
 
 rc::ScenePtr sceneWith(const std::string &type, const std::string &dimensions, const std::string &position,
                        const std::string &orientation = "[0, 0, 0, 1]")
 {
-    return rc::loadMoveItSceneString("world:\n  collision_objects:\n    - id: thing\n      primitives: [{type: " +
-                                     type + ", dimensions: " + dimensions +
-                                     "}]\n      primitive_poses: [{position: " + position +
-                                     ", orientation: " + orientation + "}]\n");
+    return rc::loadMoveItSceneString(
+        "world:\n  collision_objects:\n    - id: thing\n      primitives: [{type: " + type + ", dimensions: " +
+        dimensions + "}]\n      primitive_poses: [{position: " + position + ", orientation: " + orientation + "}]\n");
 }
 
 // In safe and exact mode: the sphere at x = contact - 0.1 mm is free, at contact + 0.1 mm collides.
@@ -221,8 +220,8 @@ TEST(CurvedPrimitives, CheckerDecidesSpheresCylindersAndConesExactly)
     expectExactLine(robot, sceneWith("sphere", "[0.15]", "[0.6, 0.03, 0.02]"),
                     0.6 - std::sqrt(0.25 * 0.25 - 0.03 * 0.03 - 0.02 * 0.02), "sphere");
     // Turned about its axis by 0.3 rad, so that no face of its mesh is tangent along x.
-    expectExactLine(robot, sceneWith("cylinder", "[0.4, 0.1]", "[0.5, 0, 0]", "[0, 0, 0.1494381, 0.9887711]"),
-                    0.3, "cylinder");
+    expectExactLine(robot, sceneWith("cylinder", "[0.4, 0.1]", "[0.5, 0, 0]", "[0, 0, 0.1494381, 0.9887711]"), 0.3,
+                    "cylinder");
     // Cone (height 0.2, radius 0.1) turned so that its apex points along -x, at x = 0.4.
     expectExactLine(robot, sceneWith("cone", "[0.2, 0.1]", "[0.5, 0, 0]", "[0, -0.7071068, 0, 0.7071068]"), 0.3,
                     "cone");

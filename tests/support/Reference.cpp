@@ -133,15 +133,15 @@ struct FclReference::Impl
         for (const Component &component : m.robot->components)
         {
             const bool primitive = exactPrimitives && component.shapes.size() == 1;
-            components.push_back(std::make_unique<fcl::CollisionObjectd>(
-                primitive ? toFcl(component.shapes[0]) : toFcl(component.mesh)));
+            components.push_back(std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(component.shapes[0])
+                                                                                   : toFcl(component.mesh)));
             componentOffsets.push_back(primitive ? component.shapes[0].pose : Eigen::Isometry3d::Identity());
         }
         for (const SceneObject &object : m.scene->objects)
         {
             const bool primitive = exactPrimitives && object.shapes.size() == 1;
-            objects.push_back(std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(object.shapes[0])
-                                                                                : toFcl(object.mesh)));
+            objects.push_back(
+                std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(object.shapes[0]) : toFcl(object.mesh)));
             if (primitive)
                 objects.back()->setTransform(object.shapes[0].pose);
             objects.back()->computeAABB();

@@ -79,8 +79,9 @@ RC_HD Vec3<double> supportPoint(const ConvexShape &shape, const Vec3<double> &d)
     rounding of the padding may go either way, a deeper one never reads as apart. */
 RC_HD bool convexWithin(const ConvexShape &a, const ConvexShape &b, double padding)
 {
-    auto support = [&](const Vec3<double> &d)
-    { return supportPoint(a, d) - supportPoint(b, Vec3<double>{-d.x, -d.y, -d.z}); };
+    auto support = [&](const Vec3<double> &d) {
+        return supportPoint(a, d) - supportPoint(b, Vec3<double>{-d.x, -d.y, -d.z});
+    };
     Vec3<double> w[4];
     int count = 1;
     w[0] = support(Vec3<double>{1.0, 0.0, 0.0});

@@ -321,7 +321,12 @@ ScenePtr readScene(const std::string &yaml, const std::string &sourceName, doubl
             shapes);
         collectShapes(
             reader, object, "meshes", "mesh_poses", where,
-            [&](const YAML::Node &node, const std::string &at) { return Shape{messageMesh(reader, node, at)}; },
+            [&](const YAML::Node &node, const std::string &at)
+            {
+                Shape shape;
+                shape.mesh = messageMesh(reader, node, at);
+                return shape;
+            },
             shapes);
         for (std::size_t i = 0; i < shapes.size(); ++i)
         {

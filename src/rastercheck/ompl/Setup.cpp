@@ -170,8 +170,8 @@ void setStartAndGoal(og::SimpleSetup &setup, const MotionPlanRequest &request)
     };
     slack(request.goalToleranceBelow, slackDown);
     slack(request.goalToleranceAbove, slackUp);
-    const std::vector<double> start =
-        ontoBounds(mapping, configurationFromJoints(mapping, request.startJoints, "start", UnknownJoints::Skip), "start");
+    const std::vector<double> start = ontoBounds(
+        mapping, configurationFromJoints(mapping, request.startJoints, "start", UnknownJoints::Skip), "start");
     const std::vector<double> goal =
         ontoBounds(mapping, configurationFromJoints(mapping, request.goalJoints, "goal"), "goal", slackDown, slackUp);
     setStartAndGoalInBounds(setup, start, goal);
