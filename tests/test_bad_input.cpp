@@ -1049,7 +1049,7 @@ TEST(BadInput, NanStateThroughCheckCli)
     std::stringstream verdicts;
     verdicts << out.rdbuf();
     EXPECT_EQ(verdicts.str().substr(0, verdicts.str().find("\n0,base")),
-              "valid,component,object,triangle,x,y,z\n1,,,,,,\n0,,,,,,\n0,,,,,,");
+              "valid,component,object,triangle,x,y,z,reason\n1,,,,,,,\n0,,,,,,,bounds:j1\n0,,,,,,,bounds:j2");
 }
 
 // ---- states -----------------------------------------------------------------------------------
@@ -1061,7 +1061,8 @@ TEST(BadInput, NanStateIsInvalid)
     rc::Contact contact;
     EXPECT_FALSE(checker.isValid(std::vector<double>{kNan, 0, 3, 0, 0, 0, 1}, {}, &contact));
     EXPECT_EQ(contact.kind, rc::Contact::Kind::OutOfBounds);
-    EXPECT_EQ(checker.describe(contact), "out of bounds or not finite");
+    EXPECT_EQ(contact.coordinate, 0);
+    EXPECT_EQ(checker.describe(contact), "coordinate 'x' out of bounds or not finite");
     EXPECT_FALSE(checker.isValid(std::vector<double>{0, 0, 3, 0, 0, kNan, 1}));
     ASSERT_EQ(log.warnings.size(), 1u) << "once per checker";
     EXPECT_EQ(log.warnings[0],

@@ -1,5 +1,6 @@
 // rastercheck check: a states file in, one verdict per state out. A stable interface other tools
-// drive: the OUT.csv columns and the final summary line do not change.
+// drive: the OUT.csv columns and the final summary line's keys only grow, at the end of the row and
+// after invalid=.
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -12,6 +13,8 @@
 #include "Commands.h"
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/core/Error.h"
+#include "rastercheck/core/Log.h"
+#include "rastercheck/model/Bounds.h"
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/io/StatesCsv.h"
 
@@ -26,20 +29,41 @@ struct CheckOptions
     std::string outPath;
     CheckingArguments checking;
     double pixel = 0.0;
+    double boundsTolerance = kDefaultBoundsTolerance;
     std::size_t deviceMemoryMiB = 0;
 };
+
+/** \brief Why a state is invalid, for the verdicts file: "bounds:<coordinate>", "environment" or
+    "self"; empty for a valid state. */
+std::string reason(const Checker &checker, bool valid, const Contact &c)
+{
+    if (valid)
+        return "";
+    switch (c.kind)
+    {
+        case Contact::Kind::OutOfBounds:
+            return "bounds:" + (c.coordinate >= 0 ? checker.robot().coordinateNames[c.coordinate] : std::string());
+        case Contact::Kind::Environment:
+            return "environment";
+        case Contact::Kind::SelfCollision:
+            return "self";
+        case Contact::Kind::None:
+            break;
+    }
+    return "";
+}
 
 void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<std::uint8_t> &valid,
                    const std::vector<Contact> &contacts)
 {
-    out << "valid,component,object,triangle,x,y,z\n" << std::setprecision(9);
+    out << "valid,component,object,triangle,x,y,z,reason\n" << std::setprecision(9);
     const RobotModel &robot = checker.robot();
     for (std::size_t i = 0; i < valid.size(); ++i)
     {
         const Contact &c = contacts[i];
         if (valid[i] || c.kind == Contact::Kind::OutOfBounds)
         {
-            out << (valid[i] ? 1 : 0) << ",,,,,,\n";
+            out << (valid[i] ? 1 : 0) << ",,,,,,," << reason(checker, valid[i], c) << '\n';
             continue;
         }
         const std::string other = c.kind == Contact::Kind::Environment ? checker.scene().objects[c.object].name
@@ -47,8 +71,27 @@ void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<
         out << "0," << robot.components[c.component].name << ',' << other << ',';
         if (c.triangle >= 0)
             out << c.triangle;
-        out << ',' << c.position.x() << ',' << c.position.y() << ',' << c.position.z() << '\n';
+        out << ',' << c.position.x() << ',' << c.position.y() << ',' << c.position.z() << ','
+            << reason(checker, false, c) << '\n';
     }
+}
+
+/** \brief Moves the coordinates of every state that lie within \a tolerance outside a joint limit
+    onto it (as `plan` does with a request's start and goal), with one warning per coordinate: the
+    number of states moved and the first of them. States farther outside stay invalid. */
+void fitStatesToBounds(const RobotModel &robot, StatesTable &states, double tolerance)
+{
+    std::vector<std::size_t> count(robot.numCoordinates(), 0);
+    std::vector<BoundsExcess> first(robot.numCoordinates());
+    for (std::size_t i = 0; i < states.rows; ++i)
+        for (const BoundsExcess &moved :
+             fitToBounds(robot, states.values.data() + i * robot.numCoordinates(), tolerance).moved)
+            if (count[static_cast<std::size_t>(moved.coordinate)]++ == 0)
+                first[static_cast<std::size_t>(moved.coordinate)] = moved;
+    for (std::size_t c = 0; c < count.size(); ++c)
+        if (count[c] > 0)
+            logWarning(std::to_string(count[c]) + " state(s) within the bounds tolerance of a limit moved onto it; " +
+                       "the first: " + describeExcess(robot, first[c]));
 }
 
 int runCheck(const CheckOptions &options)
@@ -58,6 +101,8 @@ int runCheck(const CheckOptions &options)
         throw ConfigurationError("--padding must be a finite number >= 0");
     if (!(std::isfinite(options.pixel) && options.pixel >= 0))
         throw ConfigurationError("--pixel must be a finite number >= 0");
+    if (!(std::isfinite(options.boundsTolerance) && options.boundsTolerance >= 0))
+        throw ConfigurationError("--bounds-tolerance must be a finite number >= 0");
     const Problem problem = loadProblem(options.problem.source());
     CheckerOptions checkerOptions = options.checking.checker();
     checkerOptions.deviceMemoryLimit = options.deviceMemoryMiB << 20;
@@ -65,7 +110,8 @@ int runCheck(const CheckOptions &options)
     CollisionRequest request = options.checking.request();
     request.pixelSize = options.pixel;
 
-    const StatesTable states = readStatesCsv(options.statesPath, problem.robot->coordinateNames);
+    StatesTable states = readStatesCsv(options.statesPath, problem.robot->coordinateNames);
+    fitStatesToBounds(*problem.robot, states, options.boundsTolerance);
     std::vector<std::uint8_t> valid(states.rows);
     std::vector<Contact> contacts(states.rows);
     const auto start = std::chrono::steady_clock::now();
@@ -79,11 +125,19 @@ int runCheck(const CheckOptions &options)
             throw InputError(options.outPath, "", "cannot write the verdicts file");
         writeVerdicts(out, checker, valid, contacts);
     }
-    std::size_t invalid = 0;
-    for (std::uint8_t v : valid)
-        invalid += v == 0;
+    std::size_t invalid = 0, bounds = 0, environment = 0, self = 0;
+    for (std::size_t i = 0; i < states.rows; ++i)
+    {
+        if (valid[i])
+            continue;
+        ++invalid;
+        bounds += contacts[i].kind == Contact::Kind::OutOfBounds;
+        environment += contacts[i].kind == Contact::Kind::Environment;
+        self += contacts[i].kind == Contact::Kind::SelfCollision;
+    }
     std::cerr << "rastercheck: backend " << checker.backendName() << ", mode " << options.checking.mode << '\n';
-    std::cout << "states=" << states.rows << " invalid=" << invalid << " seconds=" << seconds
+    std::cout << "states=" << states.rows << " invalid=" << invalid << " bounds=" << bounds
+              << " environment=" << environment << " self=" << self << " seconds=" << seconds
               << " states_per_s=" << (seconds > 0 ? static_cast<double>(states.rows) / seconds : 0.0) << std::endl;
     return 0;
 }
@@ -97,13 +151,20 @@ void addCheckCommand(CLI::App &app)
     command->add_option("--states", options->statesPath,
                         "CSV with a header row: the robot's coordinate names (x,y,z,qx,qy,qz,qw for rigid bodies)")
         ->required();
-    command->add_option("--out", options->outPath, "verdicts CSV: valid,component,object,triangle,x,y,z");
+    command->add_option("--out", options->outPath,
+                        "verdicts CSV: valid,component,object,triangle,x,y,z,reason (reason: bounds:COORDINATE, "
+                        "environment or self)");
     options->checking.addModeAndPadding(*command, "how the states are checked");
     options->checking.addBackendAndThreads(*command, "worker threads");
     command->add_option("--device-memory", options->deviceMemoryMiB,
                         "MiB of GPU memory the batch buffers may take (0 = half the free memory); a batch that "
                         "needs more runs in several passes, with the same verdicts")
         ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 30));
+    command
+        ->add_option("--bounds-tolerance", options->boundsTolerance,
+                     "a coordinate this far outside a joint limit (rad or m) is moved onto it with a warning "
+                     "(default 1e-4); farther outside, the state is invalid (reason bounds)")
+        ->check(CLI::NonNegativeNumber);
     command->add_option("--pixel", options->pixel, "raster pixel size in scene units (0 = automatic)")
         ->check(CLI::NonNegativeNumber);
     command->callback([options]() { throw CommandResult{runCheck(*options)}; });

@@ -49,6 +49,7 @@ struct PlanOptions
     double timeLimit = 0.0;
     double memoryLimit = 0.0;
     CheckingArguments checking;
+    double boundsTolerance = kDefaultBoundsTolerance;
     double segmentFraction = 0.01;
     std::string edges = "auto";
     double margin = 0.0;
@@ -142,6 +143,7 @@ int runPlan(const PlanOptions &options)
     ompl::SetupOptions setupOptions;
     setupOptions.checker = options.checking.checker();
     setupOptions.request = options.checking.request();
+    setupOptions.boundsTolerance = options.boundsTolerance;
     setupOptions.longestValidSegmentFraction = options.segmentFraction;
     setupOptions.edges = ompl::parseEdgeChecking(options.edges);
     // What "auto" resolves to (certified edges unless raster mode cannot certify), for the log and messages.
@@ -348,6 +350,11 @@ void addPlanCommand(CLI::App &app)
         ->check(CLI::PositiveNumber);
     options->checking.addBackendAndThreads(*command, "worker threads of batch checks");
     options->checking.addModeAndPadding(*command, "collision mode while planning");
+    command
+        ->add_option("--bounds-tolerance", options->boundsTolerance,
+                     "a start or goal this far outside a joint limit (rad or m) is moved onto it with a warning; "
+                     "farther is an error (default 1e-4; a goal joint constraint's tolerance counts where larger)")
+        ->check(CLI::NonNegativeNumber);
     command
         ->add_option("--segment-fraction", options->segmentFraction,
                      "longest valid segment, as a fraction of the space's extent (OMPL default 0.01)")

@@ -375,6 +375,8 @@ struct ViewServer::Impl
     json contactJson(const Contact &contact) const
     {
         json entry{{"kind", toString(contact.kind)}, {"description", checker.describe(contact)}};
+        if (contact.kind == Contact::Kind::OutOfBounds && contact.coordinate >= 0)
+            entry["coordinate"] = robot().coordinateNames[static_cast<std::size_t>(contact.coordinate)];
         if (contact.kind != Contact::Kind::Environment && contact.kind != Contact::Kind::SelfCollision)
             return entry;
         entry["component"] = robot().components[static_cast<std::size_t>(contact.component)].name;

@@ -2,6 +2,10 @@
 
 #include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/cone.h>
+#include <fcl/geometry/shape/cylinder.h>
+#include <fcl/geometry/shape/sphere.h>
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
@@ -16,19 +20,34 @@ bool bruteForceCollides(const CollisionModel &model, const double *q, double pad
     RobotData data(*model.robot);
     forwardKinematics(*model.robot, data, q);
     const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
-    for (std::size_t c = 0; c < model.numComponents(); ++c)
+    // The meshes of curved primitives lie outside the exact shapes: a pair they call colliding is
+    // decided on the shapes, as in safe and exact mode (CurvedSolids).
+    auto confirmed = [&](std::uint32_t pair, const Eigen::Isometry3d &poseA, const Eigen::Isometry3d &poseB)
+    {
+        return !model.curved.refines(pair) ||
+               model.curved.collide(model, pair, toDevicePose(poseA), toDevicePose(poseB), padding);
+    };
+    const std::size_t m = model.numComponents();
+    for (std::size_t c = 0; c < m; ++c)
     {
         const Eigen::Isometry3d &pose = data.oMl[model.componentLink[c]];
         for (std::size_t o = 0; o < model.numObjects(); ++o)
             if (solidsOverlap(*model.componentBvhs[c], pose, model.components[c].closed, *model.objectBvhs[o], identity,
-                              model.objects[o].closed, padding))
+                              model.objects[o].closed, padding) &&
+                confirmed(device::environmentPair(static_cast<int>(o), static_cast<int>(c), static_cast<int>(m)), pose,
+                          identity))
                 return true;
     }
-    for (const auto &[a, b] : model.selfPairs)
-        if (solidsOverlap(*model.componentBvhs[a], data.oMl[model.componentLink[a]], model.components[a].closed,
-                          *model.componentBvhs[b], data.oMl[model.componentLink[b]], model.components[b].closed,
-                          padding))
+    for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
+    {
+        const auto [a, b] = model.selfPairs[i];
+        const Eigen::Isometry3d &poseA = data.oMl[model.componentLink[a]], &poseB = data.oMl[model.componentLink[b]];
+        if (solidsOverlap(*model.componentBvhs[a], poseA, model.components[a].closed, *model.componentBvhs[b], poseB,
+                          model.components[b].closed, padding) &&
+            confirmed(device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()), static_cast<int>(m)),
+                      poseA, poseB))
             return true;
+    }
     return false;
 }
 
@@ -84,21 +103,47 @@ bool distanceCallback(fcl::CollisionObjectd *a, fcl::CollisionObjectd *b, void *
 }
 }  // namespace
 
+std::shared_ptr<fcl::CollisionGeometryd> toFcl(const PrimitiveShape &shape)
+{
+    switch (shape.kind)
+    {
+        case PrimitiveShape::Kind::Box:
+            return std::make_shared<fcl::Boxd>(shape.size);
+        case PrimitiveShape::Kind::Sphere:
+            return std::make_shared<fcl::Sphered>(shape.size.x());
+        case PrimitiveShape::Kind::Cylinder:
+            return std::make_shared<fcl::Cylinderd>(shape.size.x(), shape.size.y());
+        case PrimitiveShape::Kind::Cone:
+            return std::make_shared<fcl::Coned>(shape.size.x(), shape.size.y());
+    }
+    return nullptr;
+}
+
 struct FclReference::Impl
 {
     const CollisionModel &model;
     RobotData data;
     std::vector<std::unique_ptr<fcl::CollisionObjectd>> components;
+    std::vector<Eigen::Isometry3d> componentOffsets;  // the FCL geometry's frame in the link frame
     std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
     fcl::DynamicAABBTreeCollisionManagerd manager;
 
-    explicit Impl(const CollisionModel &m) : model(m), data(*m.robot)
+    Impl(const CollisionModel &m, bool exactPrimitives) : model(m), data(*m.robot)
     {
         for (const Component &component : m.robot->components)
-            components.push_back(std::make_unique<fcl::CollisionObjectd>(toFcl(component.mesh)));
+        {
+            const bool primitive = exactPrimitives && component.shapes.size() == 1;
+            components.push_back(std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(component.shapes[0])
+                                                                                   : toFcl(component.mesh)));
+            componentOffsets.push_back(primitive ? component.shapes[0].pose : Eigen::Isometry3d::Identity());
+        }
         for (const SceneObject &object : m.scene->objects)
         {
-            objects.push_back(std::make_unique<fcl::CollisionObjectd>(toFcl(object.mesh)));
+            const bool primitive = exactPrimitives && object.shapes.size() == 1;
+            objects.push_back(
+                std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(object.shapes[0]) : toFcl(object.mesh)));
+            if (primitive)
+                objects.back()->setTransform(object.shapes[0].pose);
             objects.back()->computeAABB();
             manager.registerObject(objects.back().get());
         }
@@ -106,7 +151,10 @@ struct FclReference::Impl
     }
 };
 
-FclReference::FclReference(const CollisionModel &model) : impl_(std::make_unique<Impl>(model)) {}
+FclReference::FclReference(const CollisionModel &model, bool exactPrimitives)
+    : impl_(std::make_unique<Impl>(model, exactPrimitives))
+{
+}
 
 FclReference::~FclReference() = default;
 
@@ -118,7 +166,7 @@ bool FclReference::collides(const double *q, double padding)
     forwardKinematics(*model.robot, impl_->data, q);
     for (std::size_t c = 0; c < impl_->components.size(); ++c)
     {
-        const Eigen::Isometry3d &pose = impl_->data.oMl[model.componentLink[c]];
+        const Eigen::Isometry3d pose = impl_->data.oMl[model.componentLink[c]] * impl_->componentOffsets[c];
         impl_->components[c]->setTransform(pose.linear(), pose.translation());
         impl_->components[c]->computeAABB();
     }

@@ -137,6 +137,18 @@ void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const C
     warnOnceIfNotFinite(q, n);
     const Backend &backend = n >= minDeviceBatch_ ? *backend_ : static_cast<const Backend &>(reference_);
     backend.check(q, n, valid, contacts, request, threads_);
+    nameCoordinatesOutOfBounds(q, n, contacts);
+}
+
+// The backends only say that a state is out of bounds; which coordinate is asked of the model here,
+// off the hot path (such states are rare, and their verdict needs no more).
+void Checker::nameCoordinatesOutOfBounds(const double *q, std::size_t n, Contact *contacts) const
+{
+    if (!contacts)
+        return;
+    for (std::size_t i = 0; i < n; ++i)
+        if (contacts[i].kind == Contact::Kind::OutOfBounds)
+            contacts[i].coordinate = model_->firstInadmissibleCoordinate(q + i * dof());
 }
 
 bool Checker::isValid(const double *q, const CollisionRequest &request, Contact *contact) const
@@ -146,6 +158,7 @@ bool Checker::isValid(const double *q, const CollisionRequest &request, Contact 
     std::uint8_t valid = 0;
     const Backend &backend = minDeviceBatch_ <= 1 ? *backend_ : static_cast<const Backend &>(reference_);
     backend.check(q, 1, &valid, contact, request, 1);
+    nameCoordinatesOutOfBounds(q, 1, contact);
     return valid != 0;
 }
 
@@ -166,6 +179,7 @@ std::vector<Contact> Checker::contacts(const double *q, const CollisionRequest &
     {
         Contact outOfBounds;
         outOfBounds.kind = Contact::Kind::OutOfBounds;
+        outOfBounds.coordinate = model.firstInadmissibleCoordinate(q);
         return {outOfBounds};
     }
     std::unique_ptr<CpuWorkspace> workspace = reference_.borrow();
@@ -210,6 +224,8 @@ std::string Checker::describe(const Contact &contact) const
         case Contact::Kind::None:
             return "valid";
         case Contact::Kind::OutOfBounds:
+            if (contact.coordinate >= 0 && static_cast<std::size_t>(contact.coordinate) < robot.numCoordinates())
+                return "coordinate '" + robot.coordinateNames[contact.coordinate] + "' out of bounds or not finite";
             return "out of bounds or not finite";
         case Contact::Kind::Environment:
             text << componentName(contact.component) << " vs object '"

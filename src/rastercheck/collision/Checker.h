@@ -112,6 +112,7 @@ private:
     /** \brief validate(), and a pairPadding that fits this checker's model and a batch of \a states. */
     void validateRequest(const CollisionRequest &request, std::size_t states) const;
     void warnOnceIfNotFinite(const double *q, std::size_t n) const;
+    void nameCoordinatesOutOfBounds(const double *q, std::size_t n, Contact *contacts) const;
 
     CollisionModelConstPtr model_;
     std::unique_ptr<Backend> backend_;

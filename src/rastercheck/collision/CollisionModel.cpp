@@ -533,6 +533,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
             quaternionStarts.push_back(joint.firstCoordinate + 3);
     }
     selfPairTables = SelfPairTables(*this);  // reads selfPairs, convex, componentLink, quaternionStarts
+    curved = CurvedSolids(*this);            // reads selfPairs and the trees
 
     if (!diagonals.empty())
     {
@@ -543,24 +544,24 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         defaultPixelSize = 1e-3;
 }
 
-bool CollisionModel::configurationAdmissible(const double *q) const
+int CollisionModel::firstInadmissibleCoordinate(const double *q) const
 {
     const double epsilon = std::numeric_limits<double>::epsilon();
     for (std::size_t i = 0; i < boundedCoordinates.size(); ++i)
     {
         if (!std::isfinite(q[i]))
-            return false;
+            return static_cast<int>(i);
         if (boundedCoordinates[i] && (q[i] - epsilon > robot->upperBounds[i] || q[i] + epsilon < robot->lowerBounds[i]))
-            return false;
+            return static_cast<int>(i);
     }
     for (int start : quaternionStarts)
     {
         const double norm2 = q[start] * q[start] + q[start + 1] * q[start + 1] + q[start + 2] * q[start + 2] +
                              q[start + 3] * q[start + 3];
         if (!(norm2 > 1e-12))
-            return false;
+            return start;
     }
-    return true;
+    return -1;
 }
 
 void CollisionModel::nameParties(std::uint32_t pair, Contact &contact) const

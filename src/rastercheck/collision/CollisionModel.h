@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rastercheck/collision/CollisionRequest.h"
+#include "rastercheck/collision/CurvedSolids.h"
 #include "rastercheck/collision/SelfPairTables.h"
 #include "rastercheck/device/Boxes.h"
 #include "rastercheck/device/SolidRelation.h"
@@ -174,10 +175,16 @@ public:
         wrist's links), which prove those pairs apart without a hull test where they are far enough
         from touching (SelfPairTables). */
     SelfPairTables selfPairTables;
+    /** \brief The exact shapes of the pairs with curved primitives (CurvedSolids): what safe and
+        exact mode decide those pairs by once the meshes call them colliding. */
+    CurvedSolids curved;
 
     /** \brief True when every coordinate is finite, bounded coordinates lie within their bounds
         (OMPL's tolerance: one double epsilon), and no quaternion is zero. */
-    bool configurationAdmissible(const double *q) const;
+    bool configurationAdmissible(const double *q) const { return firstInadmissibleCoordinate(q) < 0; }
+    /** \brief The first coordinate that makes \a q inadmissible (a quaternion's qx when it is zero),
+        -1 when there is none: what a Contact::Kind::OutOfBounds contact names. */
+    int firstInadmissibleCoordinate(const double *q) const;
 
     std::size_t numComponents() const { return components.size(); }
     std::size_t numObjects() const { return objects.size(); }

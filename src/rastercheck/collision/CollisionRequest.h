@@ -112,6 +112,9 @@ struct Contact
     /** \brief Triangle of the object (or other component) at the contact; -1 when the contact was
         found by containment (one solid inside the other, surfaces apart). */
     int triangle = -1;
+    /** \brief OutOfBounds: the first coordinate (RobotModel::coordinateNames index) outside its bounds
+        or not finite, or a zero quaternion's qx; -1 otherwise. */
+    int coordinate = -1;
     Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< world frame
 };
 

@@ -226,9 +226,9 @@ bool unprovenCollides(const device::Box &window, const Eigen::Vector3d &origin, 
     the raster stages (measured on the Panda MBM scenes: rasterizing a pair cost about 5x an exact
     BVH query, and the depth-range proof settled only a quarter of the pairs), so safe mode on this
     backend is the exact phase behind the paper's culls. */
-bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, const CollisionRequest &request,
-                  double padding, double pixel, const Eigen::Vector3d &origin, bool wantContact, CpuWorkspace &ws,
-                  Contact &contact)
+bool meshPairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, const CollisionRequest &request,
+                      double padding, double pixel, const Eigen::Vector3d &origin, bool wantContact, CpuWorkspace &ws,
+                      Contact &contact)
 {
     // The box culls already passed; the window test and the hull test are the last cheap exits.
     const device::Box window = device::pairWindow(a.bounds, b.bounds, device::floatPadding(padding));
@@ -284,6 +284,27 @@ bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, cons
     }
     // Padding is always honoured exactly: the raster sees overlaps, not distances.
     return padding > 0 && exactOverlap(a, b, padding, wantContact, contact);
+}
+
+/** \brief Safe and exact mode's last word on a pair whose meshes collide: where a side is made of
+    primitives and one is curved, the exact shapes decide (CurvedSolids), since those meshes lie
+    outside the shapes they stand for. Conservative and raster verdicts stay their tests' own. */
+bool curvedShapesConfirm(const CollisionModel &model, std::uint32_t pairNumber, const Solid &a, const Solid &b,
+                         const CollisionRequest &request, double padding)
+{
+    if ((request.mode != CollisionMode::Safe && request.mode != CollisionMode::Exact) ||
+        !model.curved.refines(pairNumber))
+        return true;
+    return model.curved.collide(model, pairNumber, *a.pose64, *b.pose64, padding);
+}
+
+/** \brief meshPairCollides, with a collision of curved primitives confirmed on their exact shapes. */
+bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, const CollisionRequest &request,
+                  double padding, double pixel, const CollisionModel &model, bool wantContact, CpuWorkspace &ws,
+                  Contact &contact)
+{
+    return meshPairCollides(a, b, pairNumber, request, padding, pixel, model.origin, wantContact, ws, contact) &&
+           curvedShapesConfirm(model, pairNumber, a, b, request, padding);
 }
 
 // Stages: forward kinematics and the hybrid BVH refit (component OBBs, layer AABBs).
@@ -389,7 +410,8 @@ bool CpuBackend::decideOpenPair(std::uint32_t pair, const CollisionRequest &requ
     if (request.mode == CollisionMode::Conservative && !isMeshObstacle(b))
         return unprovenCollides(device::pairWindow(a.bounds, b.bounds, device::floatPadding(request.padding)),
                                 model.origin, contact);
-    return exactOverlap(a, b, request.padding, true, contact);
+    return exactOverlap(a, b, request.padding, true, contact) &&
+           curvedShapesConfirm(model, pair, a, b, request, request.padding);
 }
 
 bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut,
@@ -460,7 +482,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                                           model.objectOrientedBoxes[o], device::floatPadding(padding)) &&
                     pairCollides(componentSolid(model, ws, k), object,
                                  device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m)),
-                                 request, padding, pixel, model.origin, wantContact, ws, contact))
+                                 request, padding, pixel, model, wantContact, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -488,7 +510,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
             if (pairCollides(
                     componentSolid(model, ws, a), componentSolid(model, ws, b),
                     device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()), static_cast<int>(m)),
-                    request, padding, pixel, model.origin, wantContact, ws, contact))
+                    request, padding, pixel, model, wantContact, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;

@@ -306,6 +306,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
         firstOutcome[i] = std::min(firstOutcome[i], firstOutcome[i + 1]);
 
     // Per-state reduction: the first pair (in the CPU's order) that collides.
+    const bool exactCurved = request.mode == CollisionMode::Safe || request.mode == CollisionMode::Exact;
 #pragma omp parallel num_threads(workers)
     {
         std::unique_ptr<CpuWorkspace> ws = exact_.borrow();
@@ -324,13 +325,16 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
             }
             const device::PairOutcome *begin = outcomes.data() + firstOutcome[i];
             const device::PairOutcome *end = outcomes.data() + firstOutcome[i + 1];
+            // The stages see curved primitives as their meshes, which lie outside the exact shapes:
+            // an overlap they find there is confirmed on the shapes (CurvedSolids) by the host.
+            auto overlapSettled = [&](const device::PairOutcome &o)
+            { return o.status == device::PairOverlaps && !(exactCurved && model.curved.refines(o.pair)); };
             if (!collides && !contacts)
-                collides = std::any_of(begin, end,
-                                       [](const device::PairOutcome &o) { return o.status == device::PairOverlaps; });
+                collides = std::any_of(begin, end, overlapSettled);
             bool refitted = false;
             for (const device::PairOutcome *o = begin; !collides && o != end; ++o)
             {
-                if (o->status == device::PairOverlaps)
+                if (overlapSettled(*o))
                 {
                     model.nameParties(o->pair, contact);
                     contact.triangle = o->triangle;
@@ -338,7 +342,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
                     contact.position = Eigen::Vector3d(o->position[0], o->position[1], o->position[2]) + model.origin;
                     collides = true;
                 }
-                else if (o->status == device::PairOpen)
+                else if (o->status != device::PairApart)
                 {
                     if (!refitted)
                         exact_.refitState(q + i * dof, *ws);

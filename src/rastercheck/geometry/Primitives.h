@@ -1,5 +1,7 @@
 #pragma once
 
+#include <Eigen/Geometry>
+
 #include "rastercheck/geometry/Mesh.h"
 
 namespace rastercheck
@@ -10,7 +12,8 @@ namespace rastercheck
     Curved primitives are tessellated so that the mesh *contains* the exact shape (vertices lie on
     the circumscribed polygon / polyhedron) and no point of the mesh is farther than
     \a maxError (metres) from the exact surface. A collision checker using these meshes therefore
-    never misses a contact of the exact primitive; it may report contacts up to maxError early.
+    never misses a contact of the exact primitive; it may report contacts up to maxError early
+    (safe and exact mode then decide the pair on the exact shapes: PrimitiveShape, CurvedSolids).
 
     Segment counts follow from maxError (the smallest that meet it for cylinders and cones), capped at
    kMaxPrimitiveSegments around the circumference; only a maxError below about 5e-6 of the radius reaches the cap, and
@@ -21,6 +24,27 @@ Mesh makeCylinder(double radius, double length, double maxError);
 Mesh makeSphere(double radius, double maxError);
 /** \brief MoveIt's cone (apex at +length/2, base at -length/2); same containment rule. */
 Mesh makeCone(double radius, double length, double maxError);
+
+/** \brief The exact shape a primitive's mesh stands for, placed in the frame of the solid it belongs
+    to (a link's frame, or the world for a scene object): what the curved primitives' exact tests
+    (collision/CurvedSolids.h) read. */
+struct PrimitiveShape
+{
+    enum class Kind
+    {
+        Box,
+        Sphere,
+        Cylinder,
+        Cone
+    };
+    Kind kind = Kind::Box;
+    /** \brief Box: edge lengths x y z; sphere: radius; cylinder and cone: radius, length (metres). */
+    Eigen::Vector3d size = Eigen::Vector3d::Zero();
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    /** \brief Whether its mesh only approximates it (from outside: makeSphere, makeCylinder,
+        makeCone). */
+    bool curved() const { return kind != Kind::Box; }
+};
 
 /** \brief Upper bound on polygon sides around a circle (sphere: meridians; half as many bands). */
 constexpr int kMaxPrimitiveSegments = 1024;

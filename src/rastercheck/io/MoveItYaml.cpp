@@ -154,7 +154,8 @@ std::string readFile(const std::string &path)
 }
 
 // shape_msgs/SolidPrimitive: type as a name or its message constant, dimensions per type.
-Mesh primitiveMesh(const Reader &reader, const YAML::Node &node, const std::string &where, double primitiveError)
+Mesh primitiveMesh(const Reader &reader, const YAML::Node &node, const std::string &where, double primitiveError,
+                   PrimitiveShape &exact)
 {
     if (!node || !node.IsMap())
         throw InputError(reader.file(), where, "expected a primitive with type and dimensions");
@@ -179,21 +180,28 @@ Mesh primitiveMesh(const Reader &reader, const YAML::Node &node, const std::stri
     if (type == "box")
     {
         require(3, "x y z");
+        exact.size = Eigen::Vector3d(d[0], d[1], d[2]);
         return makeBox(Eigen::Vector3d(d[0], d[1], d[2]));
     }
     if (type == "sphere")
     {
         require(1, "radius");
+        exact.kind = PrimitiveShape::Kind::Sphere;
+        exact.size.x() = d[0];
         return makeSphere(d[0], primitiveError);
     }
     if (type == "cylinder")
     {
         require(2, "height radius");
+        exact.kind = PrimitiveShape::Kind::Cylinder;
+        exact.size = Eigen::Vector3d(d[1], d[0], 0.0);
         return makeCylinder(d[1], d[0], primitiveError);
     }
     if (type == "cone")
     {
         require(2, "height radius");
+        exact.kind = PrimitiveShape::Kind::Cone;
+        exact.size = Eigen::Vector3d(d[1], d[0], 0.0);
         return makeCone(d[1], d[0], primitiveError);
     }
     throw InputError(reader.file(), where + ".type",
@@ -234,8 +242,18 @@ Mesh messageMesh(const Reader &reader, const YAML::Node &node, const std::string
 struct Shape
 {
     Mesh mesh;
-    Eigen::Isometry3d pose;
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    bool primitive = false;
+    PrimitiveShape exact;  ///< when primitive (pose: the primitive's own, identity)
 };
+
+Shape primitiveShape(const Reader &reader, const YAML::Node &node, const std::string &where, double primitiveError)
+{
+    Shape shape;
+    shape.mesh = primitiveMesh(reader, node, where, primitiveError, shape.exact);
+    shape.primitive = true;
+    return shape;
+}
 
 template <class MakeMesh>
 void collectShapes(const Reader &reader, const YAML::Node &object, const char *shapesKey, const char *posesKey,
@@ -252,8 +270,9 @@ void collectShapes(const Reader &reader, const YAML::Node &object, const char *s
     for (std::size_t i = 0; i < list.size(); ++i)
     {
         const std::string at = where + " " + shapesKey + "[" + std::to_string(i) + "]";
-        shapes.push_back(
-            {makeMesh(list[i], at), reader.pose(poses[i], where + " " + posesKey + "[" + std::to_string(i) + "]")});
+        Shape shape = makeMesh(list[i], at);
+        shape.pose = reader.pose(poses[i], where + " " + posesKey + "[" + std::to_string(i) + "]");
+        shapes.push_back(std::move(shape));
     }
 }
 }  // namespace
@@ -298,18 +317,31 @@ ScenePtr readScene(const std::string &yaml, const std::string &sourceName, doubl
         collectShapes(
             reader, object, "primitives", "primitive_poses", where,
             [&](const YAML::Node &node, const std::string &at)
-            { return primitiveMesh(reader, node, at, primitiveError); },
+            { return primitiveShape(reader, node, at, primitiveError); },
             shapes);
         collectShapes(
             reader, object, "meshes", "mesh_poses", where,
-            [&](const YAML::Node &node, const std::string &at) { return messageMesh(reader, node, at); }, shapes);
+            [&](const YAML::Node &node, const std::string &at)
+            {
+                Shape shape;
+                shape.mesh = messageMesh(reader, node, at);
+                return shape;
+            },
+            shapes);
         for (std::size_t i = 0; i < shapes.size(); ++i)
         {
             Mesh worldMesh;
             worldMesh.append(shapes[i].mesh, objectPose * shapes[i].pose);
             try
             {
-                scene->addObject(shapes.size() == 1 ? id : id + "/" + std::to_string(i), std::move(worldMesh));
+                std::vector<PrimitiveShape> exact;
+                if (shapes[i].primitive)
+                {
+                    exact.push_back(shapes[i].exact);
+                    exact.back().pose = objectPose * shapes[i].pose;
+                }
+                scene->addObject(shapes.size() == 1 ? id : id + "/" + std::to_string(i), std::move(worldMesh),
+                                 std::move(exact));
             }
             catch (const ConfigurationError &e)  // "a/0" from object a's shapes met an object called "a/0"
             {

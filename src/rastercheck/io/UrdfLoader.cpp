@@ -450,7 +450,8 @@ private:
 
     template <class Element>
     void appendElements(const std::vector<std::shared_ptr<Element>> &elements, const std::string &linkName,
-                        const char *kind, std::vector<Mesh> &parts)
+                        const char *kind, std::vector<Mesh> &parts, std::vector<PrimitiveShape> &shapes,
+                        bool &onlyPrimitives)
     {
         for (std::size_t k = 0; k < elements.size(); ++k)
         {
@@ -460,6 +461,32 @@ private:
                 throw InputError(file_, where, "has no geometry");
             parts.push_back(geometryMesh(*element.geometry, linkName, kind, where));
             parts.back().transform(toIsometry(element.origin));
+            PrimitiveShape shape;
+            shape.pose = toIsometry(element.origin);
+            switch (element.geometry->type)
+            {
+                case urdf::Geometry::BOX:
+                {
+                    const auto &box = static_cast<const urdf::Box &>(*element.geometry);
+                    shape.size = Eigen::Vector3d(box.dim.x, box.dim.y, box.dim.z);
+                    break;
+                }
+                case urdf::Geometry::CYLINDER:
+                {
+                    const auto &cylinder = static_cast<const urdf::Cylinder &>(*element.geometry);
+                    shape.kind = PrimitiveShape::Kind::Cylinder;
+                    shape.size = Eigen::Vector3d(cylinder.radius, cylinder.length, 0.0);
+                    break;
+                }
+                case urdf::Geometry::SPHERE:
+                    shape.kind = PrimitiveShape::Kind::Sphere;
+                    shape.size.x() = static_cast<const urdf::Sphere &>(*element.geometry).radius;
+                    break;
+                default:
+                    onlyPrimitives = false;
+                    continue;
+            }
+            shapes.push_back(shape);
         }
     }
 
@@ -467,15 +494,17 @@ private:
     {
         const urdf::LinkConstSharedPtr source = urdf_->getLink(link.name);
         std::vector<Mesh> parts;
+        std::vector<PrimitiveShape> shapes;
+        bool onlyPrimitives = true;
         const char *kind = "collision";
         if (!source->collision_array.empty())
-            appendElements(source->collision_array, link.name, kind, parts);
+            appendElements(source->collision_array, link.name, kind, parts, shapes, onlyPrimitives);
         else if (options_.visualWhenNoCollision && !source->visual_array.empty())
         {
             kind = "visual";
             logOnce(LogLevel::Warning,
                     file_ + ": link '" + link.name + "' has no collision geometry; its visual geometry is used");
-            appendElements(source->visual_array, link.name, kind, parts);
+            appendElements(source->visual_array, link.name, kind, parts, shapes, onlyPrimitives);
         }
         else
             return;
@@ -483,6 +512,8 @@ private:
         // Elements stay separate shells: two touching boxes of one link must not weld into a
         // non-manifold surface (see cleanAndMerge).
         Component component = makeComponent(link.name, std::move(parts));
+        if (onlyPrimitives)
+            component.shapes = std::move(shapes);
         if (component.mesh.empty())
             throw InputError(file_, "link '" + link.name + "' " + kind, "geometry has no triangles after cleaning");
         if (!component.topology.closed)

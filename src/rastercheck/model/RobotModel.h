@@ -12,6 +12,7 @@
 #include "rastercheck/geometry/Mesh.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/geometry/Obb.h"
+#include "rastercheck/geometry/Primitives.h"
 
 namespace rastercheck
 {
@@ -67,6 +68,9 @@ struct Component
     MeshTopology topology;
     Obb localObb;    ///< tight box in the link frame
     Aabb localAabb;  ///< bounds in the link frame
+    /** \brief The exact shapes of its collision elements (link frame) when every one is a
+        primitive; empty otherwise (the mesh is then all there is). */
+    std::vector<PrimitiveShape> shapes;
 };
 
 /** \brief A component from the meshes of a link's collision elements (link frame): each part is

@@ -5,7 +5,7 @@
 
 namespace rastercheck
 {
-void Scene::addObject(std::string name, Mesh worldMesh)
+void Scene::addObject(std::string name, Mesh worldMesh, std::vector<PrimitiveShape> shapes)
 {
     if (objectIndex(name) >= 0)
         throw ConfigurationError("scene object '" + name + "' is defined twice");
@@ -22,6 +22,7 @@ void Scene::addObject(std::string name, Mesh worldMesh)
         logWarning("scene object '" + object.name + "' is " + object.topology.summary() +
                    ": its surface is checked exactly, but a component entirely inside it is not a collision");
     object.bounds = object.mesh.bounds();
+    object.shapes = std::move(shapes);
     objects.push_back(std::move(object));
 }
 

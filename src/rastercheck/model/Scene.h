@@ -7,6 +7,7 @@
 #include "rastercheck/geometry/Aabb.h"
 #include "rastercheck/geometry/Mesh.h"
 #include "rastercheck/geometry/MeshTopology.h"
+#include "rastercheck/geometry/Primitives.h"
 
 namespace rastercheck
 {
@@ -17,6 +18,9 @@ struct SceneObject
     Mesh mesh;  ///< world frame, metres (or model units for OMPL.app problems)
     MeshTopology topology;
     Aabb bounds;  ///< world frame
+    /** \brief The exact shapes (world frame) when the object is made of primitives only; empty
+        otherwise. */
+    std::vector<PrimitiveShape> shapes;
 };
 
 /** \brief The environment (Party-2): immutable once built, shared as SceneConstPtr. */
@@ -29,8 +33,9 @@ public:
         with a warning naming \a name (an empty object can never collide). An open mesh (holes after
         cleaning) is kept with a warning: it is a surface without an inside, so a component entirely
         inside it is not a collision. Throws ConfigurationError when an object named \a name exists
-        (contacts name objects; two of one name would make a contact ambiguous). */
-    void addObject(std::string name, Mesh worldMesh);
+        (contacts name objects; two of one name would make a contact ambiguous). \a shapes: the
+        exact primitives \a worldMesh stands for (world frame), when it is made of them only. */
+    void addObject(std::string name, Mesh worldMesh, std::vector<PrimitiveShape> shapes = {});
 
     std::size_t numObjects() const { return objects.size(); }
     std::size_t numTriangles() const;

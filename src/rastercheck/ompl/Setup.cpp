@@ -1,6 +1,7 @@
 #include "rastercheck/ompl/Setup.h"
 
 #include <cmath>
+#include <sstream>
 
 #include <ompl/base/ScopedState.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>
@@ -14,6 +15,18 @@ namespace og = ::ompl::geometric;
 
 namespace rastercheck::ompl
 {
+namespace
+{
+void setStartAndGoalInBounds(og::SimpleSetup &setup, const std::vector<double> &start, const std::vector<double> &goal)
+{
+    const StateMapping &mapping = getStateValidityChecker(setup)->getStateMapping();
+    ob::ScopedState<> startState(setup.getStateSpace()), goalState(setup.getStateSpace());
+    mapping.fromConfiguration(start, startState.get());
+    mapping.fromConfiguration(goal, goalState.get());
+    setup.setStartAndGoalStates(startState, goalState);
+}
+}  // namespace
+
 og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &options)
 {
     if (!problem.robot)
@@ -22,6 +35,7 @@ og::SimpleSetupPtr makeSimpleSetup(const Problem &problem, const SetupOptions &o
         throw ConfigurationError("longest valid segment fraction must be in (0, 1]");
     StateMappingOptions mappingOptions;
     mappingOptions.heldCoordinates = options.heldCoordinates;
+    mappingOptions.boundsTolerance = options.boundsTolerance;
     auto mapping = std::make_shared<const StateMapping>(problem.robot, mappingOptions);
     if (options.existingChecker && &options.existingChecker->robot() != problem.robot.get())
         throw ConfigurationError("makeSimpleSetup: the existing checker checks another robot than the problem's");
@@ -140,14 +154,30 @@ std::vector<double> configurationFromJoints(const StateMapping &mapping, const s
     return q;
 }
 
+std::vector<double> ontoBounds(const StateMapping &mapping, std::vector<double> q, const std::string &what,
+                               const std::vector<double> &slackDown, const std::vector<double> &slackUp)
+{
+    if (q.size() != mapping.numCoordinates())
+        throw ConfigurationError(what + " has " + std::to_string(q.size()) + " coordinates, robot '" +
+                                 mapping.robot().name + "' has " + std::to_string(mapping.numCoordinates()));
+    const BoundsFit fit = fitToBounds(mapping.robot(), q.data(), mapping.boundsTolerance(), slackDown, slackUp);
+    if (fit.outside.coordinate >= 0)
+    {
+        std::ostringstream tolerance;
+        tolerance << mapping.boundsTolerance();
+        throw ConfigurationError(what + ": " + describeExcess(mapping.robot(), fit.outside) +
+                                 ", farther than the bounds tolerance (" + tolerance.str() + ")");
+    }
+    for (const BoundsExcess &moved : fit.moved)
+        logWarning(what + ": " + describeExcess(mapping.robot(), moved) + "; moved onto the bound");
+    return q;
+}
+
 void setStartAndGoal(og::SimpleSetup &setup, const std::vector<double> &start, const std::vector<double> &goal)
 {
     const StateValidityCheckerPtr checker = getStateValidityChecker(setup);
     const StateMapping &mapping = checker->getStateMapping();
-    ob::ScopedState<> startState(setup.getStateSpace()), goalState(setup.getStateSpace());
-    mapping.fromConfiguration(start, startState.get());
-    mapping.fromConfiguration(goal, goalState.get());
-    setup.setStartAndGoalStates(startState, goalState);
+    setStartAndGoalInBounds(setup, ontoBounds(mapping, start, "start"), ontoBounds(mapping, goal, "goal"));
 }
 
 void setStartAndGoal(og::SimpleSetup &setup, const OmplAppProblem &problem)
@@ -177,7 +207,23 @@ std::pair<std::vector<double>, std::vector<double>> startAndGoal(const StateMapp
 
 void setStartAndGoal(og::SimpleSetup &setup, const MotionPlanRequest &request)
 {
-    const auto [start, goal] = startAndGoal(getStateValidityChecker(setup)->getStateMapping(), request);
-    setStartAndGoal(setup, start, goal);
+    const StateMapping &mapping = getStateValidityChecker(setup)->getStateMapping();
+    // A goal joint constraint is met anywhere in [position - tolerance_below, position +
+    // tolerance_above], so a goal past a limit by less than that may move onto the limit.
+    std::vector<double> slackDown(mapping.numCoordinates(), 0.0), slackUp(mapping.numCoordinates(), 0.0);
+    auto slack = [&](const std::map<std::string, double> &tolerances, std::vector<double> &out)
+    {
+        for (const auto &[name, tolerance] : tolerances)
+        {
+            const int c = mapping.robot().coordinateIndex(name);
+            if (c >= 0 && std::isfinite(tolerance) && tolerance > 0)
+                out[static_cast<std::size_t>(c)] = tolerance;
+        }
+    };
+    slack(request.goalToleranceBelow, slackDown);
+    slack(request.goalToleranceAbove, slackUp);
+    auto [start, goal] = startAndGoal(mapping, request);
+    setStartAndGoalInBounds(setup, ontoBounds(mapping, std::move(start), "start"),
+                            ontoBounds(mapping, std::move(goal), "goal", slackDown, slackUp));
 }
 }  // namespace rastercheck::ompl

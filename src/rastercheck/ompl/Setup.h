@@ -53,6 +53,10 @@ struct SetupOptions
     CollisionRequest request;
     /** \brief Coordinates held fixed (StateMappingOptions::heldCoordinates). */
     std::map<std::string, double> heldCoordinates;
+    /** \brief How far outside a joint limit (rad or m) a start or goal given to setStartAndGoal may
+        lie and still be moved onto it, with a warning (StateMappingOptions::boundsTolerance); a goal
+        joint constraint's own tolerance counts where larger. Farther outside is an error. */
+    double boundsTolerance = kDefaultBoundsTolerance;
     /** \brief StateSpace::setLongestValidSegmentFraction: edge resolution as a fraction of the space's
         maximum extent (OMPL's default is 0.01). Certified edges do not use it. */
     double longestValidSegmentFraction = 0.01;
@@ -105,10 +109,18 @@ std::vector<double> configurationFromJoints(const StateMapping &mapping, const s
 /** \brief Start (start_state.joint_state) and goal (goal_constraints[0] joint positions) of a MoveIt
     request as configurations in robot coordinate order: coordinates the request does not name keep
     their neutral (or held) values; start joints the robot lacks are skipped with a warning
-    (UnknownJoints::Skip); goal joints it lacks are a ConfigurationError. What setStartAndGoal sets,
-    and what `rastercheck view` and `render` show for a request. */
+    (UnknownJoints::Skip); goal joints it lacks are a ConfigurationError. What `rastercheck view` and
+    `render` show for a request; setStartAndGoal moves them onto the bounds first. */
 std::pair<std::vector<double>, std::vector<double>> startAndGoal(const StateMapping &mapping,
                                                                  const MotionPlanRequest &request);
+
+/** \brief \a q with every coordinate within the mapping's boundsTolerance() (or, where larger, the
+    per-coordinate \a slackDown / \a slackUp of fitToBounds) outside a joint limit moved onto it, with
+    one warning per coordinate naming the joint, its value and the bound. Throws ConfigurationError
+    naming the same for a coordinate farther outside. \a what names the configuration ("start",
+    "goal"). */
+std::vector<double> ontoBounds(const StateMapping &mapping, std::vector<double> q, const std::string &what,
+                               const std::vector<double> &slackDown = {}, const std::vector<double> &slackUp = {});
 
 /** \brief Start and goal of an OMPL.app problem (its start / goal configurations). */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
@@ -117,10 +129,15 @@ void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem
     its threshold, for "length"; nothing when absent. Throws ConfigurationError for another. */
 void setObjective(::ompl::geometric::SimpleSetup &setup, const OmplAppProblem &problem);
 
-/** \brief Start and goal of a MoveIt request (startAndGoal). */
+/** \brief Start and goal of a MoveIt request (startAndGoal), both moved
+    onto the bounds within the tolerance (ontoBounds), the goal also within its joint constraints'
+    tolerance_below / tolerance_above (MoveIt accepts a goal anywhere in that band). Start joints
+    the robot lacks are skipped with a warning (UnknownJoints::Skip); goal joints it lacks are a
+    ConfigurationError. */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const MotionPlanRequest &request);
 
-/** \brief Start and goal from two configurations (robot coordinate order). */
+/** \brief Start and goal from two configurations (robot coordinate order), moved onto the bounds
+    within the tolerance (ontoBounds). */
 void setStartAndGoal(::ompl::geometric::SimpleSetup &setup, const std::vector<double> &start,
                      const std::vector<double> &goal);
 }  // namespace rastercheck::ompl

@@ -59,10 +59,13 @@ ob::RealVectorBounds boundsOf(const RobotModel &robot, const std::vector<int> &c
 }
 }  // namespace
 
-StateMapping::StateMapping(RobotModelConstPtr robot, const StateMappingOptions &options) : robot_(std::move(robot))
+StateMapping::StateMapping(RobotModelConstPtr robot, const StateMappingOptions &options)
+    : robot_(std::move(robot)), boundsTolerance_(options.boundsTolerance)
 {
     if (!robot_)
         throw ConfigurationError("StateMapping: no robot model");
+    if (!(std::isfinite(boundsTolerance_) && boundsTolerance_ >= 0))
+        throw ConfigurationError("the bounds tolerance must be a finite number >= 0");
     const RobotModel &model = *robot_;
     const std::size_t n = model.numCoordinates();
     held_.assign(n, false);

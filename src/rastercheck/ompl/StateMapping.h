@@ -8,6 +8,7 @@
 #include <ompl/base/State.h>
 #include <ompl/base/StateSpace.h>
 
+#include "rastercheck/model/Bounds.h"
 #include "rastercheck/model/RobotModel.h"
 
 namespace rastercheck::ompl
@@ -20,6 +21,9 @@ struct StateMappingOptions
         quaternion (qx qy qz qw) is held entirely or not at all. Example: a crane whose mobile-base
         coordinates are held while the superstructure is planned. */
     std::map<std::string, double> heldCoordinates;
+    /** \brief How far outside a joint limit (rad or m) a given start or goal may lie and still be
+        moved onto it (setStartAndGoal, fitToBounds); >= 0. */
+    double boundsTolerance = kDefaultBoundsTolerance;
 };
 
 /** \brief The OMPL state space of a robot and the conversion between its states and the robot's
@@ -63,6 +67,9 @@ public:
     /** \brief Whether coordinate \a index is held (not planned). */
     bool isHeld(int index) const { return held_[static_cast<std::size_t>(index)]; }
 
+    /** \brief StateMappingOptions::boundsTolerance. */
+    double boundsTolerance() const { return boundsTolerance_; }
+
     /** \brief The configuration every conversion starts from: the robot's neutral configuration with
         the held values written in. */
     const std::vector<double> &baseConfiguration() const { return base_; }
@@ -103,6 +110,7 @@ private:
     std::vector<int> planned_;
     std::vector<bool> held_;
     std::vector<double> base_;
+    double boundsTolerance_;
     ::ompl::base::StateSpacePtr space_;
     bool compound_ = false;
 };

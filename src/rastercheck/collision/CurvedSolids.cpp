@@ -1,0 +1,175 @@
+#include "rastercheck/collision/CurvedSolids.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/device/ConvexDistance.h"
+#include "rastercheck/model/Kinematics.h"
+
+namespace rastercheck
+{
+namespace
+{
+using device::ConvexKind;
+using device::ConvexShape;
+using device::Pose;
+using device::Vec3;
+
+bool hasCurved(const std::vector<PrimitiveShape> &shapes)
+{
+    return std::any_of(shapes.begin(), shapes.end(), [](const PrimitiveShape &s) { return s.curved(); });
+}
+
+/** \brief \a shape placed by \a placement (its solid's frame -> the frame the test runs in). */
+ConvexShape placed(const PrimitiveShape &shape, const Pose<double> &placement)
+{
+    ConvexShape convex{};
+    convex.pose = device::compose(placement, toDevicePose(shape.pose));
+    switch (shape.kind)
+    {
+        case PrimitiveShape::Kind::Box:
+            convex.kind = ConvexKind::Box;
+            for (int i = 0; i < 3; ++i)
+                convex.size[i] = 0.5 * shape.size[i];
+            break;
+        case PrimitiveShape::Kind::Sphere:
+            convex.kind = ConvexKind::Sphere;
+            convex.size[0] = shape.size.x();
+            break;
+        case PrimitiveShape::Kind::Cylinder:
+        case PrimitiveShape::Kind::Cone:
+            convex.kind = shape.kind == PrimitiveShape::Kind::Cone ? ConvexKind::Cone : ConvexKind::Cylinder;
+            convex.size[0] = shape.size.x();
+            convex.size[1] = 0.5 * shape.size.y();
+            break;
+    }
+    return convex;
+}
+
+/** \brief Radius of a ball about the primitive's frame origin that holds it. */
+double reach(const PrimitiveShape &shape)
+{
+    switch (shape.kind)
+    {
+        case PrimitiveShape::Kind::Box:
+            return 0.5 * shape.size.norm();
+        case PrimitiveShape::Kind::Sphere:
+            return shape.size.x();
+        case PrimitiveShape::Kind::Cylinder:
+        case PrimitiveShape::Kind::Cone:
+            return std::hypot(shape.size.x(), 0.5 * shape.size.y());
+    }
+    return 0.0;
+}
+
+bool shapesWithin(const std::vector<PrimitiveShape> &a, const Pose<double> &poseA, const std::vector<PrimitiveShape> &b,
+                  const Pose<double> &poseB, double padding)
+{
+    for (const PrimitiveShape &sa : a)
+    {
+        const ConvexShape ca = placed(sa, poseA);
+        for (const PrimitiveShape &sb : b)
+            if (device::convexWithin(ca, placed(sb, poseB), padding))
+                return true;
+    }
+    return false;
+}
+
+/** \brief Do the primitives \a shapes (placed by \a poseShapes) come within \a padding of the
+    solid of \a bvh's mesh (placed by \a poseMesh; \a closed: it has an inside)? The test runs in
+    the mesh's frame, so its triangles are read as stored; its tree's bounding spheres rule out the
+    triangles beyond the primitive's reach. */
+bool shapesMeetMesh(const std::vector<PrimitiveShape> &shapes, const Pose<double> &poseShapes, const MeshBvh &bvh,
+                    bool closed, const Pose<double> &poseMesh, double padding)
+{
+    if (bvh.empty())
+        return false;
+    const Pose<double> inMesh = device::relativePose(poseMesh, poseShapes);  // shapes' frame -> mesh frame
+    const MeshBvh::Node *nodes = bvh.nodes();
+    for (const PrimitiveShape &shape : shapes)
+    {
+        const ConvexShape convex = placed(shape, inMesh);
+        const Vec3<double> centre{convex.pose.m[3], convex.pose.m[7], convex.pose.m[11]};
+        const double radius = reach(shape) + padding;
+        // Tree nodes are in float: grow their spheres by a rounding allowance.
+        const double slack = 1e-5 * (std::abs(centre.x) + std::abs(centre.y) + std::abs(centre.z) + nodes[0].radius);
+        std::uint32_t stack[2 * device::kMaxTreeDepth + 2];
+        int top = 0;
+        stack[top++] = 0;
+        while (top > 0)
+        {
+            const MeshBvh::Node &node = nodes[stack[--top]];
+            const Vec3<double> offset{centre.x - node.centre[0], centre.y - node.centre[1], centre.z - node.centre[2]};
+            const double within = node.radius + radius + slack;
+            if (device::dot(offset, offset) > within * within)
+                continue;
+            if (!node.isLeaf())
+            {
+                stack[top++] = static_cast<std::uint32_t>(node.first);
+                stack[top++] = static_cast<std::uint32_t>(node.first) + 1;
+                continue;
+            }
+            for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
+            {
+                ConvexShape triangle{};
+                triangle.kind = ConvexKind::Triangle;
+                const std::array<Eigen::Vector3d, 3> &corners = bvh.slotTriangle(slot);
+                for (int k = 0; k < 3; ++k)
+                    triangle.corner[k] = {corners[k].x(), corners[k].y(), corners[k].z()};
+                if (device::convexWithin(convex, triangle, padding))
+                    return true;
+            }
+        }
+        // No surface within reach: the primitive is inside the mesh's solid or wholly outside it.
+        if (closed && pointInsideClosedMesh(bvh, Eigen::Vector3d(centre.x, centre.y, centre.z)))
+            return true;
+    }
+    return false;
+}
+}  // namespace
+
+CurvedSolids::CurvedSolids(const CollisionModel &model)
+{
+    const RobotModel &robot = *model.robot;
+    const std::size_t m = model.numComponents();
+    refines_.assign(model.numPairs(), 0);
+    bool any = false;
+    for (std::uint32_t pair = 0; pair < model.numPairs(); ++pair)
+    {
+        Contact parties;
+        model.nameParties(pair, parties);
+        const std::vector<PrimitiveShape> &a = robot.components[static_cast<std::size_t>(parties.component)].shapes;
+        const std::vector<PrimitiveShape> &b =
+            parties.kind == Contact::Kind::Environment
+                ? model.scene->objects[static_cast<std::size_t>(parties.object)].shapes
+                : robot.components[static_cast<std::size_t>(parties.otherComponent)].shapes;
+        refines_[pair] = hasCurved(a) || hasCurved(b) ? 1 : 0;
+        any = any || refines_[pair];
+    }
+    if (!any || m == 0)
+        refines_.clear();
+}
+
+bool CurvedSolids::collide(const CollisionModel &model, std::uint32_t pair, const Pose<double> &poseA,
+                           const Pose<double> &poseB, double padding) const
+{
+    Contact parties;
+    model.nameParties(pair, parties);
+    const RobotModel &robot = *model.robot;
+    const std::size_t a = static_cast<std::size_t>(parties.component);
+    const bool environment = parties.kind == Contact::Kind::Environment;
+    const std::size_t b = static_cast<std::size_t>(environment ? parties.object : parties.otherComponent);
+    const std::vector<PrimitiveShape> &shapesA = robot.components[a].shapes;
+    const std::vector<PrimitiveShape> &shapesB =
+        environment ? model.scene->objects[b].shapes : robot.components[b].shapes;
+    padding = std::max(0.0, padding);
+    if (!shapesA.empty() && !shapesB.empty())
+        return shapesWithin(shapesA, poseA, shapesB, poseB, padding);
+    const MeshBvh &bvhB = environment ? *model.objectBvhs[b] : *model.componentBvhs[b];
+    const bool closedB = environment ? model.objects[b].closed : model.components[b].closed;
+    if (!shapesA.empty())
+        return shapesMeetMesh(shapesA, poseA, bvhB, closedB, poseB, padding);
+    return shapesMeetMesh(shapesB, poseB, *model.componentBvhs[a], model.components[a].closed, poseA, padding);
+}
+}  // namespace rastercheck

@@ -1,0 +1,43 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "rastercheck/device/Pose.h"
+
+namespace rastercheck
+{
+class CollisionModel;
+
+/** \brief Exact decisions for the pairs that involve spheres, cylinders and cones.
+
+    Their meshes contain the exact shapes and lie up to the tessellation error (1 mm by default)
+    outside them (geometry/Primitives.h): every cull, proof and exact test that calls such a pair
+    apart is right, but one that calls it colliding may see a gap thinner than that error as a
+    contact. So in safe and exact mode a pair the meshes call colliding is decided again here, on the
+    exact shapes, whenever a side of it is made of primitives only (Component::shapes,
+    SceneObject::shapes) and a side has a curved one: primitive against primitive by GJK
+    (device/ConvexDistance.h) on each pair of shapes; primitives against the other side's mesh by
+    GJK against each triangle its tree cannot rule out, then whether the primitive lies inside that
+    mesh (closed meshes). A side that mixes curved primitives with meshes keeps its mesh, which is
+    on the safe side: a false alarm within the error is possible there, a missed contact never. */
+class CurvedSolids
+{
+public:
+    CurvedSolids() = default;
+    /** \brief Reads the model's robot and scene shapes, its self pairs and pair numbering. */
+    explicit CurvedSolids(const CollisionModel &model);
+
+    /** \brief Whether pair \a pair (CollisionModel numbering) is decided again by collide(). */
+    bool refines(std::uint32_t pair) const { return pair < refines_.size() && refines_[pair] != 0; }
+
+    /** \brief Do the exact shapes of pair \a pair come within \a padding (>= 0)? \a poseA: the pair's
+        component's link pose; \a poseB: the other component's link pose, or the identity for a
+        scene object (world frame). Only for pairs that refines(). Thread-safe, no allocation. */
+    bool collide(const CollisionModel &model, std::uint32_t pair, const device::Pose<double> &poseA,
+                 const device::Pose<double> &poseB, double padding) const;
+
+private:
+    std::vector<std::uint8_t> refines_;  // n_pairs
+};
+}  // namespace rastercheck
