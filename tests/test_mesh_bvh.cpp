@@ -273,7 +273,7 @@ TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
                 for (int k = 0; k < 3; ++k)
                 {
                     const Vec &corner = mesh.vertices[mesh.triangles[triangle][k]];
-                    EXPECT_EQ(bvh.slotTriangle(slot)[k], corner);
+                    EXPECT_EQ(Vec(Eigen::Map<const Vec>(bvh.slotCorners(slot) + 3 * k)), corner);
                     // Every node on the way down holds the corner (up to the float storage's
                     // rounding, 1e-6 of the size, which the queries' slack covers).
                     for (int up = static_cast<int>(i); up >= 0; up = parent[up])

@@ -366,7 +366,7 @@ void ConvexSolids::addPatches(const Mesh &mesh, double patchThickness)
             node.max[k] = box.max[k];
         }
         node.reserved = 0;
-        if (job.end - job.begin == 1 || job.depth >= device::kMaxPatchDepth ||
+        if (job.end - job.begin == 1 || job.depth >= device::kMaxTreeDepth ||
             (job.end - job.begin <= kPatchTriangles && patchIsFlat(mesh, order, job.begin, job.end, patchThickness)))
         {
             // A patch: its triangles as a mesh of their own (vertices renumbered).

@@ -189,4 +189,39 @@ public:
 
 using CollisionModelConstPtr = std::shared_ptr<const CollisionModel>;
 
+/** \brief The padding of every pair at one state, the one lookup the backends read it through:
+    CollisionRequest::padding plus, when the request has a pairPadding, the pair's entry in row
+    \a row (0 for a request with one row). A view: the request must outlive it. */
+class PairPaddings
+{
+public:
+    PairPaddings(const CollisionModel &model, const CollisionRequest &request, std::size_t row)
+        : base_(request.padding), numComponents_(model.numComponents()), numEnvironmentPairs_(model.numObjects() * model.numComponents())
+    {
+        if (const PairPadding *extra = request.pairPadding.get())
+        {
+            environment_ = extra->environment.data() + row * model.numComponents();
+            self_ = extra->self.data() + row * model.selfPairs.size();
+        }
+    }
+    /** \brief No entry per pair: every pair has the request's padding. */
+    bool uniform() const { return environment_ == nullptr; }
+    /** \brief Component \a k against any scene object. */
+    double component(std::size_t k) const { return base_ + (environment_ ? environment_[k] : 0.0); }
+    /** \brief Self pair \a i (CollisionModel::selfPairs order). */
+    double self(std::size_t i) const { return base_ + (self_ ? self_[i] : 0.0); }
+    /** \brief Pair \a pair in CollisionModel's numbering (environment pairs, then self pairs). */
+    double pair(std::uint32_t pair) const
+    {
+        return pair < numEnvironmentPairs_ ? component(pair % numComponents_) : self(pair - numEnvironmentPairs_);
+    }
+
+private:
+    double base_;
+    std::size_t numComponents_;
+    std::size_t numEnvironmentPairs_;
+    const double *environment_ = nullptr;  // numComponents entries, or null
+    const double *self_ = nullptr;         // selfPairs.size() entries, or null
+};
+
 }  // namespace rastercheck

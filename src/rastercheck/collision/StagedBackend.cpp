@@ -6,6 +6,7 @@
 #include <numeric>
 #include <string>
 
+#include "rastercheck/collision/ModeRules.h"
 #include "rastercheck/collision/StageChunks.h"
 
 namespace rastercheck
@@ -66,15 +67,11 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
     settings.maxImageSide = request.maxImageSide;
     settings.checkEnvironment = request.checkEnvironment;
     settings.checkSelfCollision = request.checkSelfCollision;
-    // Safe mode reports the CPU's first contact when asked for contacts, which takes the exact
-    // phase on every pair; without contacts a raster hit is proof enough.
-    settings.rasterize =
-        request.mode == CollisionMode::Raster || (request.mode == CollisionMode::Safe && !contactsAsked);
-    settings.confirmMisses = request.mode == CollisionMode::Safe;
-    // An overlap the hulls prove names no triangle: only when no contact is asked. Not in raster
-    // mode, whose verdicts (misses included) must not depend on whether contacts are asked.
-    settings.proveOverlaps = !contactsAsked && request.mode != CollisionMode::Raster;
-    settings.meshObstaclesUnproven = request.mode != CollisionMode::Raster;  // CpuBackend's pairCollides
+    const ModeRules rules = modeRules(request.mode, contactsAsked);
+    settings.rasterize = rules.rasterInStages;
+    settings.confirmMisses = rules.confirmRasterMisses;
+    settings.proveOverlaps = rules.proveOverlaps;
+    settings.meshObstaclesUnproven = rules.meshObstaclesExact;
     return settings;
 }
 
