@@ -147,13 +147,18 @@ public:
     std::vector<std::unique_ptr<MeshBvh>> componentBvhs;  // n_components, link frame
     std::vector<std::unique_ptr<MeshBvh>> objectBvhs;     // n_objects, world frame
 
-    /** \brief The trees' nodes and triangle orders, stored here once (each MeshBvh reads its
-        slice) as flat arrays that the batched stages and the GPU read too: nodes per party
-        concatenated (MeshSlice::firstNode), triangle order per mesh at MeshSlice::firstTriangle. */
-    std::vector<device::TreeNode> componentTreeNodes;   // link frame
-    std::vector<std::uint32_t> componentTriangleOrder;  // n_component_triangles
-    std::vector<device::TreeNode> objectTreeNodes;      // world frame
-    std::vector<std::uint32_t> objectTriangleOrder;     // n_object_triangles
+    /** \brief One party's trees and the exact phase's arrays, stored here once (each MeshBvh
+        reads its slice) as flat arrays that the batched stages and the GPU read too. */
+    struct TreeArrays
+    {
+        std::vector<device::TreeNode> nodes;         // per mesh at MeshSlice::firstNode
+        std::vector<std::uint32_t> triangleOrder;    // n_triangles; per mesh at MeshSlice::firstTriangle
+        std::vector<double> corners;                 // n_triangles x 9, slot order (MeshBvh::slotCorners)
+        std::vector<std::uint8_t> gridCells;         // inside grids (MeshBvh::insideGridAnswer)
+        std::vector<std::size_t> firstGridCell;      // n_meshes + 1: mesh k's cells start there
+    };
+    TreeArrays componentTrees;  // link frame
+    TreeArrays objectTrees;     // world frame
     /** \brief The objects' trees are in the world frame, the stages' floats relative to origin. */
     device::Pose<float> objectTreePlacement = device::Pose<float>::identity();
 

@@ -49,12 +49,12 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.convex.numPatchNodes(),
                                model.convex.numPatches(),
                                model.convex.numPatchTriangleIndices(),
-                               model.componentTreeNodes.data(),
-                               model.componentTreeNodes.size(),
-                               model.componentTriangleOrder.data(),
-                               model.objectTreeNodes.data(),
-                               model.objectTreeNodes.size(),
-                               model.objectTriangleOrder.data(),
+                               model.componentTrees.nodes.data(),
+                               model.componentTrees.nodes.size(),
+                               model.componentTrees.triangleOrder.data(),
+                               model.objectTrees.nodes.data(),
+                               model.objectTrees.nodes.size(),
+                               model.objectTrees.triangleOrder.data(),
                                model.objectTreePlacement};
 }
 

@@ -137,18 +137,22 @@ bool nodeContains(const MeshBvh::Node &node, const Eigen::Vector3d &p, double ma
     return (local.array().abs() <= nodeExtents(node).array() + margin).all();
 }
 
-void MeshBvh::useSharedArrays(const Node *nodes, const std::uint32_t *triangleOrder)
+void MeshBvh::useSharedArrays(const Arrays &arrays)
 {
-    nodes_ = nodes;
-    triangleOrder_ = triangleOrder;
+    nodes_ = arrays.nodes;
+    triangleOrder_ = arrays.triangleOrder;
+    corners_ = arrays.corners;
+    gridCells_ = arrays.gridCells;
     ownNodes_ = {};
     ownTriangleOrder_ = {};
+    ownCorners_ = {};
+    ownGridCells_ = {};
 }
 
 std::size_t MeshBvh::bytes() const
 {
     return numNodes_ * sizeof(Node) + mesh_->triangles.size() * sizeof(std::uint32_t) +
-           corners_.size() * sizeof(double) + gridCells_.size();
+           9 * mesh_->triangles.size() * sizeof(double) + numGridCells_;
 }
 
 MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) : mesh_(&mesh)
@@ -214,13 +218,15 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
                 shellProbes_.push_back(v);
         shellProbeStart_.push_back(static_cast<std::uint32_t>(shellProbes_.size()));
     }
-    corners_.resize(9 * n);
+    ownCorners_.resize(9 * n);
     for (std::size_t slot = 0; slot < n; ++slot)
     {
         const Mesh::Triangle &t = mesh.triangles[ownTriangleOrder_[slot]];
         for (int k = 0; k < 3; ++k)
-            std::copy(mesh.vertices[t[k]].data(), mesh.vertices[t[k]].data() + 3, corners_.data() + 9 * slot + 3 * k);
+            std::copy(mesh.vertices[t[k]].data(), mesh.vertices[t[k]].data() + 3,
+                      ownCorners_.data() + 9 * slot + 3 * k);
     }
+    corners_ = ownCorners_.data();
     if (insideGrid)
         buildInsideGrid();
 }
@@ -230,12 +236,12 @@ void MeshBvh::buildInsideGrid()
     // About 64 cells per triangle, at least 16^3 and at most 2^21 (2 MB). With the shells' probes
     // (solidsOverlap) it took the rays cast on OMPL.app's Abstract (closed, 700 triangles) from 0.9
     // to below 0.001 per uniform state and from 1.0 to 0.002 per near-contact state.
-    const std::size_t n = corners_.size() / 9;
+    const std::size_t n = mesh_->triangles.size();
     const std::size_t wanted = std::clamp<std::size_t>(64 * n, 4096, std::size_t(1) << 21);
     Vec lower = Vec::Constant(std::numeric_limits<double>::infinity()), upper = -lower;
     for (std::size_t i = 0; i < 3 * n; ++i)
     {
-        const CornersMap p(corners_.data() + 3 * i);
+        const CornersMap p(corners_ + 3 * i);
         lower = lower.cwiseMin(p);
         upper = upper.cwiseMax(p);
     }
@@ -294,17 +300,17 @@ void MeshBvh::buildInsideGrid()
     // Face-adjacent untouched cells share a region: the segment between their centres stays in
     // their union, which no triangle meets. One ray per region, from a cell centre far from the
     // surface, classifies the whole region.
-    gridCells_.assign(touched.size(), 0);
+    ownGridCells_.assign(touched.size(), 0);
     std::vector<std::uint32_t> queue;
     for (std::size_t seed = 0; seed < touched.size(); ++seed)
     {
-        if (touched[seed] || gridCells_[seed])
+        if (touched[seed] || ownGridCells_[seed])
             continue;
         const int si = static_cast<int>(seed % nx), sj = static_cast<int>(seed / nx % ny),
                   sk = static_cast<int>(seed / nx / ny);
         const Vec centre = lower + cellSize.cwiseProduct(Vec(si + 0.5, sj + 0.5, sk + 0.5));
         const std::uint8_t answer = insideByRays(*this, centre) ? 2 : 1;
-        gridCells_[seed] = answer;
+        ownGridCells_[seed] = answer;
         queue.assign(1, static_cast<std::uint32_t>(seed));
         while (!queue.empty())
         {
@@ -319,18 +325,19 @@ void MeshBvh::buildInsideGrid()
                 if (m[0] < 0 || m[1] < 0 || m[2] < 0 || m[0] >= nx || m[1] >= ny || m[2] >= nz)
                     continue;
                 const std::size_t next = index(m[0], m[1], m[2]);
-                if (touched[next] || gridCells_[next])
+                if (touched[next] || ownGridCells_[next])
                     continue;
-                gridCells_[next] = answer;
+                ownGridCells_[next] = answer;
                 queue.push_back(static_cast<std::uint32_t>(next));
             }
         }
-    }
+    }    gridCells_ = ownGridCells_.data();
+    numGridCells_ = ownGridCells_.size();
 }
 
 int MeshBvh::insideGridAnswer(const Eigen::Vector3d &point) const
 {
-    if (gridCells_.empty())
+    if (numGridCells_ == 0)
         return 0;
     int cell[3];
     for (int k = 0; k < 3; ++k)

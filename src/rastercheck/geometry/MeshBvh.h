@@ -65,13 +65,25 @@ public:
     {
         return device::TreeView{nodes_, triangleOrder_, static_cast<std::uint32_t>(numNodes_)};
     }
-    /** \brief Points this tree at a copy of its nodes and triangle order held elsewhere (the
-        model's flat arrays, which the batched stages and the GPU read) and frees its own, so the
-        nodes are stored once. The copy must equal nodes() and triangleOrder() and outlive the tree. */
-    void useSharedArrays(const Node *nodes, const std::uint32_t *triangleOrder);
+    /** \brief Where a tree's arrays may be held: the nodes, the triangle order, the corners
+        (slotCorners) and the inside grid's cells (null without a grid). */
+    struct Arrays
+    {
+        const Node *nodes;
+        const std::uint32_t *triangleOrder;
+        const double *corners;
+        const std::uint8_t *gridCells;
+    };
+    /** \brief Points this tree at a copy of its arrays held elsewhere (the model's flat arrays,
+        which the batched stages and the GPU read) and frees its own, so each is stored once. The
+        copy must equal arrays() and outlive the tree. */
+    void useSharedArrays(const Arrays &arrays);
+    Arrays arrays() const { return Arrays{nodes_, triangleOrder_, corners_, gridCells_}; }
+    /** \brief Cells of the inside grid (0 without one). */
+    std::size_t numGridCells() const { return numGridCells_; }
     /** \brief Corners of the triangle in slot \a slot of triangleOrder (mesh frame): 9 doubles,
         x y z of each corner, stored in traversal order so that leaves read contiguous memory. */
-    const double *slotCorners(std::uint32_t slot) const { return corners_.data() + 9 * static_cast<std::size_t>(slot); }
+    const double *slotCorners(std::uint32_t slot) const { return corners_ + 9 * static_cast<std::size_t>(slot); }
     /** \brief Levels below the root (0 for a single leaf, -1 when empty). */
     int depth() const { return depth_; }
     bool empty() const { return numNodes_ == 0; }
@@ -84,7 +96,7 @@ public:
         comes near (the triangles' bounds grown by a margin far above rounding) lies in one region
         of space the surface does not cross, whose answer one ray cast at build time gave. */
     int insideGridAnswer(const Eigen::Vector3d &point) const;
-    bool hasInsideGrid() const { return !gridCells_.empty(); }
+    bool hasInsideGrid() const { return numGridCells_ > 0; }
 
     /** \brief Per connected shell of the mesh, a few of its vertex indices (its first vertex, then
         its extreme vertices along the axes), for containment tests: when two surfaces do not meet,
@@ -111,7 +123,8 @@ private:
     const Node *nodes_ = nullptr;
     std::size_t numNodes_ = 0;
     const std::uint32_t *triangleOrder_ = nullptr;
-    std::vector<double> corners_;                       // n_triangles x 9, slot order
+    std::vector<double> ownCorners_;                    // n_triangles x 9, slot order
+    const double *corners_ = nullptr;
     std::vector<std::uint32_t> shellProbes_;            // n_probes: vertex numbers
     std::vector<std::uint32_t> shellProbeStart_{0};     // n_shells + 1
     int depth_ = -1;
@@ -120,7 +133,9 @@ private:
     Eigen::Vector3d gridLower_ = Eigen::Vector3d::Zero();
     Eigen::Vector3d gridInverseCell_ = Eigen::Vector3d::Zero();
     int gridSize_[3] = {0, 0, 0};
-    std::vector<std::uint8_t> gridCells_;
+    std::vector<std::uint8_t> ownGridCells_;
+    const std::uint8_t *gridCells_ = nullptr;
+    std::size_t numGridCells_ = 0;
 };
 
 /** \brief Scratch of the exact phase for one thread at a time (Pinocchio's Data): whoever runs the
