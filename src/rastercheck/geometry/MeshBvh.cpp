@@ -564,10 +564,16 @@ struct ExactQuery
         return slot;
     }
 
-    bool triangles(std::uint32_t sf, std::uint32_t sm)
+    // The moving tree's triangle in slot sm, placed in the working frame.
+    void place(std::uint32_t sm, Vec placedTriangle[3]) const
     {
         const double *cm = moving.slotCorners(sm);
-        const Vec placedTriangle[3] = {R * CornersMap(cm) + T, R * CornersMap(cm + 3) + T, R * CornersMap(cm + 6) + T};
+        for (int k = 0; k < 3; ++k)
+            placedTriangle[k] = R * CornersMap(cm + 3 * k) + T;
+    }
+
+    bool triangles(std::uint32_t sf, const Vec placedTriangle[3])
+    {
         const double *cf = fixed.slotCorners(sf);
         const Vec fixedTriangle[3] = {CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6)};
         const Vec *ta = movingIsA ? placedTriangle : fixedTriangle, *tb = movingIsA ? fixedTriangle : placedTriangle;
@@ -600,15 +606,19 @@ struct ExactQuery
     bool leaves(device::NodePair pair)
     {
         const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
+        Vec placedTriangle[3];
         for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
+        {
+            place(sm, placedTriangle);
             for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
-                if (triangles(sf, sm))
+                if (triangles(sf, placedTriangle))
                 {
                     remember(sf, sm);
                     slotFixed = sf;
                     slotMoving = sm;
                     return false;
                 }
+        }
         const double gap = std::sqrt(between.squaredNorm()) - (static_cast<double>(nf.radius) + nm.radius);
         if (gap < nearestGap)
         {
@@ -678,9 +688,10 @@ Traversal traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Iso
                      workspace ? &leafHint(*workspace, fixed, moving) : nullptr,
                      point};
     const LeafHint *hint = query.hint;
+    Vec placedTriangle[3];
     if (useHint && hint && hint->fixed == &fixed && hint->moving == &moving &&
         hint->slotFixed < fixed.mesh().triangles.size() && hint->slotMoving < moving.mesh().triangles.size() &&
-        query.triangles(hint->slotFixed, hint->slotMoving))
+        (query.place(hint->slotMoving, placedTriangle), query.triangles(hint->slotFixed, placedTriangle)))
     {
         *slotFixed = hint->slotFixed;
         *slotMoving = hint->slotMoving;
