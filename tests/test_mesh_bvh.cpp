@@ -939,8 +939,8 @@ std::vector<LineNode> chain(int depth)
     {
         const std::size_t at = nodes.size() - (level == 0 ? 1 : 2);  // the previous inner node
         nodes[at] = {0.0, 1.0, static_cast<std::int32_t>(nodes.size())};
-        nodes.push_back({0.0, 1.0, 0});                      // inner, linked next level
-        nodes.push_back({0.0, 1.0, -1 - level});             // a leaf
+        nodes.push_back({0.0, 1.0, 0});           // inner, linked next level
+        nodes.push_back({0.0, 1.0, -1 - level});  // a leaf
     }
     nodes[nodes.size() - 2].first = -1 - depth;  // the deepest node is a leaf
     return nodes;
@@ -1020,6 +1020,7 @@ TEST(Traversal, APairWalkWithAShrinkingReachFindsTheNearestPairAsADistanceQueryW
         } query{treeA, treeB, a, b};
         ASSERT_EQ(rc::device::walkPairs(treeA.data(), treeB.data(), query), rc::device::WalkEnd::Finished);
         EXPECT_DOUBLE_EQ(query.best, b.front() - a.back()) << trial;
-        EXPECT_LT(query.leafPairs, 50) << "the reach did not shrink: " << query.leafPairs << " of " << a.size() * b.size();
+        EXPECT_LT(query.leafPairs, 50) << "the reach did not shrink: " << query.leafPairs << " of "
+                                       << a.size() * b.size();
     }
 }

@@ -151,11 +151,11 @@ public:
         reads its slice) as flat arrays that the batched stages and the GPU read too. */
     struct TreeArrays
     {
-        std::vector<device::TreeNode> nodes;         // per mesh at MeshSlice::firstNode
-        std::vector<std::uint32_t> triangleOrder;    // n_triangles; per mesh at MeshSlice::firstTriangle
-        std::vector<double> corners;                 // n_triangles x 9, slot order (MeshBvh::slotCorners)
-        std::vector<std::uint8_t> gridCells;         // inside grids (MeshBvh::insideGridAnswer)
-        std::vector<std::size_t> firstGridCell;      // n_meshes + 1: mesh k's cells start there
+        std::vector<device::TreeNode> nodes;       // per mesh at MeshSlice::firstNode
+        std::vector<std::uint32_t> triangleOrder;  // n_triangles; per mesh at MeshSlice::firstTriangle
+        std::vector<double> corners;               // n_triangles x 9, slot order (MeshBvh::slotCorners)
+        std::vector<std::uint8_t> gridCells;       // inside grids (MeshBvh::insideGridAnswer)
+        std::vector<std::size_t> firstGridCell;    // n_meshes + 1: mesh k's cells start there
     };
     TreeArrays componentTrees;  // link frame
     TreeArrays objectTrees;     // world frame
@@ -201,7 +201,9 @@ class PairPaddings
 {
 public:
     PairPaddings(const CollisionModel &model, const CollisionRequest &request, std::size_t row)
-        : base_(request.padding), numComponents_(model.numComponents()), numEnvironmentPairs_(model.numObjects() * model.numComponents())
+        : base_(request.padding),
+          numComponents_(model.numComponents()),
+          numEnvironmentPairs_(model.numObjects() * model.numComponents())
     {
         if (const PairPadding *extra = request.pairPadding.get())
         {

@@ -331,7 +331,8 @@ void MeshBvh::buildInsideGrid()
                 queue.push_back(static_cast<std::uint32_t>(next));
             }
         }
-    }    gridCells_ = ownGridCells_.data();
+    }
+    gridCells_ = ownGridCells_.data();
     numGridCells_ = ownGridCells_.size();
 }
 

@@ -123,10 +123,10 @@ private:
     const Node *nodes_ = nullptr;
     std::size_t numNodes_ = 0;
     const std::uint32_t *triangleOrder_ = nullptr;
-    std::vector<double> ownCorners_;                    // n_triangles x 9, slot order
+    std::vector<double> ownCorners_;  // n_triangles x 9, slot order
     const double *corners_ = nullptr;
-    std::vector<std::uint32_t> shellProbes_;            // n_probes: vertex numbers
-    std::vector<std::uint32_t> shellProbeStart_{0};     // n_shells + 1
+    std::vector<std::uint32_t> shellProbes_;         // n_probes: vertex numbers
+    std::vector<std::uint32_t> shellProbeStart_{0};  // n_shells + 1
     int depth_ = -1;
     // Inside grid: a regular grid over the mesh's bounding box (mesh frame), one byte per cell
     // (0 near the surface, 1 outside, 2 inside), x fastest.
