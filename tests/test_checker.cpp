@@ -13,6 +13,7 @@
 #include "rastercheck/BuildConfig.h"
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/collision/CpuBackend.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
 #include "rastercheck/geometry/Primitives.h"
@@ -151,6 +152,31 @@ TEST(Checker, PairPaddingActsLikeThePaddingOnItsPairs)
     extra->environment = {0.0};
     extra->self = {0.0};  // the cube has no self pair
     EXPECT_THROW(checker.isValid(at(0, 0, 1), request), rc::ConfigurationError);
+}
+
+TEST(Checker, AnOpenPairIsDecidedWithItsOwnPadding)
+{
+    // The staged backends finish open pairs with decideOpenPair: it must read the pair's padding
+    // from the state's pairPadding row, as the CPU backend's own pass does.
+    const auto model = std::make_shared<const rc::CollisionModel>(cubeRobot(0.2), tableScene());
+    const rc::CpuBackend backend(model);
+    std::unique_ptr<rc::CpuWorkspace> ws = backend.makeWorkspace();
+    backend.refitState(at(0.2, 0.1, 0.11).data(), *ws);  // 1 cm above the table top (object 0)
+    rc::CollisionRequest request;
+    request.padding = 0.004;
+    auto rows = std::make_shared<rc::PairPadding>();
+    rows->rows = 2;
+    rows->environment = {0.005, 0.007};  // 0.009 and 0.011 in all
+    request.pairPadding = rows;
+    const std::uint32_t table = 0;  // object 0 against component 0
+    for (rc::CollisionMode mode : {rc::CollisionMode::Safe, rc::CollisionMode::Exact})
+    {
+        request.mode = mode;
+        rc::Contact contact;
+        EXPECT_FALSE(backend.decideOpenPair(table, request, *ws, contact, 0)) << rc::toString(mode);
+        EXPECT_TRUE(backend.decideOpenPair(table, request, *ws, contact, 1)) << rc::toString(mode);
+        EXPECT_EQ(contact.object, 0);
+    }
 }
 
 TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)

@@ -2,6 +2,7 @@
 // point-in-solid parity (grazing rays included) and containment in solidsOverlap.
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -17,7 +18,9 @@
 #include <fcl/narrowphase/distance.h>
 
 #include "rastercheck/device/MeshTree.h"
+#include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
+#include "rastercheck/device/Traversal.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/geometry/TriangleTests.h"
@@ -272,7 +275,7 @@ TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
                 for (int k = 0; k < 3; ++k)
                 {
                     const Vec &corner = mesh.vertices[mesh.triangles[triangle][k]];
-                    EXPECT_EQ(bvh.slotTriangle(slot)[k], corner);
+                    EXPECT_EQ(Vec(Eigen::Map<const Vec>(bvh.slotCorners(slot) + 3 * k)), corner);
                     // Every node on the way down holds the corner (up to the float storage's
                     // rounding, 1e-6 of the size, which the queries' slack covers).
                     for (int up = static_cast<int>(i); up >= 0; up = parent[up])
@@ -621,10 +624,28 @@ TEST(PointInsideClosedMesh, BoxInsideOutsideAndNearFaces)
     EXPECT_TRUE(rc::pointInsideClosedMesh(bvh, Vec(0.3, -0.5 + 1e-6, 0.25 - 1e-6)));
     EXPECT_FALSE(rc::pointInsideClosedMesh(bvh, Vec(0.3, -0.5 - 1e-6, 0.1)));
     EXPECT_FALSE(rc::pointInsideClosedMesh(bvh, Vec(5, 5, 5)));
-    // On a face every ray starts on the surface, so the winding-number fallback decides; either
-    // answer is allowed on the surface, but it must be the same every time.
-    const bool onFace = rc::pointInsideClosedMesh(bvh, Vec(0.3, 0.5, 0.1));
-    EXPECT_EQ(rc::pointInsideClosedMesh(bvh, Vec(0.3, 0.5, 0.1)), onFace);
+    // On a face, an edge or a corner every ray starts on the surface and grazes: the answer is
+    // inside, the safe one (a solid touching another collides), for the tree's test and the
+    // patches' alike (one function, device::pointInsideSolid).
+    for (const Vec &onSurface : {Vec(0.3, 0.5, 0.1), Vec(1.0, 0.5, 0.0), Vec(1.0, 0.5, 0.25), Vec(-1.0, -0.5, -0.25)})
+    {
+        EXPECT_TRUE(rc::pointInsideClosedMesh(bvh, onSurface)) << onSurface.transpose();
+        EXPECT_TRUE(rc::device::pointInsideSolid(
+            bvh.nodes(), static_cast<std::uint32_t>(bvh.numNodes()), {onSurface.x(), onSurface.y(), onSurface.z()},
+            1e-9, [](const rc::MeshBvh::Node &node, const rc::device::Ray &ray)
+            { return rc::device::rayMeetsTreeNode(ray, node, 1e-6); },
+            [&](const rc::MeshBvh::Node &leaf, auto &&visit)
+            {
+                for (std::uint32_t slot = leaf.firstSlot(); slot < leaf.firstSlot() + leaf.count; ++slot)
+                {
+                    const double *c = bvh.slotCorners(slot);
+                    if (!visit(rc::device::Vec3<double>{c[0], c[1], c[2]}, rc::device::Vec3<double>{c[3], c[4], c[5]},
+                               rc::device::Vec3<double>{c[6], c[7], c[8]}))
+                        return false;
+                }
+                return true;
+            }));
+    }
     // Points on the lines of the box's edges and face diagonals, just inside and just outside.
     for (double s : {-0.9, -1.0 / 3.0, 0.0, 1.0 / 3.0, 0.9})
     {
@@ -834,4 +855,126 @@ TEST(SurfacesWithin, TreesTooLargeForThePlacedNodeCacheGiveTheSameAnswers)
     EXPECT_FALSE(rc::surfacesWithin(bvhA, identity, bvhB, at(1.85), 0.0));
     EXPECT_TRUE(rc::surfacesWithin(bvhA, identity, bvhB, at(1.85), 0.06));
     EXPECT_FALSE(rc::surfacesWithin(bvhB, at(1.85), bvhA, identity, 0.04));
+}
+
+namespace
+{
+// A tree of the walk's node convention whose leaves hold points on a line: a chain (every inner
+// node's second child a leaf) or a balanced tree over points[begin, end).
+struct LineNode
+{
+    double lower, upper;  // the points' range below the node
+    std::int32_t first;   // inner: first child; leaf: -(1 + point index)
+};
+
+std::int32_t buildLine(std::vector<LineNode> &nodes, const std::vector<double> &points, std::size_t begin,
+                       std::size_t end, std::int32_t at)
+{
+    nodes[at].lower = points[begin];
+    nodes[at].upper = points[end - 1];
+    if (end - begin == 1)
+    {
+        nodes[at].first = -1 - static_cast<std::int32_t>(begin);
+        return 0;
+    }
+    const auto child = static_cast<std::int32_t>(nodes.size());
+    nodes[at].first = child;
+    nodes.push_back({});
+    nodes.push_back({});
+    const std::size_t middle = (begin + end) / 2;
+    const int left = buildLine(nodes, points, begin, middle, child);
+    return 1 + std::max(left, buildLine(nodes, points, middle, end, child + 1));
+}
+
+std::vector<LineNode> chain(int depth)
+{
+    std::vector<LineNode> nodes(1);
+    for (int level = 0; level < depth; ++level)
+    {
+        const std::size_t at = nodes.size() - (level == 0 ? 1 : 2);  // the previous inner node
+        nodes[at] = {0.0, 1.0, static_cast<std::int32_t>(nodes.size())};
+        nodes.push_back({0.0, 1.0, 0});           // inner, linked next level
+        nodes.push_back({0.0, 1.0, -1 - level});  // a leaf
+    }
+    nodes[nodes.size() - 2].first = -1 - depth;  // the deepest node is a leaf
+    return nodes;
+}
+}  // namespace
+
+TEST(Traversal, ATreeTooDeepForTheStackEndsInOverflowNotPastTheStack)
+{
+    // walkTree holds at most depth + 1 entries of the pair walk's kPairStackSize: the deepest
+    // chain that fits, and one level more.
+    const int fits = rc::device::kPairStackSize - 1;
+    for (int depth : {10, fits, fits + 1, 3 * rc::device::kPairStackSize})
+    {
+        const std::vector<LineNode> nodes = chain(depth);
+        int leaves = 0;
+        const rc::device::WalkEnd end = rc::device::walkTree(
+            nodes.data(), static_cast<std::uint32_t>(nodes.size()), [](const LineNode &) { return true; },
+            [&](const LineNode &)
+            {
+                ++leaves;
+                return true;
+            });
+        if (depth <= fits)
+        {
+            EXPECT_EQ(end, rc::device::WalkEnd::Finished) << depth;
+            EXPECT_EQ(leaves, depth + 1) << depth;
+        }
+        else
+            EXPECT_EQ(end, rc::device::WalkEnd::Overflow) << depth;
+    }
+}
+
+TEST(Traversal, APairWalkWithAShrinkingReachFindsTheNearestPairAsADistanceQueryWould)
+{
+    // The nearest pair of two point sets on a line: the node test is a lower bound on the
+    // distance of a node pair against the best distance so far, which the leaf visitor lowers.
+    std::mt19937_64 rng(33);
+    std::uniform_real_distribution<double> u(0.0, 100.0);
+    for (int trial = 0; trial < 20; ++trial)
+    {
+        std::vector<double> a(300), b(200);
+        for (double &x : a)
+            x = u(rng);
+        for (double &x : b)
+            x = u(rng) + 100.5;  // apart by at least half a unit
+        std::sort(a.begin(), a.end());
+        std::sort(b.begin(), b.end());
+        std::vector<LineNode> treeA(1), treeB(1);
+        buildLine(treeA, a, 0, a.size(), 0);
+        buildLine(treeB, b, 0, b.size(), 0);
+        struct Nearest
+        {
+            const std::vector<LineNode> &ta, &tb;
+            const std::vector<double> &a, &b;
+            double best = std::numeric_limits<double>::infinity();
+            int leafPairs = 0;
+            double bound(rc::device::NodePair p) const
+            {
+                const LineNode &na = ta[p.a], &nb = tb[p.b];
+                return std::max({0.0, nb.lower - na.upper, na.lower - nb.upper});
+            }
+            bool test(rc::device::NodePair p) const { return bound(p) < best; }
+            bool leaves(rc::device::NodePair p)
+            {
+                ++leafPairs;
+                best = std::min(best, std::abs(a[-(ta[p.a].first + 1)] - b[-(tb[p.b].first + 1)]));
+                return true;
+            }
+            bool splitA(rc::device::NodePair p) const
+            {
+                return ta[p.a].upper - ta[p.a].lower >= tb[p.b].upper - tb[p.b].lower;
+            }
+            bool secondFirst(rc::device::NodePair first, rc::device::NodePair second) const
+            {
+                return bound(second) < bound(first);
+            }
+        } query{treeA, treeB, a, b};
+        ASSERT_EQ(rc::device::walkPairs(treeA.data(), treeB.data(), query), rc::device::WalkEnd::Finished);
+        EXPECT_DOUBLE_EQ(query.best, b.front() - a.back()) << trial;
+        EXPECT_LT(query.leafPairs, 50) << "the reach did not shrink: " << query.leafPairs << " of "
+                                       << a.size() * b.size();
+    }
 }

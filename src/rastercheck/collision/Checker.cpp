@@ -186,7 +186,6 @@ std::vector<Contact> Checker::contacts(const double *q, const CollisionRequest &
     reference_.refitState(q, *workspace);
     CollisionRequest exact = request;
     exact.mode = CollisionMode::Exact;
-    const PairPadding *extra = request.pairPadding.get();
     const std::size_t environmentPairs = model.numObjects() * model.numComponents();
     std::vector<Contact> found;
     for (std::uint32_t pair = 0; pair < model.numPairs(); ++pair)
@@ -195,11 +194,6 @@ std::vector<Contact> Checker::contacts(const double *q, const CollisionRequest &
         if (environment ? !request.checkEnvironment : !request.checkSelfCollision)
             continue;
         Contact contact;
-        model.nameParties(pair, contact);
-        if (extra)
-            exact.padding =
-                request.padding + (environment ? extra->environment[static_cast<std::size_t>(contact.component)]
-                                               : extra->self[pair - environmentPairs]);
         if (reference_.decideOpenPair(pair, exact, *workspace, contact))
             found.push_back(contact);
     }

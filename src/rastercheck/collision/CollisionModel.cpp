@@ -44,28 +44,40 @@ constexpr unsigned kComponentLeafTriangles = 2;
 /** \brief Moves the trees' nodes and triangle orders into one flat pair of arrays (the slices say
     where each mesh's part starts) and points every tree at its part, so each node is stored once. */
 void shareTrees(const std::vector<std::unique_ptr<MeshBvh>> &trees, std::vector<CollisionModel::MeshSlice> &slices,
-                std::vector<device::TreeNode> &nodes, std::vector<std::uint32_t> &order)
+                CollisionModel::TreeArrays &arrays)
 {
-    std::size_t numNodes = 0, numTriangles = 0;
+    std::size_t numNodes = 0, numTriangles = 0, numCells = 0;
     for (const std::unique_ptr<MeshBvh> &tree : trees)
     {
         numNodes += tree->numNodes();
         numTriangles += tree->mesh().triangles.size();
+        numCells += tree->numGridCells();
     }
-    nodes.reserve(numNodes);
-    order.reserve(numTriangles);
+    arrays.nodes.reserve(numNodes);
+    arrays.triangleOrder.reserve(numTriangles);
+    arrays.corners.reserve(9 * numTriangles);
+    arrays.gridCells.reserve(numCells);
+    arrays.firstGridCell.assign(1, 0);
     for (std::size_t k = 0; k < trees.size(); ++k)
     {
         const MeshBvh &tree = *trees[k];
-        slices[k].firstNode = static_cast<std::uint32_t>(nodes.size());
+        const std::size_t triangles = tree.mesh().triangles.size();
+        slices[k].firstNode = static_cast<std::uint32_t>(arrays.nodes.size());
         slices[k].numNodes = static_cast<std::uint32_t>(tree.numNodes());
-        if (order.size() != slices[k].firstTriangle)
+        if (arrays.triangleOrder.size() != slices[k].firstTriangle)
             throw std::logic_error("shareTrees: the triangle orders do not follow the triangle slices");
-        nodes.insert(nodes.end(), tree.nodes(), tree.nodes() + tree.numNodes());
-        order.insert(order.end(), tree.triangleOrder(), tree.triangleOrder() + tree.mesh().triangles.size());
+        const MeshBvh::Arrays own = tree.arrays();
+        arrays.nodes.insert(arrays.nodes.end(), own.nodes, own.nodes + tree.numNodes());
+        arrays.triangleOrder.insert(arrays.triangleOrder.end(), own.triangleOrder, own.triangleOrder + triangles);
+        arrays.corners.insert(arrays.corners.end(), own.corners, own.corners + 9 * triangles);
+        arrays.gridCells.insert(arrays.gridCells.end(), own.gridCells, own.gridCells + tree.numGridCells());
+        arrays.firstGridCell.push_back(arrays.gridCells.size());
     }
     for (std::size_t k = 0; k < trees.size(); ++k)
-        trees[k]->useSharedArrays(nodes.data() + slices[k].firstNode, order.data() + slices[k].firstTriangle);
+        trees[k]->useSharedArrays(MeshBvh::Arrays{
+            arrays.nodes.data() + slices[k].firstNode, arrays.triangleOrder.data() + slices[k].firstTriangle,
+            arrays.corners.data() + 9 * static_cast<std::size_t>(slices[k].firstTriangle),
+            trees[k]->numGridCells() > 0 ? arrays.gridCells.data() + arrays.firstGridCell[k] : nullptr});
 }
 
 /** \brief Largest vertices x triangles product a piece's convexity is measured over: a finer
@@ -366,7 +378,7 @@ void ConvexSolids::addPatches(const Mesh &mesh, double patchThickness)
             node.max[k] = box.max[k];
         }
         node.reserved = 0;
-        if (job.end - job.begin == 1 || job.depth >= device::kMaxPatchDepth ||
+        if (job.end - job.begin == 1 || job.depth >= device::kMaxTreeDepth ||
             (job.end - job.begin <= kPatchTriangles && patchIsFlat(mesh, order, job.begin, job.end, patchThickness)))
         {
             // A patch: its triangles as a mesh of their own (vertices renumbered).
@@ -512,8 +524,8 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
                    kPatchFlatness * (robotScale > 0.0 ? robotScale : (object.bounds.max - object.bounds.min).norm()));
     }
 
-    shareTrees(componentBvhs, components, componentTreeNodes, componentTriangleOrder);
-    shareTrees(objectBvhs, objects, objectTreeNodes, objectTriangleOrder);
+    shareTrees(componentBvhs, components, componentTrees);
+    shareTrees(objectBvhs, objects, objectTrees);
     for (int k = 0; k < 3; ++k)
         objectTreePlacement.m[4 * k + 3] = static_cast<float>(-origin[k]);
 

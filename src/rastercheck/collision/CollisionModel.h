@@ -148,13 +148,18 @@ public:
     std::vector<std::unique_ptr<MeshBvh>> componentBvhs;  // n_components, link frame
     std::vector<std::unique_ptr<MeshBvh>> objectBvhs;     // n_objects, world frame
 
-    /** \brief The trees' nodes and triangle orders, stored here once (each MeshBvh reads its
-        slice) as flat arrays that the batched stages and the GPU read too: nodes per party
-        concatenated (MeshSlice::firstNode), triangle order per mesh at MeshSlice::firstTriangle. */
-    std::vector<device::TreeNode> componentTreeNodes;   // link frame
-    std::vector<std::uint32_t> componentTriangleOrder;  // n_component_triangles
-    std::vector<device::TreeNode> objectTreeNodes;      // world frame
-    std::vector<std::uint32_t> objectTriangleOrder;     // n_object_triangles
+    /** \brief One party's trees and the exact phase's arrays, stored here once (each MeshBvh
+        reads its slice) as flat arrays that the batched stages and the GPU read too. */
+    struct TreeArrays
+    {
+        std::vector<device::TreeNode> nodes;       // per mesh at MeshSlice::firstNode
+        std::vector<std::uint32_t> triangleOrder;  // n_triangles; per mesh at MeshSlice::firstTriangle
+        std::vector<double> corners;               // n_triangles x 9, slot order (MeshBvh::slotCorners)
+        std::vector<std::uint8_t> gridCells;       // inside grids (MeshBvh::insideGridAnswer)
+        std::vector<std::size_t> firstGridCell;    // n_meshes + 1: mesh k's cells start there
+    };
+    TreeArrays componentTrees;  // link frame
+    TreeArrays objectTrees;     // world frame
     /** \brief The objects' trees are in the world frame, the stages' floats relative to origin. */
     device::Pose<float> objectTreePlacement = device::Pose<float>::identity();
 
@@ -195,5 +200,42 @@ public:
 };
 
 using CollisionModelConstPtr = std::shared_ptr<const CollisionModel>;
+
+/** \brief The padding of every pair at one state, the one lookup the backends read it through:
+    CollisionRequest::padding plus, when the request has a pairPadding, the pair's entry in row
+    \a row (0 for a request with one row). A view: the request must outlive it. */
+class PairPaddings
+{
+public:
+    PairPaddings(const CollisionModel &model, const CollisionRequest &request, std::size_t row)
+        : base_(request.padding),
+          numComponents_(model.numComponents()),
+          numEnvironmentPairs_(model.numObjects() * model.numComponents())
+    {
+        if (const PairPadding *extra = request.pairPadding.get())
+        {
+            environment_ = extra->environment.data() + row * model.numComponents();
+            self_ = extra->self.data() + row * model.selfPairs.size();
+        }
+    }
+    /** \brief No entry per pair: every pair has the request's padding. */
+    bool uniform() const { return environment_ == nullptr; }
+    /** \brief Component \a k against any scene object. */
+    double component(std::size_t k) const { return base_ + (environment_ ? environment_[k] : 0.0); }
+    /** \brief Self pair \a i (CollisionModel::selfPairs order). */
+    double self(std::size_t i) const { return base_ + (self_ ? self_[i] : 0.0); }
+    /** \brief Pair \a pair in CollisionModel's numbering (environment pairs, then self pairs). */
+    double pair(std::uint32_t pair) const
+    {
+        return pair < numEnvironmentPairs_ ? component(pair % numComponents_) : self(pair - numEnvironmentPairs_);
+    }
+
+private:
+    double base_;
+    std::size_t numComponents_;
+    std::size_t numEnvironmentPairs_;
+    const double *environment_ = nullptr;  // numComponents entries, or null
+    const double *self_ = nullptr;         // selfPairs.size() entries, or null
+};
 
 }  // namespace rastercheck

@@ -1,4 +1,5 @@
 #include "rastercheck/collision/CpuBackend.h"
+#include "rastercheck/collision/ModeRules.h"
 
 #include <algorithm>
 #include <cmath>
@@ -163,11 +164,12 @@ device::HullRelation hullRelation(const Solid &a, const Solid &b, double padding
     thread last met for these two trees (surfacesWithin()), which changes which contact is found
     first but never the verdict; with it, the first contact is the traversal's own, the same on
     every backend and every chunking of a batch. */
-bool exactOverlap(const Solid &a, const Solid &b, double padding, bool wantContact, Contact &contact)
+bool exactOverlap(const Solid &a, const Solid &b, double padding, bool wantContact, CpuWorkspace &ws,
+                  Contact &contact)
 {
     MeshContact meshContact;
     if (!solidsOverlap(*a.bvh, fromDevicePose(*a.pose64), a.slice->closed, *b.bvh, fromDevicePose(*b.pose64),
-                       b.slice->closed, padding, wantContact ? &meshContact : nullptr))
+                       b.slice->closed, padding, wantContact ? &meshContact : nullptr, &ws.exact))
         return false;
     contact.triangle = meshContact.triangleB;
     contact.position = meshContact.position;
@@ -227,8 +229,8 @@ bool unprovenCollides(const device::Box &window, const Eigen::Vector3d &origin, 
     BVH query, and the depth-range proof settled only a quarter of the pairs), so safe mode on this
     backend is the exact phase behind the paper's culls. */
 bool meshPairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, const CollisionRequest &request,
-                      double padding, double pixel, const Eigen::Vector3d &origin, bool wantContact, CpuWorkspace &ws,
-                      Contact &contact)
+                      const ModeRules &rules, double padding, double pixel, const Eigen::Vector3d &origin,
+                      bool wantContact, CpuWorkspace &ws, Contact &contact)
 {
     // The box culls already passed; the window test and the hull test are the last cheap exits.
     const device::Box window = device::pairWindow(a.bounds, b.bounds, device::floatPadding(padding));
@@ -241,19 +243,15 @@ bool meshPairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, 
     // Home, 0.63 -> 0.88 on Easy, 0.67 -> 0.91 on cubicles). In conservative mode that makes the
     // pair exact, not just bounded: no false alarms among meshes (6 % of Abstract's free states
     // before), at safe mode's speed (alpha-1.5: 0.21x -> 1.7x FCL).
-    if (isMeshObstacle(b) && request.mode != CollisionMode::Raster)
-        return exactOverlap(a, b, padding, wantContact, contact);
-    // Overlap proofs name no triangle, and would make raster mode's verdicts depend on whether
-    // a contact is asked (stageSettings() draws the same line).
-    // Conservative mode's verdicts are the proof's outcome, so the proof must not depend on what
-    // the workspace decided before (the warm start): it starts cold, as the stages' proof does.
+    if (rules.meshObstaclesExact && isMeshObstacle(b))
+        return exactOverlap(a, b, padding, wantContact, ws, contact);
     // A self pair's direction is kept in A's frame: the joints above both links turn them together,
     // and a direction that proved them apart still points between them after such a turn (an
     // object stays put, so an environment pair's is kept in the world frame). Panda MBM problems
     // (bench/edges, one A/B run): 2.78 -> 2.48 us per free state, 6.0 -> 5.6 per certified one.
     device::Vec3<double> *warmStart = nullptr, selfDirection{};
     const bool selfPair = b.component >= 0;
-    if (request.mode != CollisionMode::Conservative)
+    if (rules.warmStart)
     {
         warmStart = &ws.proofDirection[pairNumber];
         if (selfPair)
@@ -263,17 +261,16 @@ bool meshPairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, 
         }
     }
     const device::HullRelation relation =
-        hullRelation(a, b, padding, !wantContact && request.mode != CollisionMode::Raster, warmStart,
-                     request.mode == CollisionMode::Conservative);
+        hullRelation(a, b, padding, rules.proveOverlaps, warmStart, rules.patchAgainstPatch);
     if (selfPair && warmStart && relation == device::HullRelation::Apart)
         ws.proofDirection[pairNumber] = device::inverseRotate(*a.pose64, selfDirection);
     if (relation != device::HullRelation::Unknown)
         return relation == device::HullRelation::Overlapping;
-    if (request.mode == CollisionMode::Conservative)
+    if (rules.unprovenCollides)
         return unprovenCollides(window, origin, contact);
-    if (request.mode != CollisionMode::Raster ||
+    if (!rules.rasterOnHost ||
         !device::rasterUsable(a.slice->closed, b.slice->closed, window, static_cast<float>(pixel)))
-        return exactOverlap(a, b, padding, wantContact, contact);
+        return exactOverlap(a, b, padding, wantContact, ws, contact);
     PreparedPair pair;
     if (!preparePair(a, b, request, padding, pixel, ws, pair))
         return false;
@@ -283,7 +280,7 @@ bool meshPairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, 
         return true;
     }
     // Padding is always honoured exactly: the raster sees overlaps, not distances.
-    return padding > 0 && exactOverlap(a, b, padding, wantContact, contact);
+    return (rules.confirmRasterMisses || padding > 0) && exactOverlap(a, b, padding, wantContact, ws, contact);
 }
 
 /** \brief Safe and exact mode's last word on a pair whose meshes collide: where a side is made of
@@ -300,10 +297,11 @@ bool curvedShapesConfirm(const CollisionModel &model, std::uint32_t pairNumber, 
 
 /** \brief meshPairCollides, with a collision of curved primitives confirmed on their exact shapes. */
 bool pairCollides(const Solid &a, const Solid &b, std::uint32_t pairNumber, const CollisionRequest &request,
-                  double padding, double pixel, const CollisionModel &model, bool wantContact, CpuWorkspace &ws,
-                  Contact &contact)
+                  const ModeRules &rules, double padding, double pixel, const CollisionModel &model,
+                  bool wantContact, CpuWorkspace &ws, Contact &contact)
 {
-    return meshPairCollides(a, b, pairNumber, request, padding, pixel, model.origin, wantContact, ws, contact) &&
+    return meshPairCollides(a, b, pairNumber, request, rules, padding, pixel, model.origin, wantContact, ws,
+                            contact) &&
            curvedShapesConfirm(model, pairNumber, a, b, request, padding);
 }
 
@@ -398,7 +396,7 @@ void CpuBackend::refitState(const double *q, CpuWorkspace &ws) const
 }
 
 bool CpuBackend::decideOpenPair(std::uint32_t pair, const CollisionRequest &request, CpuWorkspace &ws,
-                                Contact &contact) const
+                                Contact &contact, std::size_t paddingRow) const
 {
     const CollisionModel &model = *model_;
     model.nameParties(pair, contact);
@@ -406,12 +404,13 @@ bool CpuBackend::decideOpenPair(std::uint32_t pair, const CollisionRequest &requ
     const Solid b = contact.kind == Contact::Kind::Environment
                         ? objectSolid(model, static_cast<std::size_t>(contact.object))
                         : componentSolid(model, ws, static_cast<std::size_t>(contact.otherComponent));
+    const double padding = PairPaddings(model, request, paddingRow).pair(pair);
     // As pairCollides: a non-convex mesh obstacle is decided exactly in conservative mode too.
-    if (request.mode == CollisionMode::Conservative && !isMeshObstacle(b))
-        return unprovenCollides(device::pairWindow(a.bounds, b.bounds, device::floatPadding(request.padding)),
-                                model.origin, contact);
-    return exactOverlap(a, b, request.padding, true, contact) &&
-           curvedShapesConfirm(model, pair, a, b, request, request.padding);
+    const ModeRules rules = modeRules(request.mode, true);
+    if (rules.unprovenCollides && !(rules.meshObstaclesExact && isMeshObstacle(b)))
+        return unprovenCollides(device::pairWindow(a.bounds, b.bounds, device::floatPadding(padding)), model.origin,
+                                contact);
+    return exactOverlap(a, b, padding, true, ws, contact) && curvedShapesConfirm(model, pair, a, b, request, padding);
 }
 
 bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut,
@@ -435,21 +434,19 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
 
     const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
     const bool wantContact = contactOut != nullptr;
+    const ModeRules rules = modeRules(request.mode, wantContact);
     // Paddings: the request's, plus its pairPadding entry per pair. The distance set and the layer
     // culls take the largest padding they stand for.
-    const PairPadding *extra = request.pairPadding.get();
-    const double *extraEnvironment = extra ? extra->environment.data() + paddingRow * m : nullptr;
-    const double *extraSelf = extra ? extra->self.data() + paddingRow * model.selfPairs.size() : nullptr;
-    auto environmentPadding = [&](std::size_t k) { return request.padding + (extra ? extraEnvironment[k] : 0.0); };
+    const PairPaddings paddings(model, request, paddingRow);
     double reachPadding = request.padding;
-    if (!extra)
+    if (paddings.uniform())
         std::fill(ws.layerPadding.begin(), ws.layerPadding.end(), device::floatPadding(request.padding));
     else
     {
         // A layer's padding is the largest in its subtree (the layer boxes' own walk).
         device::joinLayers(
             model.componentSubtreeEnd.data(), static_cast<int>(m), ws.layerLargest.data(),
-            [&](int k) { return std::max(request.padding, environmentPadding(static_cast<std::size_t>(k))); },
+            [&](int k) { return std::max(request.padding, paddings.component(static_cast<std::size_t>(k))); },
             [](double &layer, double child) { layer = std::max(layer, child); });
         for (std::size_t k = 0; k < m; ++k)
         {
@@ -477,12 +474,12 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     k = static_cast<std::size_t>(model.componentSubtreeEnd[k]);
                     continue;
                 }
-                const double padding = environmentPadding(k);
+                const double padding = paddings.component(k);
                 if (device::solidsMayMeet(ws.componentBounds[k], ws.componentBox[k], objectBox,
                                           model.objectOrientedBoxes[o], device::floatPadding(padding)) &&
                     pairCollides(componentSolid(model, ws, k), object,
                                  device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m)),
-                                 request, padding, pixel, model, wantContact, ws, contact))
+                                 request, rules, padding, pixel, model, wantContact, ws, contact))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -493,24 +490,23 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         }
     }
 
-    const bool tablesDecide = request.mode == CollisionMode::Safe || request.mode == CollisionMode::Exact;
     if (request.checkSelfCollision)
         for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
         {
             const auto [a, b] = model.selfPairs[i];
-            const double padding = request.padding + (extra ? extraSelf[i] : 0.0);
+            const double padding = paddings.self(i);
             if (!device::solidsMayMeet(ws.componentBounds[a], ws.componentBox[a], ws.componentBounds[b],
                                        ws.componentBox[b], device::floatPadding(padding)))
                 continue;
             // The pair's clearance table: a proof of "apart" without a hull test. Safe and exact mode
             // only, whose verdicts are the meshes' own (conservative and raster verdicts are their
             // tests' outcomes, which the table must not change).
-            if (tablesDecide && model.selfPairTables.apart(i, q, padding))
+            if (rules.clearanceTables && model.selfPairTables.apart(i, q, padding))
                 continue;
             if (pairCollides(
                     componentSolid(model, ws, a), componentSolid(model, ws, b),
                     device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()), static_cast<int>(m)),
-                    request, padding, pixel, model, wantContact, ws, contact))
+                    request, rules, padding, pixel, model, wantContact, ws, contact))
             {
                 contact.component = a;
                 contact.otherComponent = b;

@@ -52,6 +52,7 @@ struct CpuWorkspace
     std::vector<int> pixelCount;              // n_pixels
     std::vector<int> pixelStart;              // n_pixels + 1
     std::vector<device::Fragment> fragments;  // total fragments
+    ExactWorkspace exact;                     // the exact phase's scratch
 };
 
 /** \brief Worker threads for a batch of \a n states: \a requested (0 = all cores), but at least
@@ -94,12 +95,13 @@ public:
     /** \brief Forward kinematics and box refit of state \a q into \a workspace: what decideOpenPair needs. */
     void refitState(const double *q, CpuWorkspace &workspace) const;
     /** \brief Decides one pair (CollisionModel's numbering) that the culls and proofs left open, at
-        the state last refitted into \a workspace: by the exact narrow phase with the request's
-        padding, or in conservative mode as colliding. On collision fills \a contact completely. The
-        staged backends finish the pairs their stages could not settle with this; the stages have
-        already tried the hull proof on those pairs, so it is not repeated here. */
+        the state last refitted into \a workspace: by the exact narrow phase with the pair's padding
+        (PairPaddings: the request's, plus row \a paddingRow of its pairPadding), or in
+        conservative mode as colliding. On collision fills \a contact completely. The staged
+        backends finish the pairs their stages could not settle with this; the stages have already
+        tried the hull proof on those pairs, so it is not repeated here. */
     bool decideOpenPair(std::uint32_t pair, const CollisionRequest &request, CpuWorkspace &workspace,
-                        Contact &contact) const;
+                        Contact &contact, std::size_t paddingRow = 0) const;
 
     /** \brief The raster image of the pair named by \a contact at state \a q (the paper's Fig. 6):
         which pixels each solid covers and where Sort_Search_Pair finds the overlap. For pictures and

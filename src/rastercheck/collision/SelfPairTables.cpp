@@ -107,7 +107,8 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
         }
         if (!finiteRates)
             continue;
-        table.clearance.resize(numNodes);
+        table.firstClearance = clearance_.size();
+        clearance_.resize(clearance_.size() + numNodes);
         q = canonical;
         for (std::size_t node = 0; node < numNodes; ++node)
         {
@@ -143,10 +144,10 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
             float stored = static_cast<float>(clearance);
             if (static_cast<double>(stored) > clearance)
                 stored = std::nextafter(stored, -std::numeric_limits<float>::infinity());
-            table.clearance[node] = stored;
+            clearance_[table.firstClearance + node] = stored;
         }
         tableOf_[p] = static_cast<int>(tables_.size());
-        tables_.push_back(std::move(table));
+        tables_.push_back(table);
     }
 }
 
@@ -168,14 +169,11 @@ bool SelfPairTables::apart(std::size_t pair, const double *q, double padding) co
         index = index * static_cast<std::size_t>(axis.nodes) + static_cast<std::size_t>(node);
     }
     // The sweep's own rounding: a relative 1e-12 of it.
-    return static_cast<double>(table.clearance[index]) - sweep * (1 + 1e-12) > padding;
+    return static_cast<double>(clearance_[table.firstClearance + index]) - sweep * (1 + 1e-12) > padding;
 }
 
 std::size_t SelfPairTables::memoryBytes() const
 {
-    std::size_t bytes = tableOf_.size() * sizeof(int);
-    for (const Table &table : tables_)
-        bytes += sizeof(Table) + table.clearance.size() * sizeof(float);
-    return bytes;
+    return tableOf_.size() * sizeof(int) + tables_.size() * sizeof(Table) + clearance_.size() * sizeof(float);
 }
 }  // namespace rastercheck

@@ -59,9 +59,10 @@ private:
     {
         Axis axes[2];
         int numAxes = 0;
-        std::vector<float> clearance;  ///< per node, axis 0 slowest; -infinity where no proof held
+        std::size_t firstClearance = 0;  ///< the table's nodes in clearance_
     };
-    std::vector<int> tableOf_;  ///< per self pair: index into tables_, or -1
-    std::vector<Table> tables_;
+    std::vector<int> tableOf_;      ///< per self pair: index into tables_, or -1
+    std::vector<Table> tables_;     ///< n_tables
+    std::vector<float> clearance_;  ///< per table, per node (axis 0 slowest); -infinity where no proof held
 };
 }  // namespace rastercheck

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <string>
 
+#include "rastercheck/collision/ModeRules.h"
 #include "rastercheck/collision/StageChunks.h"
 
 namespace rastercheck
@@ -48,12 +49,12 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.convex.numPatchNodes(),
                                model.convex.numPatches(),
                                model.convex.numPatchTriangleIndices(),
-                               model.componentTreeNodes.data(),
-                               model.componentTreeNodes.size(),
-                               model.componentTriangleOrder.data(),
-                               model.objectTreeNodes.data(),
-                               model.objectTreeNodes.size(),
-                               model.objectTriangleOrder.data(),
+                               model.componentTrees.nodes.data(),
+                               model.componentTrees.nodes.size(),
+                               model.componentTrees.triangleOrder.data(),
+                               model.objectTrees.nodes.data(),
+                               model.objectTrees.nodes.size(),
+                               model.objectTrees.triangleOrder.data(),
                                model.objectTreePlacement};
 }
 
@@ -62,20 +63,16 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
     device::StageSettings settings{};
     settings.padding = std::max(0.0, request.padding);
     if (const PairPadding *extra = request.pairPadding.get())
-        settings.extraPadding = device::PairPaddings{extra->environment.data(), extra->self.data(), extra->rows > 1};
+        settings.extraPadding = device::PairPaddingRows{extra->environment.data(), extra->self.data(), extra->rows > 1};
     settings.pixel = static_cast<float>(request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize);
     settings.maxImageSide = request.maxImageSide;
     settings.checkEnvironment = request.checkEnvironment;
     settings.checkSelfCollision = request.checkSelfCollision;
-    // Safe mode reports the CPU's first contact when asked for contacts, which takes the exact
-    // phase on every pair; without contacts a raster hit is proof enough.
-    settings.rasterize =
-        request.mode == CollisionMode::Raster || (request.mode == CollisionMode::Safe && !contactsAsked);
-    settings.confirmMisses = request.mode == CollisionMode::Safe;
-    // An overlap the hulls prove names no triangle: only when no contact is asked. Not in raster
-    // mode, whose verdicts (misses included) must not depend on whether contacts are asked.
-    settings.proveOverlaps = !contactsAsked && request.mode != CollisionMode::Raster;
-    settings.meshObstaclesUnproven = request.mode != CollisionMode::Raster;  // CpuBackend's pairCollides
+    const ModeRules rules = modeRules(request.mode, contactsAsked);
+    settings.rasterize = rules.rasterInStages;
+    settings.confirmMisses = rules.confirmRasterMisses;
+    settings.proveOverlaps = rules.proveOverlaps;
+    settings.meshObstaclesUnproven = rules.meshObstaclesExact;
     return settings;
 }
 
@@ -262,7 +259,7 @@ std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, c
 }
 
 StagedBackend::StagedBackend(CollisionModelConstPtr model, std::unique_ptr<StageRunner> runner)
-    : model_(std::move(model)), arrays_(hostModelArrays(*model_)), exact_(model_), runner_(std::move(runner))
+    : model_(std::move(model)), exact_(model_), runner_(std::move(runner))
 {
 }
 
@@ -305,13 +302,13 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     for (std::size_t i = n; i-- > 0;)
         firstOutcome[i] = std::min(firstOutcome[i], firstOutcome[i + 1]);
 
-    // Per-state reduction: the first pair (in the CPU's order) that collides.
+    // Per-state reduction: the first pair (in the CPU's order) that collides. An open pair is decided
+    // with its own padding (the state's pairPadding row).
+    const bool rowPerState = request.pairPadding && request.pairPadding->rows > 1;
     const bool exactCurved = request.mode == CollisionMode::Safe || request.mode == CollisionMode::Exact;
 #pragma omp parallel num_threads(workers)
     {
         std::unique_ptr<CpuWorkspace> ws = exact_.borrow();
-        CollisionRequest pairRequest = request;  // with the open pair's own padding
-        pairRequest.pairPadding = nullptr;
 #pragma omp for schedule(dynamic, 16)
         for (std::ptrdiff_t si = 0; si < static_cast<std::ptrdiff_t>(n); ++si)
         {
@@ -347,8 +344,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
                     if (!refitted)
                         exact_.refitState(q + i * dof, *ws);
                     refitted = true;
-                    pairRequest.padding = device::pairPadding(arrays_, settings, i, o->pair);
-                    collides = exact_.decideOpenPair(o->pair, pairRequest, *ws, contact);
+                    collides = exact_.decideOpenPair(o->pair, request, *ws, contact, rowPerState ? i : 0);
                 }
             }
             valid[i] = collides ? 0 : 1;

@@ -55,7 +55,6 @@ public:
 
 private:
     CollisionModelConstPtr model_;
-    device::ModelArrays arrays_;  // host memory: the pair paddings' layout
     CpuBackend exact_;
     std::unique_ptr<StageRunner> runner_;  // thread-safe: an executor per concurrent pass
 };

@@ -99,7 +99,7 @@ struct ModelArrays
 /** \brief Extra padding per (state, pair) (CollisionRequest::pairPadding): the certified motion
     validators give each pair of each midpoint the distance its solids can close in. Null arrays:
     no extra padding. */
-struct PairPaddings
+struct PairPaddingRows
 {
     const double *environment = nullptr;  // rows x numComponents: component k's pairs with every object
     const double *self = nullptr;         // rows x numSelfPairs
@@ -107,9 +107,9 @@ struct PairPaddings
 
     RC_HD bool any() const { return environment != nullptr; }
     /** \brief The rows of states [first, ...) of the batch. */
-    RC_HD PairPaddings fromState(std::size_t first, int numComponents, int numSelfPairs) const
+    RC_HD PairPaddingRows fromState(std::size_t first, int numComponents, int numSelfPairs) const
     {
-        PairPaddings rest = *this;
+        PairPaddingRows rest = *this;
         if (environment && rowPerState)
         {
             rest.environment += first * static_cast<std::size_t>(numComponents);
@@ -125,7 +125,7 @@ struct StageSettings
     double padding;  ///< the request's padding (>= 0); pairPadding() gives a pair's
     /** \brief Added to padding per (state, pair); host memory in the settings a runner is
         given, executor memory inside a chunk (runStageChunk uploads the chunk's rows). */
-    PairPaddings extraPadding;
+    PairPaddingRows extraPadding;
     float pixel;
     int maxImageSide;
     bool checkEnvironment;
@@ -148,7 +148,7 @@ struct StageSettings
     (the same sum the CPU backend forms, so both round it to float alike). */
 RC_HD double pairPadding(const ModelArrays &model, const StageSettings &settings, std::size_t s, std::uint32_t pair)
 {
-    const PairPaddings &extra = settings.extraPadding;
+    const PairPaddingRows &extra = settings.extraPadding;
     if (!extra.any())
         return settings.padding;
     const std::size_t row = extra.rowPerState ? s : 0;
@@ -165,7 +165,7 @@ RC_HD double pairPadding(const ModelArrays &model, const StageSettings &settings
     is coarser, never wrong: the pair's own test follows). */
 RC_HD double environmentReachPadding(const ModelArrays &model, const StageSettings &settings, std::size_t s)
 {
-    const PairPaddings &extra = settings.extraPadding;
+    const PairPaddingRows &extra = settings.extraPadding;
     double largest = settings.padding;
     if (extra.any())
     {

@@ -12,6 +12,7 @@
 #include "rastercheck/device/HostDevice.h"
 #include "rastercheck/device/Pose.h"
 #include "rastercheck/device/Raster.h"
+#include "rastercheck/device/Traversal.h"
 
 namespace rastercheck::device
 {
@@ -31,10 +32,6 @@ struct TreeNode
     RC_HD bool isLeaf() const { return first < 0; }
     RC_HD std::uint32_t firstSlot() const { return static_cast<std::uint32_t>(-(first + 1)); }
 };
-
-/** \brief Deepest tree the fixed traversal stacks allow (MeshBvh's build checks it): a walk that
-    pushes both children and pops one holds at most depth + 1 nodes. */
-constexpr int kMaxTreeDepth = 60;
 
 /** \brief One mesh's tree in the flat arrays: its nodes, root first, and the triangle numbers
     (within the mesh) in slot order. */
@@ -74,34 +71,6 @@ RC_HD bool nodeMeetsImage(const TreeNode &node, const Pose<float> &placement, co
     return true;
 }
 
-/** \brief Depth-first walk of a tree (\a numNodes nodes, root first): calls \a visit(slot) for
-    every triangle slot of every leaf whose node and ancestors all pass \a test(node); stops as soon
-    as \a visit returns false. */
-template <class NodeTest, class Visit>
-RC_HD void walkTree(const TreeNode *nodes, std::uint32_t numNodes, NodeTest &&test, Visit &&visit)
-{
-    if (numNodes == 0)
-        return;
-    std::int32_t stack[kMaxTreeDepth + 2];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0)
-    {
-        const TreeNode &node = nodes[stack[--top]];
-        if (!test(node))
-            continue;
-        if (!node.isLeaf())
-        {
-            stack[top++] = node.first + 1;
-            stack[top++] = node.first;
-            continue;
-        }
-        for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
-            if (!visit(slot))
-                return;
-    }
-}
-
 /** \brief Calls \a visit(triangle) for every triangle (number within the mesh) in a leaf whose box
     nodeMeetsImage(): a superset of the triangles triangleMeetsImage() keeps, found without
     reading the others. Leaves come in tree order. */
@@ -111,9 +80,10 @@ RC_HD void forEachTriangleNearImage(const TreeView &tree, const Pose<float> &pla
 {
     walkTree(
         tree.nodes, tree.numNodes, [&](const TreeNode &node) { return nodeMeetsImage(node, placement, grid, margin); },
-        [&](std::uint32_t slot)
+        [&](const TreeNode &leaf)
         {
-            visit(tree.triangleOrder[slot]);
+            for (std::uint32_t slot = leaf.firstSlot(); slot < leaf.firstSlot() + leaf.count; ++slot)
+                visit(tree.triangleOrder[slot]);
             return true;
         });
 }

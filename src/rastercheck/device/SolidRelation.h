@@ -11,14 +11,12 @@
 
 #include <cstdint>
 
+#include "rastercheck/device/MeshTree.h"
 #include "rastercheck/device/Separation.h"
+#include "rastercheck/device/Traversal.h"
 
 namespace rastercheck::device
 {
-/** \brief Deepest patch tree the fixed traversal stacks allow; ConvexSolids builds balanced trees
-    (median splits), far shallower for any mesh that fits in memory. */
-constexpr int kMaxPatchDepth = 40;
-
 /** \brief One of a fixed set of ray directions (k in [0, kRayDirections)) with "irrational"
     components (from sqrt 2, sqrt 3, sqrt 5 and the golden ratio), all non-zero, so that no ray runs
     parallel to the axis-aligned walls and edges real meshes are full of, and no two are related by
@@ -84,69 +82,148 @@ RC_HD int rayCrossesTriangle(const Vec3<double> &origin, const Vec3<double> &dir
     return 1;
 }
 
-/** \brief Is \a point (the solid's own frame) inside closed solid \a solid, by its patch tree? Signed
-    crossings of a ray with the patches' triangles (+1 leaving through an outward face, -1
-    entering), so that overlapping closed shells count as their union. A ray that grazes an edge,
-    a vertex or a face's plane within \a tolerance is retried along the next rayDirection();
-    \a inside is written and true returned when some ray decides, false when every one grazed. */
-RC_HD bool pointInsidePatches(const ConvexArrays &arrays, std::uint32_t solid, const Vec3<double> &point,
-                              double tolerance, bool &inside)
+/** \brief A ray of the containment test: origin + t direction, t >= 0, and the direction's
+    componentwise inverse for slab tests (every rayDirection() component is non-zero). */
+struct Ray
 {
-    const PatchNode *nodes = arrays.patchNodes + arrays.solidPatchNodes[solid];
+    Vec3<double> origin;
+    Vec3<double> direction;
+    Vec3<double> inverse;
+};
+
+/** \brief Slab test of \a ray against the axis-aligned box [lower, upper] grown by \a margin. */
+RC_HD bool rayMeetsBox(const Ray &ray, const double lower[3], const double upper[3], double margin)
+{
+    const double origin[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
+    const double inverse[3] = {ray.inverse.x, ray.inverse.y, ray.inverse.z};
+    double near = 0.0, far = 1e300;
+    for (int i = 0; i < 3; ++i)
+    {
+        const double t1 = (lower[i] - margin - origin[i]) * inverse[i];
+        const double t2 = (upper[i] + margin - origin[i]) * inverse[i];
+        near = near > (t1 < t2 ? t1 : t2) ? near : (t1 < t2 ? t1 : t2);
+        far = far < (t1 > t2 ? t1 : t2) ? far : (t1 > t2 ? t1 : t2);
+    }
+    return near <= far;
+}
+
+/** \brief The point-in-solid test, for every tree of triangles (the exact phase's, MeshBvh; the
+    proofs' patch trees): is \a point (the tree's frame) inside the closed solid? Signed crossings
+    of a ray with the triangles (+1 leaving through an outward face, -1 entering) rather than
+    parity, so that a mesh of several overlapping closed shells (a link of a cylinder and two
+    spheres) contains the point when any shell does. A ray that grazes an edge, a vertex or a
+    face's plane within \a tolerance (rayCrossesTriangle() says -1) is retried along the next
+    rayDirection().
+    When every direction grazes (a point within \a tolerance of the surface) or the walk overflows
+    its stack, the answer is inside: the safe one, since a solid found inside another is a
+    collision, so no doubt here ever makes a colliding state valid.
+    \a rayMeetsNode(node, ray) culls a node; \a leafTriangles(leaf, visit) calls
+    visit(a, b, c) for each triangle of a leaf (outward order) while visit returns true, and
+    returns false when one returned false. */
+template <class Node, class RayMeetsNode, class LeafTriangles>
+RC_HD bool pointInsideSolid(const Node *nodes, std::uint32_t numNodes, const Vec3<double> &point, double tolerance,
+                            RayMeetsNode &&rayMeetsNode, LeafTriangles &&leafTriangles)
+{
     for (int k = 0; k < kRayDirections; ++k)
     {
         const Vec3<double> direction = rayDirection(k);
-        const double inverse[3] = {1.0 / direction.x, 1.0 / direction.y, 1.0 / direction.z};
-        const double origin[3] = {point.x, point.y, point.z};
+        const Ray ray{point, direction, Vec3<double>{1.0 / direction.x, 1.0 / direction.y, 1.0 / direction.z}};
         int winding = 0;
-        bool grazed = false;
-        std::int32_t stack[kMaxPatchDepth + 2];
-        int top = 0;
-        stack[top++] = 0;
-        while (top > 0 && !grazed)
+        const WalkEnd end = walkTree(
+            nodes, numNodes, [&](const Node &node) { return rayMeetsNode(node, ray); },
+            [&](const Node &leaf)
+            {
+                return leafTriangles(
+                    leaf,
+                    [&](const Vec3<double> &a, const Vec3<double> &b, const Vec3<double> &c)
+                    {
+                        double at = 0.0;
+                        const int crossing = rayCrossesTriangle(point, direction, a, b, c, tolerance, at);
+                        if (crossing == 1)
+                            winding += dot(direction, cross(b - a, c - a)) > 0.0 ? 1 : -1;
+                        return crossing >= 0;  // a graze ends this ray
+                    });
+            });
+        if (end == WalkEnd::Finished)
+            return winding > 0;
+        if (end == WalkEnd::Overflow)
+            return true;
+    }
+    return true;
+}
+
+/** \brief Slab test of \a ray against \a node's oriented box grown by \a margin, in double (the
+    exact phase's rays), in the box's own frame. */
+RC_HD bool rayMeetsTreeNode(const Ray &ray, const TreeNode &node, double margin)
+{
+    const float *a = node.axes;  // row-major: box axis k is (a[k], a[3 + k], a[6 + k])
+    const Vec3<double> offset{ray.origin.x - node.centre[0], ray.origin.y - node.centre[1],
+                              ray.origin.z - node.centre[2]};
+    double near = 0.0, far = 1e300;
+    for (int k = 0; k < 3; ++k)
+    {
+        const Vec3<double> axis{a[k], a[3 + k], a[6 + k]};
+        const double o = dot(axis, offset), d = dot(axis, ray.direction);
+        const double extent = node.halfExtents[k] + margin;
+        if (d == 0.0)
         {
-            const PatchNode &node = nodes[stack[--top]];
-            double near = 0.0, far = 1e300;
-            for (int i = 0; i < 3; ++i)
+            if ((o < 0.0 ? -o : o) > extent)
+                return false;
+            continue;
+        }
+        const double t1 = (-extent - o) / d, t2 = (extent - o) / d;
+        near = near > (t1 < t2 ? t1 : t2) ? near : (t1 < t2 ? t1 : t2);
+        far = far < (t1 > t2 ? t1 : t2) ? far : (t1 > t2 ? t1 : t2);
+    }
+    return near <= far;
+}
+
+/** \brief Is \a point (the mesh's frame) inside the closed mesh of \a tree (pointInsideSolid():
+    every ray grazing says inside)? \a corners: the tree's triangle corners in slot order, 9
+    doubles per slot (MeshBvh::slotCorners); \a margin grows the node boxes past their float
+    storage's rounding. */
+RC_HD bool pointInsideTree(const TreeView &tree, const double *corners, const Vec3<double> &point, double tolerance,
+                           double margin)
+{
+    return pointInsideSolid(
+        tree.nodes, tree.numNodes, point, tolerance,
+        [&](const TreeNode &node, const Ray &ray) { return rayMeetsTreeNode(ray, node, margin); },
+        [&](const TreeNode &leaf, auto &&visit)
+        {
+            for (std::uint32_t slot = leaf.firstSlot(); slot < leaf.firstSlot() + leaf.count; ++slot)
             {
-                const double t1 = (node.min[i] - tolerance - origin[i]) * inverse[i];
-                const double t2 = (node.max[i] + tolerance - origin[i]) * inverse[i];
-                near = near > (t1 < t2 ? t1 : t2) ? near : (t1 < t2 ? t1 : t2);
-                far = far < (t1 > t2 ? t1 : t2) ? far : (t1 > t2 ? t1 : t2);
+                const double *c = corners + 9 * static_cast<std::size_t>(slot);
+                if (!visit(Vec3<double>{c[0], c[1], c[2]}, Vec3<double>{c[3], c[4], c[5]},
+                           Vec3<double>{c[6], c[7], c[8]}))
+                    return false;
             }
-            if (near > far)
-                continue;
-            if (node.first > 0)
-            {
-                stack[top++] = node.first + 1;
-                stack[top++] = node.first;
-                continue;
-            }
-            const ConvexPiece &patch = arrays.patchPieces[-(node.first + 1)];
+            return true;
+        });
+}
+
+/** \brief Is \a point (the solid's own frame) inside closed solid \a solid, by its patch tree
+    (pointInsideSolid(): every ray grazing says inside)? */
+RC_HD bool pointInsidePatches(const ConvexArrays &arrays, std::uint32_t solid, const Vec3<double> &point,
+                              double tolerance)
+{
+    const PatchNode *nodes = arrays.patchNodes + arrays.solidPatchNodes[solid];
+    const std::uint32_t numNodes = arrays.solidPatchNodes[solid + 1] - arrays.solidPatchNodes[solid];
+    return pointInsideSolid(
+        nodes, numNodes, point, tolerance,
+        [&](const PatchNode &node, const Ray &ray) { return rayMeetsBox(ray, node.min, node.max, tolerance); },
+        [&](const PatchNode &leaf, auto &&visit)
+        {
+            const ConvexPiece &patch = arrays.patchPieces[-(leaf.first + 1)];
             const double *vertices = arrays.vertices + 3 * static_cast<std::size_t>(patch.firstVertex);
             const std::uint32_t *triangles = arrays.patchTriangles + 3 * static_cast<std::size_t>(patch.firstTriangle);
             const auto corner = [&](std::uint32_t v) {
                 return Vec3<double>{vertices[3 * v], vertices[3 * v + 1], vertices[3 * v + 2]};
             };
-            for (std::uint32_t t = 0; t < patch.numTriangles && !grazed; ++t)
-            {
-                const Vec3<double> a = corner(triangles[3 * t]), b = corner(triangles[3 * t + 1]),
-                                   c = corner(triangles[3 * t + 2]);
-                double at = 0.0;
-                const int crossing = rayCrossesTriangle(point, direction, a, b, c, tolerance, at);
-                if (crossing < 0)
-                    grazed = true;
-                else if (crossing == 1)
-                    winding += dot(direction, cross(b - a, c - a)) > 0.0 ? 1 : -1;
-            }
-        }
-        if (!grazed)
-        {
-            inside = winding > 0;
+            for (std::uint32_t t = 0; t < patch.numTriangles; ++t)
+                if (!visit(corner(triangles[3 * t]), corner(triangles[3 * t + 1]), corner(triangles[3 * t + 2])))
+                    return false;
             return true;
-        }
-    }
-    return false;
+        });
 }
 
 /** \brief The box of \a piece (placed by \a pose) in the frame of \a frame, from the hull points'
@@ -225,32 +302,27 @@ RC_HD bool patchesApart(const ConvexArrays &arrays, std::uint32_t solid, const P
         return false;
     };
     const PatchNode *nodes = arrays.patchNodes + arrays.solidPatchNodes[solid];
-    std::int32_t stack[kMaxPatchDepth + 2];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0)
-    {
-        const PatchNode &node = nodes[stack[--top]];
-        if (node.min[0] > upper[0] || node.min[1] > upper[1] || node.min[2] > upper[2] || node.max[0] < lower[0] ||
-            node.max[1] < lower[1] || node.max[2] < lower[2] || beyondAPlane(node))
-            continue;
-        if (node.first > 0)
+    const std::uint32_t numNodes = arrays.solidPatchNodes[solid + 1] - arrays.solidPatchNodes[solid];
+    const WalkEnd end = walkTree(
+        nodes, numNodes,
+        [&](const PatchNode &node)
         {
-            stack[top++] = node.first + 1;
-            stack[top++] = node.first;
-            continue;
-        }
-        const ConvexProxy patch = convexProxy(arrays, arrays.patchPieces[-(node.first + 1)]);
-        const HullRelation relation = relateHulls(piece, pose, patch, solidPose, padding, proveOverlap);
-        if (relation == HullRelation::Overlapping)
+            return !(node.min[0] > upper[0] || node.min[1] > upper[1] || node.min[2] > upper[2] ||
+                     node.max[0] < lower[0] || node.max[1] < lower[1] || node.max[2] < lower[2] ||
+                     beyondAPlane(node));
+        },
+        [&](const PatchNode &leaf)
         {
-            overlapping = true;
-            return false;
-        }
-        if (relation == HullRelation::Unknown && !onUnknown(patch))
-            return false;
-    }
-    return true;
+            const ConvexProxy patch = convexProxy(arrays, arrays.patchPieces[-(leaf.first + 1)]);
+            const HullRelation relation = relateHulls(piece, pose, patch, solidPose, padding, proveOverlap);
+            if (relation == HullRelation::Overlapping)
+            {
+                overlapping = true;
+                return false;
+            }
+            return relation != HullRelation::Unknown || onUnknown(patch);
+        });
+    return end == WalkEnd::Finished;  // an overflow proves nothing
 }
 
 RC_HD bool hasPatches(const ConvexArrays &arrays, std::uint32_t solid)
@@ -314,17 +386,14 @@ RC_HD HullRelation relatePatches(const ConvexArrays &arrays, std::uint32_t a, co
     const auto buried =
         [&](const ConvexProxy &inner, const Pose<double> &innerPose, std::uint32_t outer, const Pose<double> &outerPose)
     {
-        // Unknown when no vertex is known to be on the surface, or every ray grazed.
-        bool inside = true;
-        if (inner.surfaceVertices)
-        {
-            const Vec3<double> x = surfacePoint(inner, innerPose);
-            if (pointInsidePatches(arrays, outer, inverseRotate(outerPose, x - translationOf(outerPose)), tolerance,
-                                   inside) &&
-                !inside)
-                return HullRelation::Apart;
-        }
-        return inside && proveOverlap ? HullRelation::Overlapping : HullRelation::Unknown;
+        // A solid without a vertex known to be on its surface, like a point whose every ray grazed,
+        // counts as inside: the safe answer.
+        if (!inner.surfaceVertices)
+            return proveOverlap ? HullRelation::Overlapping : HullRelation::Unknown;
+        const Vec3<double> x = surfacePoint(inner, innerPose);
+        if (!pointInsidePatches(arrays, outer, inverseRotate(outerPose, x - translationOf(outerPose)), tolerance))
+            return HullRelation::Apart;
+        return proveOverlap ? HullRelation::Overlapping : HullRelation::Unknown;
     };
     if (closedB)
     {

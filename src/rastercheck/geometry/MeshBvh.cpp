@@ -18,15 +18,7 @@ namespace rastercheck
 namespace
 {
 using Vec = Eigen::Vector3d;
-
-// A simultaneous traversal pushes two pairs per level descended in either tree, popping one, so
-// it never holds more than depthA + depthB + 1 pairs.
-constexpr int kPairStackSize = 2 * MeshBvh::kMaxDepth + 2;
-
-struct NodePair
-{
-    std::int32_t a, b;
-};
+using CornersMap = Eigen::Map<const Vec>;
 
 // Separating-axis test (Gottschalk's 15 axes) of a fixed-tree node's box against a moving-tree
 // node's box placed in the fixed frame (its axes the columns of P, its centre at `between` from the
@@ -78,29 +70,6 @@ bool boxesMayMeet(const MeshBvh::Node &nf, const Eigen::Matrix3d &P, const MeshB
     return true;
 }
 
-// Slab test of the ray origin + t * direction, t >= 0, against a node's box grown by margin, in
-// the box's own frame.
-bool rayHitsNode(const Vec &origin, const Vec &direction, const MeshBvh::Node &node, double margin)
-{
-    const Eigen::Matrix3d axes = nodeAxes(node);
-    const Vec o = axes.transpose() * (origin - nodeCentre(node)), d = axes.transpose() * direction;
-    double near = 0.0, far = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < 3; ++k)
-    {
-        const double extent = node.halfExtents[k] + margin;
-        if (d[k] == 0.0)
-        {
-            if (std::abs(o[k]) > extent)
-                return false;
-            continue;
-        }
-        const double t1 = (-extent - o[k]) / d[k], t2 = (extent - o[k]) / d[k];
-        near = std::max(near, std::min(t1, t2));
-        far = std::min(far, std::max(t1, t2));
-    }
-    return near <= far;
-}
-
 // What the float storage of the nodes may be off by, as a fraction of the coordinates'
 // magnitude: their axes depart from orthonormal by a few float ulps (about 1e-7), so a corner may
 // sit that fraction of the node's size outside its stored box. Ten times that is the slack every
@@ -121,31 +90,13 @@ float roundedUp(double x)
     return f;
 }
 
-// Generalised winding number (sum of signed solid angles, Van Oosterom and Strackee), the
-// fallback when every ray grazes. About 1 inside an outward-oriented closed mesh, 0 outside.
-double windingNumber(const MeshBvh &bvh, const Vec &point)
-{
-    double total = 0.0;
-    for (std::uint32_t slot = 0; slot < bvh.mesh().triangles.size(); ++slot)
-    {
-        const std::array<Vec, 3> &t = bvh.slotTriangle(slot);
-        const Vec a = t[0] - point, b = t[1] - point, c = t[2] - point;
-        const double la = a.norm(), lb = b.norm(), lc = c.norm();
-        const double numerator = a.dot(b.cross(c));
-        const double denominator = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-        total += 2.0 * std::atan2(numerator, denominator);
-    }
-    return total / (4.0 * M_PI);
-}
-
 // A magnitude of a tree's coordinates: its root's radius plus its distance from the origin.
 double treeScale(const MeshBvh &bvh)
 {
     const MeshBvh::Node &root = bvh.nodes()[0];
     return root.radius + nodeCentre(root).norm();
 }
-// pointInsideClosedMesh() without the inside grid: rays through the tree, the winding number when
-// every ray grazes.
+// pointInsideClosedMesh() without the inside grid: device::pointInsideTree.
 bool insideByRays(const MeshBvh &bvh, const Vec &point)
 {
     if (bvh.empty())
@@ -157,37 +108,8 @@ bool insideByRays(const MeshBvh &bvh, const Vec &point)
     const double margin = tolerance + kNodeRounding * (treeScale(bvh) + point.norm());
     if (!nodeContains(root, point, margin))
         return false;
-
-    for (int k = 0; k < device::kRayDirections; ++k)
-    {
-        const device::Vec3<double> d = device::rayDirection(k);
-        const Vec direction(d.x, d.y, d.z);
-        // Signed crossings (+1 leaving through an outward face, -1 entering) rather than parity: a
-        // mesh of several overlapping closed shells (a link of a cylinder and two spheres) contains
-        // the point when any shell does, which parity gets wrong inside an overlap.
-        int winding = 0;
-        bool grazed = false;
-        device::walkTree(
-            bvh.nodes(), static_cast<std::uint32_t>(bvh.numNodes()),
-            [&](const MeshBvh::Node &node) { return rayHitsNode(point, direction, node, margin); },
-            [&](std::uint32_t slot)
-            {
-                const std::array<Vec, 3> &t = bvh.slotTriangle(slot);
-                double hitAt = 0.0;
-                const int crossing = rayTriangle(point, direction, t[0], t[1], t[2], tolerance, hitAt);
-                if (crossing < 0)
-                {
-                    grazed = true;
-                    return false;
-                }
-                if (crossing == 1)
-                    winding += direction.dot((t[1] - t[0]).cross(t[2] - t[0])) > 0 ? 1 : -1;
-                return true;
-            });
-        if (!grazed)
-            return winding > 0;
-    }
-    return windingNumber(bvh, point) > 0.5;
+    return device::pointInsideTree(bvh.view(), bvh.slotCorners(0), {point.x(), point.y(), point.z()}, tolerance,
+                                   margin);
 }
 }  // namespace
 
@@ -215,18 +137,22 @@ bool nodeContains(const MeshBvh::Node &node, const Eigen::Vector3d &p, double ma
     return (local.array().abs() <= nodeExtents(node).array() + margin).all();
 }
 
-void MeshBvh::useSharedArrays(const Node *nodes, const std::uint32_t *triangleOrder)
+void MeshBvh::useSharedArrays(const Arrays &arrays)
 {
-    nodes_ = nodes;
-    triangleOrder_ = triangleOrder;
+    nodes_ = arrays.nodes;
+    triangleOrder_ = arrays.triangleOrder;
+    corners_ = arrays.corners;
+    gridCells_ = arrays.gridCells;
     ownNodes_ = {};
     ownTriangleOrder_ = {};
+    ownCorners_ = {};
+    ownGridCells_ = {};
 }
 
 std::size_t MeshBvh::bytes() const
 {
     return numNodes_ * sizeof(Node) + mesh_->triangles.size() * sizeof(std::uint32_t) +
-           corners_.size() * sizeof(corners_[0]) + gridCells_.size();
+           9 * mesh_->triangles.size() * sizeof(double) + numGridCells_;
 }
 
 MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) : mesh_(&mesh)
@@ -262,16 +188,16 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
     // the six axis directions (spread out, so that some lie far from wherever the other mesh is near).
     std::size_t shells = 0;
     const std::vector<std::uint32_t> shellOf = triangleShells(mesh, shells);
-    shellProbes_.assign(shells, {});
+    constexpr std::uint32_t kNone = ~0u;
+    std::vector<std::uint32_t> firstVertex(shells, kNone);
     std::vector<std::array<std::uint32_t, 6>> extremes(shells);
     for (std::size_t i = 0; i < n; ++i)
         for (std::uint32_t v : mesh.triangles[i])
         {
-            std::vector<std::uint32_t> &probes = shellProbes_[shellOf[i]];
             std::array<std::uint32_t, 6> &extreme = extremes[shellOf[i]];
-            if (probes.empty())
+            if (firstVertex[shellOf[i]] == kNone)
             {
-                probes.push_back(v);
+                firstVertex[shellOf[i]] = v;
                 extreme.fill(v);
             }
             for (int k = 0; k < 3; ++k)
@@ -283,15 +209,24 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
             }
         }
     for (std::size_t shell = 0; shell < shells; ++shell)
+    {
+        const std::size_t begin = shellProbes_.size();
+        shellProbes_.push_back(firstVertex[shell]);
         for (std::uint32_t v : extremes[shell])
-            if (std::find(shellProbes_[shell].begin(), shellProbes_[shell].end(), v) == shellProbes_[shell].end())
-                shellProbes_[shell].push_back(v);
-    corners_.resize(n);
+            if (std::find(shellProbes_.begin() + static_cast<std::ptrdiff_t>(begin), shellProbes_.end(), v) ==
+                shellProbes_.end())
+                shellProbes_.push_back(v);
+        shellProbeStart_.push_back(static_cast<std::uint32_t>(shellProbes_.size()));
+    }
+    ownCorners_.resize(9 * n);
     for (std::size_t slot = 0; slot < n; ++slot)
     {
         const Mesh::Triangle &t = mesh.triangles[ownTriangleOrder_[slot]];
-        corners_[slot] = {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
+        for (int k = 0; k < 3; ++k)
+            std::copy(mesh.vertices[t[k]].data(), mesh.vertices[t[k]].data() + 3,
+                      ownCorners_.data() + 9 * slot + 3 * k);
     }
+    corners_ = ownCorners_.data();
     if (insideGrid)
         buildInsideGrid();
 }
@@ -301,15 +236,15 @@ void MeshBvh::buildInsideGrid()
     // About 64 cells per triangle, at least 16^3 and at most 2^21 (2 MB). With the shells' probes
     // (solidsOverlap) it took the rays cast on OMPL.app's Abstract (closed, 700 triangles) from 0.9
     // to below 0.001 per uniform state and from 1.0 to 0.002 per near-contact state.
-    const std::size_t n = corners_.size();
+    const std::size_t n = mesh_->triangles.size();
     const std::size_t wanted = std::clamp<std::size_t>(64 * n, 4096, std::size_t(1) << 21);
     Vec lower = Vec::Constant(std::numeric_limits<double>::infinity()), upper = -lower;
-    for (const std::array<Vec, 3> &t : corners_)
-        for (const Vec &p : t)
-        {
-            lower = lower.cwiseMin(p);
-            upper = upper.cwiseMax(p);
-        }
+    for (std::size_t i = 0; i < 3 * n; ++i)
+    {
+        const CornersMap p(corners_ + 3 * i);
+        lower = lower.cwiseMin(p);
+        upper = upper.cwiseMax(p);
+    }
     // Far above the rounding of a cell index or a plane distance (1e-16 of the coordinates), far
     // below any feature: a cell this close to a triangle is left to the ray.
     const double margin = kNodeRounding * (treeScale(*this) + std::max(lower.norm(), upper.norm()));
@@ -336,8 +271,11 @@ void MeshBvh::buildInsideGrid()
     // A cell is touched when a triangle's bounds, grown by the margin, meet it and the triangle's
     // plane passes within the margin of the cell's bounding sphere.
     const double halfDiagonal = 0.5 * cellSize.norm();
-    for (const std::array<Vec, 3> &t : corners_)
+    for (std::size_t slot = 0; slot < n; ++slot)
     {
+        const Vec t[3] = {CornersMap(slotCorners(static_cast<std::uint32_t>(slot))),
+                          CornersMap(slotCorners(static_cast<std::uint32_t>(slot)) + 3),
+                          CornersMap(slotCorners(static_cast<std::uint32_t>(slot)) + 6)};
         const Vec lo = t[0].cwiseMin(t[1]).cwiseMin(t[2]).array() - margin;
         const Vec hi = t[0].cwiseMax(t[1]).cwiseMax(t[2]).array() + margin;
         int first[3], last[3];
@@ -362,17 +300,17 @@ void MeshBvh::buildInsideGrid()
     // Face-adjacent untouched cells share a region: the segment between their centres stays in
     // their union, which no triangle meets. One ray per region, from a cell centre far from the
     // surface, classifies the whole region.
-    gridCells_.assign(touched.size(), 0);
+    ownGridCells_.assign(touched.size(), 0);
     std::vector<std::uint32_t> queue;
     for (std::size_t seed = 0; seed < touched.size(); ++seed)
     {
-        if (touched[seed] || gridCells_[seed])
+        if (touched[seed] || ownGridCells_[seed])
             continue;
         const int si = static_cast<int>(seed % nx), sj = static_cast<int>(seed / nx % ny),
                   sk = static_cast<int>(seed / nx / ny);
         const Vec centre = lower + cellSize.cwiseProduct(Vec(si + 0.5, sj + 0.5, sk + 0.5));
         const std::uint8_t answer = insideByRays(*this, centre) ? 2 : 1;
-        gridCells_[seed] = answer;
+        ownGridCells_[seed] = answer;
         queue.assign(1, static_cast<std::uint32_t>(seed));
         while (!queue.empty())
         {
@@ -387,18 +325,20 @@ void MeshBvh::buildInsideGrid()
                 if (m[0] < 0 || m[1] < 0 || m[2] < 0 || m[0] >= nx || m[1] >= ny || m[2] >= nz)
                     continue;
                 const std::size_t next = index(m[0], m[1], m[2]);
-                if (touched[next] || gridCells_[next])
+                if (touched[next] || ownGridCells_[next])
                     continue;
-                gridCells_[next] = answer;
+                ownGridCells_[next] = answer;
                 queue.push_back(static_cast<std::uint32_t>(next));
             }
         }
     }
+    gridCells_ = ownGridCells_.data();
+    numGridCells_ = ownGridCells_.size();
 }
 
 int MeshBvh::insideGridAnswer(const Eigen::Vector3d &point) const
 {
-    if (gridCells_.empty())
+    if (numGridCells_ == 0)
         return 0;
     int cell[3];
     for (int k = 0; k < 3; ++k)
@@ -581,193 +521,194 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
 
 namespace
 {
-// A node of the moving tree placed in the fixed tree's frame: done once per node and query, where a
-// node pair's test would otherwise redo it for every node of the other tree it meets.
-struct PlacedNode
-{
-    Eigen::Matrix3d axes;
-    Vec centre;
-};
+using PlacedNode = ExactWorkspace::PlacedNode;
+using LeafHint = ExactWorkspace::LeafHint;
 
-// Per-thread scratch for the placed nodes, stamped by query so that nothing is cleared between
-// queries. Trees above kMaxPlacedNodes are placed per visit instead (the cache would take 100
-// bytes per node per thread).
-constexpr std::size_t kMaxPlacedNodes = std::size_t(1) << 17;
-struct PlacedCache
+LeafHint &leafHint(ExactWorkspace &workspace, const MeshBvh &fixed, const MeshBvh &moving)
 {
-    std::vector<PlacedNode> nodes;
-    std::vector<std::uint32_t> stamps;
-    std::uint32_t query = 0;
-};
-
-// Per thread, for the last queries of each pair of trees: the leaf pair (triangle slots) where the
-// last query found its contact or, when it found none, the leaf pair whose bounding spheres came
-// nearest. The next query of the pair tests that triangle pair before traversing: nearby states
-// (the next state along a motion, the other end of a bisection step) often touch there first
-// (OMPL.app near-contact states, A/B in one build: safe / FCL Easy 2.7 -> 3.2, Twistycool 2.0-2.9
-// -> 3.2-3.4, alpha-1.5 2.6-3.3 -> 3.0-3.5; uniform states unchanged within the noise).
-// It only reorders work: a hit is a real contact of those two triangles, a miss goes on to the
-// traversal, so no verdict depends on it. Keyed by the trees' addresses; a stale entry (a tree
-// freed and another built at its address) names slots that are checked against the tree's size.
-struct LeafHint
-{
-    const MeshBvh *fixed = nullptr;
-    const MeshBvh *moving = nullptr;
-    std::uint32_t slotFixed = 0, slotMoving = 0;
-};
-constexpr std::size_t kLeafHints = 64;
-
-LeafHint &leafHint(const MeshBvh &fixed, const MeshBvh &moving)
-{
-    thread_local std::array<LeafHint, kLeafHints> hints;
     const auto key = reinterpret_cast<std::uintptr_t>(&fixed) * 0x9E3779B97F4A7C15ull ^
                      reinterpret_cast<std::uintptr_t>(&moving) * 0xC2B2AE3D27D4EB4Full;
-    return hints[(key >> 32) % kLeafHints];
+    return workspace.hints[(key >> 32) % ExactWorkspace::kLeafHints];
 }
 
-// Do the triangles in slots sf (fixed tree, working frame) and sm (moving tree, placed by R, T)
-// come within padding? In the order (a, b) of the caller: `movingIsA` says which is A.
-bool leafPairMeets(const MeshBvh &fixed, std::uint32_t sf, const MeshBvh &moving, std::uint32_t sm,
-                   const Eigen::Matrix3d &R, const Vec &T, bool movingIsA, double padding, Vec *point)
+// The exact phase's query for device::walkPairs, with `fixed`'s frame as the working frame and
+// `moving` placed there by R, T: bounding spheres, then boxesMayMeet(), both grown by `reach`;
+// leaf pairs by the triangle tests, in the order (a, b) of the caller (`movingIsA` says which tree
+// is A). Stops at the first contact.
+struct ExactQuery
 {
-    const std::array<Vec, 3> &tm = moving.slotTriangle(sm);
-    const std::array<Vec, 3> placedTriangle = {R * tm[0] + T, R * tm[1] + T, R * tm[2] + T};
-    const std::array<Vec, 3> &tf = fixed.slotTriangle(sf);
-    const std::array<Vec, 3> &ta = movingIsA ? placedTriangle : tf, &tb = movingIsA ? tf : placedTriangle;
-    return padding > 0.0 ? trianglesWithin(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], padding, point)
-                         : trianglesIntersect(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], point);
-}
-
-// The traversal with `fixed`'s frame as the working frame and `moving` placed there by fMm.
-// Leaf pairs are tested with the triangles in the order (a, b) of the caller: `movingIsA` says
-// which tree is A.
-bool traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry3d &fMm, bool movingIsA, double padding,
-              double reach, bool useHint, Vec *point, std::uint32_t *slotFixed, std::uint32_t *slotMoving)
-{
-    const Eigen::Matrix3d R = fMm.linear();
-    const Vec T = fMm.translation();
-    const MeshBvh::Node *nodesF = fixed.nodes(), *nodesM = moving.nodes();
-    thread_local PlacedCache cache;
-    const bool cached = moving.numNodes() <= kMaxPlacedNodes;
-    if (cached)
-    {
-        if (cache.stamps.size() < moving.numNodes())
-        {
-            cache.nodes.resize(moving.numNodes());
-            cache.stamps.resize(moving.numNodes(), 0);
-        }
-        if (++cache.query == 0)  // the stamps wrapped: forget them all
-        {
-            std::fill(cache.stamps.begin(), cache.stamps.end(), 0);
-            cache.query = 1;
-        }
-    }
-    LeafHint &hint = leafHint(fixed, moving);
-    if (useHint && hint.fixed == &fixed && hint.moving == &moving && hint.slotFixed < fixed.mesh().triangles.size() &&
-        hint.slotMoving < moving.mesh().triangles.size() &&
-        leafPairMeets(fixed, hint.slotFixed, moving, hint.slotMoving, R, T, movingIsA, padding, point))
-    {
-        *slotFixed = hint.slotFixed;
-        *slotMoving = hint.slotMoving;
-        return true;
-    }
+    const MeshBvh &fixed, &moving;
+    const MeshBvh::Node *nodesF, *nodesM;
+    Eigen::Matrix3d R;
+    Vec T;
+    bool movingIsA;
+    double padding, reach;
+    ExactWorkspace *workspace;  // null: nodes placed per visit, no hint
+    bool cached;                // the moving tree's placed nodes are kept in the workspace
+    LeafHint *hint;
+    Vec *point;  // receives the contact's point (working frame)
+    PlacedNode scratch{};
+    Vec between = Vec::Zero();  // of the pair last tested: the moving node's centre less the fixed one's
     double nearestGap = std::numeric_limits<double>::infinity();
-    const auto remember = [&](std::uint32_t sf, std::uint32_t sm)
+    std::uint32_t slotFixed = 0, slotMoving = 0;
+
+    const PlacedNode &placed(std::int32_t index)
     {
-        hint.fixed = &fixed;
-        hint.moving = &moving;
-        hint.slotFixed = sf;
-        hint.slotMoving = sm;
-    };
-    PlacedNode scratch;
-    const auto placed = [&](std::int32_t index) -> const PlacedNode &
-    {
-        PlacedNode &slot = cached ? cache.nodes[index] : scratch;
-        if (!cached || cache.stamps[index] != cache.query)
+        PlacedNode &slot = cached ? workspace->placed[index] : scratch;
+        if (!cached || workspace->stamps[index] != workspace->query)
         {
             slot.axes = R * nodeAxes(nodesM[index]);
             slot.centre = R * nodeCentre(nodesM[index]) + T;
             if (cached)
-                cache.stamps[index] = cache.query;
+                workspace->stamps[index] = workspace->query;
         }
         return slot;
-    };
+    }
 
-    NodePair stack[kPairStackSize];  // {fixed, moving}
-    int top = 0;
-    stack[top++] = {0, 0};
-    while (top > 0)
+    // The moving tree's triangle in slot sm, placed in the working frame.
+    void place(std::uint32_t sm, Vec placedTriangle[3]) const
     {
-        const NodePair pair = stack[--top];
+        const double *cm = moving.slotCorners(sm);
+        for (int k = 0; k < 3; ++k)
+            placedTriangle[k] = R * CornersMap(cm + 3 * k) + T;
+    }
+
+    bool triangles(std::uint32_t sf, const Vec placedTriangle[3])
+    {
+        const double *cf = fixed.slotCorners(sf);
+        const Vec fixedTriangle[3] = {CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6)};
+        const Vec *ta = movingIsA ? placedTriangle : fixedTriangle, *tb = movingIsA ? fixedTriangle : placedTriangle;
+        return padding > 0.0 ? trianglesWithin(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], padding, point)
+                             : trianglesIntersect(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], point);
+    }
+
+    void remember(std::uint32_t sf, std::uint32_t sm)
+    {
+        if (!hint)
+            return;
+        hint->fixed = &fixed;
+        hint->moving = &moving;
+        hint->slotFixed = sf;
+        hint->slotMoving = sm;
+    }
+
+    bool test(device::NodePair pair)
+    {
         const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
         const PlacedNode &pm = placed(pair.b);
         // Bounding spheres first: they settle most pairs that are far apart for one dot product.
-        const Vec between = pm.centre - nodeCentre(nf);
+        between = pm.centre - nodeCentre(nf);
         const double spheres = static_cast<double>(nf.radius) + nm.radius + reach;
         if (between.squaredNorm() > spheres * spheres)
-            continue;
-        if (!boxesMayMeet(nf, pm.axes, nm, between, reach))
-            continue;
-        if (nf.isLeaf() && nm.isLeaf())
+            return false;
+        return boxesMayMeet(nf, pm.axes, nm, between, reach);
+    }
+
+    bool leaves(device::NodePair pair)
+    {
+        const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
+        Vec placedTriangle[3];
+        for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
         {
-            for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
-            {
-                const std::array<Vec, 3> &tm = moving.slotTriangle(sm);
-                const std::array<Vec, 3> placedTriangle = {R * tm[0] + T, R * tm[1] + T, R * tm[2] + T};
-                for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
+            place(sm, placedTriangle);
+            for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
+                if (triangles(sf, placedTriangle))
                 {
-                    const std::array<Vec, 3> &tf = fixed.slotTriangle(sf);
-                    const std::array<Vec, 3> &ta = movingIsA ? placedTriangle : tf,
-                                             &tb = movingIsA ? tf : placedTriangle;
-                    const bool hit = padding > 0.0
-                                         ? trianglesWithin(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], padding, point)
-                                         : trianglesIntersect(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], point);
-                    if (hit)
-                    {
-                        remember(sf, sm);
-                        *slotFixed = sf;
-                        *slotMoving = sm;
-                        return true;
-                    }
+                    remember(sf, sm);
+                    slotFixed = sf;
+                    slotMoving = sm;
+                    return false;
                 }
-            }
-            const double gap = std::sqrt(between.squaredNorm()) - (static_cast<double>(nf.radius) + nm.radius);
-            if (gap < nearestGap)
-            {
-                nearestGap = gap;
-                remember(nf.firstSlot(), nm.firstSlot());
-            }
-            continue;
         }
-        // Descend into the bigger node, so both trees shrink at a similar pace.
-        const bool splitFixed = nm.isLeaf() || (!nf.isLeaf() && nf.radius >= nm.radius);
-        // The child nearer the other node is popped first: in a colliding state the contact is
-        // more likely there, and the traversal stops at the first one.
-        if (splitFixed)
+        const double gap = std::sqrt(between.squaredNorm()) - (static_cast<double>(nf.radius) + nm.radius);
+        if (gap < nearestGap)
         {
-            const std::int32_t c = nf.first;
-            const bool secondNearer = (nodeCentre(nodesF[c + 1]) - pm.centre).squaredNorm() <
-                                      (nodeCentre(nodesF[c]) - pm.centre).squaredNorm();
-            stack[top++] = {secondNearer ? c : c + 1, pair.b};
-            stack[top++] = {secondNearer ? c + 1 : c, pair.b};
+            nearestGap = gap;
+            remember(nf.firstSlot(), nm.firstSlot());
         }
-        else
+        return true;
+    }
+
+    // Descend into the bigger node, so both trees shrink at a similar pace.
+    bool splitA(device::NodePair pair) const { return nodesF[pair.a].radius >= nodesM[pair.b].radius; }
+
+    // The child nearer the other node first: in a colliding state the contact is more likely
+    // there, and the walk stops at the first one.
+    bool secondFirst(device::NodePair first, device::NodePair second)
+    {
+        if (first.a != second.a)
         {
-            const std::int32_t c = nm.first;
-            // One at a time: placed() may hand back the same scratch node for both.
-            const Vec fixedCentre = nodeCentre(nf);
-            const double second = (placed(c + 1).centre - fixedCentre).squaredNorm();
-            const bool secondNearer = second < (placed(c).centre - fixedCentre).squaredNorm();
-            stack[top++] = {pair.a, secondNearer ? c : c + 1};
-            stack[top++] = {pair.a, secondNearer ? c + 1 : c};
+            const Vec centre = placed(first.b).centre;
+            return (nodeCentre(nodesF[second.a]) - centre).squaredNorm() <
+                   (nodeCentre(nodesF[first.a]) - centre).squaredNorm();
+        }
+        // One at a time: placed() may hand back the same scratch node for both.
+        const Vec fixedCentre = nodeCentre(nodesF[first.a]);
+        const double toSecond = (placed(second.b).centre - fixedCentre).squaredNorm();
+        return toSecond < (placed(first.b).centre - fixedCentre).squaredNorm();
+    }
+};
+
+// The query's outcome: no contact, a contact (slots set), or a walk its stack could not hold.
+enum class Traversal
+{
+    Apart,
+    Contact,
+    Overflow
+};
+
+Traversal traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry3d &fMm, bool movingIsA,
+                   double padding, double reach, bool useHint, ExactWorkspace *workspace, Vec *point,
+                   std::uint32_t *slotFixed, std::uint32_t *slotMoving)
+{
+    const bool cached = workspace && moving.numNodes() <= ExactWorkspace::kMaxPlacedNodes;
+    if (cached)
+    {
+        if (workspace->stamps.size() < moving.numNodes())
+        {
+            workspace->placed.resize(moving.numNodes());
+            workspace->stamps.resize(moving.numNodes(), 0);
+        }
+        if (++workspace->query == 0)  // the stamps wrapped: forget them all
+        {
+            std::fill(workspace->stamps.begin(), workspace->stamps.end(), 0);
+            workspace->query = 1;
         }
     }
-    return false;
+    ExactQuery query{fixed,
+                     moving,
+                     fixed.nodes(),
+                     moving.nodes(),
+                     fMm.linear(),
+                     fMm.translation(),
+                     movingIsA,
+                     padding,
+                     reach,
+                     workspace,
+                     cached,
+                     workspace ? &leafHint(*workspace, fixed, moving) : nullptr,
+                     point};
+    const LeafHint *hint = query.hint;
+    Vec placedTriangle[3];
+    if (useHint && hint && hint->fixed == &fixed && hint->moving == &moving &&
+        hint->slotFixed < fixed.mesh().triangles.size() && hint->slotMoving < moving.mesh().triangles.size() &&
+        (query.place(hint->slotMoving, placedTriangle), query.triangles(hint->slotFixed, placedTriangle)))
+    {
+        *slotFixed = hint->slotFixed;
+        *slotMoving = hint->slotMoving;
+        return Traversal::Contact;
+    }
+    const device::WalkEnd end = device::walkPairs(fixed.nodes(), moving.nodes(), query);
+    if (end == device::WalkEnd::Finished)
+        return Traversal::Apart;
+    *slotFixed = query.slotFixed;
+    *slotMoving = query.slotMoving;
+    return end == device::WalkEnd::Stopped ? Traversal::Contact : Traversal::Overflow;
 }
 }  // namespace
 
 bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
-                    double padding, MeshContact *contact)
+                    double padding, MeshContact *contact, ExactWorkspace *workspace)
 {
     if (a.empty() || b.empty())
         return false;
@@ -784,12 +725,20 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
     const double reach = padding + kNodeRounding * (fMm.translation().norm() + treeScale(a) + treeScale(b));
     Vec point;
     std::uint32_t slotFixed = 0, slotMoving = 0;
-    // A caller that asks for the contact gets the traversal's own first one, independent of what
-    // this thread asked before (the backends promise the same first contacts); the others may
-    // start from the remembered leaf pair.
-    if (!traverse(fixed, moving, fMm, movingIsA, padding, reach, contact == nullptr, &point, &slotFixed, &slotMoving))
+    // A caller that asks for the contact gets the walk's own first one, independent of what this
+    // workspace asked before (the backends promise the same first contacts); the others may start
+    // from the remembered leaf pair.
+    const Traversal outcome = traverse(fixed, moving, fMm, movingIsA, padding, reach, contact == nullptr, workspace,
+                                       &point, &slotFixed, &slotMoving);
+    if (outcome == Traversal::Apart)
         return false;
-    if (contact)
+    if (contact && outcome == Traversal::Overflow)  // the safe answer, with no triangle to name
+    {
+        contact->position = fixedPose * nodeCentre(fixed.nodes()[0]);
+        contact->triangleA = -1;
+        contact->triangleB = -1;
+    }
+    else if (contact)
     {
         contact->position = fixedPose * point;
         const std::int32_t triangleFixed = static_cast<std::int32_t>(fixed.triangleOrder()[slotFixed]);
@@ -807,9 +756,10 @@ bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
 }
 
 bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closedA, const MeshBvh &b,
-                   const Eigen::Isometry3d &poseB, bool closedB, double padding, MeshContact *contact)
+                   const Eigen::Isometry3d &poseB, bool closedB, double padding, MeshContact *contact,
+                   ExactWorkspace *workspace)
 {
-    if (surfacesWithin(a, poseA, b, poseB, padding, contact))
+    if (surfacesWithin(a, poseA, b, poseB, padding, contact, workspace))
         return true;
     if (a.empty() || b.empty())
         return false;
@@ -821,19 +771,20 @@ bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closed
                                        const Eigen::Isometry3d &outerPose)
     {
         const Eigen::Isometry3d innerToOuter = outerPose.inverse(Eigen::Isometry) * innerPose;
-        for (const std::vector<std::uint32_t> &probes : inner.shellProbes())
+        const std::uint32_t *probes = inner.shellProbes(), *start = inner.shellProbeStart();
+        for (std::size_t shell = 0; shell < inner.numShells(); ++shell)
         {
             int known = 0;
             Vec vertex;
-            for (std::uint32_t v : probes)
+            for (std::uint32_t k = start[shell]; k < start[shell + 1]; ++k)
             {
-                vertex = inner.mesh().vertices[v];
+                vertex = inner.mesh().vertices[probes[k]];
                 known = outer.insideGridAnswer(innerToOuter * vertex);
                 if (known != 0)
                     break;
             }
             if (known == 0)
-                vertex = inner.mesh().vertices[probes.front()];
+                vertex = inner.mesh().vertices[probes[start[shell]]];
             if (known == 0 ? !insideByRays(outer, innerToOuter * vertex) : known == 1)
                 continue;
             if (contact)

@@ -38,8 +38,8 @@ public:
         arrays the exact phase walks (CollisionModel's flat tree arrays). */
     using Node = device::TreeNode;
 
-    /** \brief Deepest tree the queries' fixed stacks allow; a balanced build of any mesh that fits
-        in memory stays far below it (the constructor checks). */
+    /** \brief Deepest tree the walk's fixed stack allows (device::walkPairs); a balanced build of
+        any mesh that fits in memory stays far below it (the constructor checks). */
     static constexpr int kMaxDepth = device::kMaxTreeDepth;
 
     /** \brief Builds over \a mesh, which must outlive this object and not change. Empty meshes give
@@ -65,13 +65,25 @@ public:
     {
         return device::TreeView{nodes_, triangleOrder_, static_cast<std::uint32_t>(numNodes_)};
     }
-    /** \brief Points this tree at a copy of its nodes and triangle order held elsewhere (the
-        model's flat arrays, which the batched stages and the GPU read) and frees its own, so the
-        nodes are stored once. The copy must equal nodes() and triangleOrder() and outlive the tree. */
-    void useSharedArrays(const Node *nodes, const std::uint32_t *triangleOrder);
-    /** \brief Corners of the triangle in slot \a slot of triangleOrder (mesh frame), stored in
-        traversal order so that leaves read contiguous memory. */
-    const std::array<Eigen::Vector3d, 3> &slotTriangle(std::uint32_t slot) const { return corners_[slot]; }
+    /** \brief Where a tree's arrays may be held: the nodes, the triangle order, the corners
+        (slotCorners) and the inside grid's cells (null without a grid). */
+    struct Arrays
+    {
+        const Node *nodes;
+        const std::uint32_t *triangleOrder;
+        const double *corners;
+        const std::uint8_t *gridCells;
+    };
+    /** \brief Points this tree at a copy of its arrays held elsewhere (the model's flat arrays,
+        which the batched stages and the GPU read) and frees its own, so each is stored once. The
+        copy must equal arrays() and outlive the tree. */
+    void useSharedArrays(const Arrays &arrays);
+    Arrays arrays() const { return Arrays{nodes_, triangleOrder_, corners_, gridCells_}; }
+    /** \brief Cells of the inside grid (0 without one). */
+    std::size_t numGridCells() const { return numGridCells_; }
+    /** \brief Corners of the triangle in slot \a slot of triangleOrder (mesh frame): 9 doubles,
+        x y z of each corner, stored in traversal order so that leaves read contiguous memory. */
+    const double *slotCorners(std::uint32_t slot) const { return corners_ + 9 * static_cast<std::size_t>(slot); }
     /** \brief Levels below the root (0 for a single leaf, -1 when empty). */
     int depth() const { return depth_; }
     bool empty() const { return numNodes_ == 0; }
@@ -84,12 +96,15 @@ public:
         comes near (the triangles' bounds grown by a margin far above rounding) lies in one region
         of space the surface does not cross, whose answer one ray cast at build time gave. */
     int insideGridAnswer(const Eigen::Vector3d &point) const;
-    bool hasInsideGrid() const { return !gridCells_.empty(); }
+    bool hasInsideGrid() const { return numGridCells_ > 0; }
 
     /** \brief Per connected shell of the mesh, a few of its vertex indices (its first vertex, then
         its extreme vertices along the axes), for containment tests: when two surfaces do not meet,
-        any vertex of a shell is inside the other solid exactly when the whole shell is. */
-    const std::vector<std::vector<std::uint32_t>> &shellProbes() const { return shellProbes_; }
+        any vertex of a shell is inside the other solid exactly when the whole shell is. Shell s's
+        probes are shellProbes()[shellProbeStart()[s] .. shellProbeStart()[s + 1]). */
+    std::size_t numShells() const { return shellProbeStart_.size() - 1; }
+    const std::uint32_t *shellProbes() const { return shellProbes_.data(); }
+    const std::uint32_t *shellProbeStart() const { return shellProbeStart_.data(); }
 
 private:
     int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level,
@@ -108,15 +123,59 @@ private:
     const Node *nodes_ = nullptr;
     std::size_t numNodes_ = 0;
     const std::uint32_t *triangleOrder_ = nullptr;
-    std::vector<std::array<Eigen::Vector3d, 3>> corners_;
-    std::vector<std::vector<std::uint32_t>> shellProbes_;
+    std::vector<double> ownCorners_;  // n_triangles x 9, slot order
+    const double *corners_ = nullptr;
+    std::vector<std::uint32_t> shellProbes_;         // n_probes: vertex numbers
+    std::vector<std::uint32_t> shellProbeStart_{0};  // n_shells + 1
     int depth_ = -1;
     // Inside grid: a regular grid over the mesh's bounding box (mesh frame), one byte per cell
     // (0 near the surface, 1 outside, 2 inside), x fastest.
     Eigen::Vector3d gridLower_ = Eigen::Vector3d::Zero();
     Eigen::Vector3d gridInverseCell_ = Eigen::Vector3d::Zero();
     int gridSize_[3] = {0, 0, 0};
-    std::vector<std::uint8_t> gridCells_;
+    std::vector<std::uint8_t> ownGridCells_;
+    const std::uint8_t *gridCells_ = nullptr;
+    std::size_t numGridCells_ = 0;
+};
+
+/** \brief Scratch of the exact phase for one thread at a time (Pinocchio's Data): whoever runs the
+    queries (a backend's workspace, a test) owns it, so nothing is kept per thread behind the
+    caller's back. Sized on first use; a query without one places nodes per visit and starts no
+    walk from a remembered leaf pair. */
+struct ExactWorkspace
+{
+    /** \brief A node of the moving tree placed in the fixed tree's frame: done once per node and
+        query, where a node pair's test would otherwise redo it for every node of the other tree it
+        meets. Stamped by query, so that nothing is cleared between queries; trees above
+        kMaxPlacedNodes are placed per visit instead (100 bytes per node). */
+    struct PlacedNode
+    {
+        Eigen::Matrix3d axes;
+        Eigen::Vector3d centre;
+    };
+    static constexpr std::size_t kMaxPlacedNodes = std::size_t(1) << 17;
+    std::vector<PlacedNode> placed;
+    std::vector<std::uint32_t> stamps;
+    std::uint32_t query = 0;
+
+    /** \brief For the last queries of a few pairs of trees: the leaf pair (triangle slots) where
+        the last query found its contact or, when it found none, the leaf pair whose bounding
+        spheres came nearest. The next query of the pair tests that triangle pair before walking:
+        nearby states (the next state along a motion, the other end of a bisection step) often touch
+        there first (OMPL.app near-contact states, A/B in one build: safe / FCL Easy 2.7 -> 3.2,
+        Twistycool 2.0-2.9 -> 3.2-3.4, alpha-1.5 2.6-3.3 -> 3.0-3.5; uniform states unchanged
+        within the noise). It only reorders work: a hit is a real contact of those two triangles, a
+        miss goes on to the walk, so no verdict depends on it. Keyed by the trees' addresses; a
+        stale entry (a tree freed and another built at its address) names slots that are checked
+        against the tree's size. */
+    struct LeafHint
+    {
+        const void *fixed = nullptr;
+        const void *moving = nullptr;
+        std::uint32_t slotFixed = 0, slotMoving = 0;
+    };
+    static constexpr std::size_t kLeafHints = 64;
+    std::array<LeafHint, kLeafHints> hints{};
 };
 
 /** \brief Where two meshes touch: a point (world frame) and the triangle of each mesh. */
@@ -135,14 +194,17 @@ struct MeshContact
     trianglesWithin() (padding > 0) with the smaller tree's triangles expressed in the other's
     frame. So the answer is exact for the coordinates after that one rigid transform. Stops at the
     first contact found, which \a contact (when not null) receives: for padding > 0 the midpoint of
-    a close-enough pair. Without \a contact the query first tests the leaf pair where this thread's
-    last query of the same two trees touched or came nearest (nearby states often touch there
-    again); that may change which contact is found first, never the answer, so a query with
-    \a contact skips it and its first contact does not depend on earlier queries. The smaller tree's nodes are placed in
-   the other's frame once per query, in a per-thread cache (grown on a thread's first queries, up to 13 MB for a tree of
-   2^17 nodes; larger trees are placed per visit); thread-safe. */
+    a close-enough pair. With a \a workspace and without \a contact the query first tests the leaf
+    pair where the workspace's last query of the same two trees touched or came nearest (nearby
+    states often touch there again); that may change which contact is found first, never the
+    answer, so a query with \a contact skips it and its first contact does not depend on earlier
+    queries. The smaller tree's nodes are placed in the other's frame once per query, in the
+    workspace (up to 13 MB for a tree of 2^17 nodes; larger trees, and queries without a
+    workspace, place them per visit). Thread-safe given one workspace per thread. The walk is
+    device::walkPairs; a tree too deep for its stack (which the constructor rules out) would
+    answer true, with no triangles named. */
 bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
-                    double padding, MeshContact *contact = nullptr);
+                    double padding, MeshContact *contact = nullptr, ExactWorkspace *workspace = nullptr);
 
 /** \brief A node's axes (columns), centre and half extents, in double. */
 Eigen::Matrix3d nodeAxes(const MeshBvh::Node &node);
@@ -152,12 +214,12 @@ Eigen::Vector3d nodeExtents(const MeshBvh::Node &node);
 bool nodeContains(const MeshBvh::Node &node, const Eigen::Vector3d &p, double margin = 0.0);
 
 /** \brief Is \a point (frame of the mesh) strictly inside the closed mesh of \a bvh? The tree's
-    inside grid answers when it knows the point's cell; otherwise parity of a ray cast through the
-    tree, retried along another of a fixed set of directions whenever the ray
-    comes within a small tolerance (1e-9 of the mesh's size) of an edge or vertex or lies in a
-    face's plane. If every direction grazes, the generalized winding number over all triangles
-    decides (> 1/2 is inside). A point on the surface may go either way. Meaningful only for
-    closed meshes. No allocation; thread-safe. */
+    inside grid answers when it knows the point's cell; otherwise device::pointInsideSolid() over
+    the tree: a ray's signed crossings, retried along another of a fixed set of directions whenever
+    the ray comes within a small tolerance (1e-9 of the mesh's size) of an edge or vertex or lies
+    in a face's plane. If every direction grazes (a point within that tolerance of the surface) the
+    answer is inside, the safe one. Meaningful only for closed meshes. No allocation;
+    thread-safe. */
 bool pointInsideClosedMesh(const MeshBvh &bvh, const Eigen::Vector3d &point);
 
 /** \brief The exact oracle for two solids: true when their surfaces come within \a padding or one
@@ -165,5 +227,6 @@ bool pointInsideClosedMesh(const MeshBvh &bvh, const Eigen::Vector3d &point);
     decided by one vertex of the inner mesh, which suffices once the surfaces are known not to
     cross. On containment \a contact gets that vertex (world frame) and triangles -1. */
 bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closedA, const MeshBvh &b,
-                   const Eigen::Isometry3d &poseB, bool closedB, double padding, MeshContact *contact = nullptr);
+                   const Eigen::Isometry3d &poseB, bool closedB, double padding, MeshContact *contact = nullptr,
+                   ExactWorkspace *workspace = nullptr);
 }  // namespace rastercheck

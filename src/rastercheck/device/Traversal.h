@@ -1,0 +1,122 @@
+#pragma once
+
+// The one tree walk of the library: a depth-first traversal of a pair of trees (FCL's
+// collisionRecurse / distanceRecurse, Coal's the same), written once for every query that walks a
+// tree: the exact phase (a tree against a tree), the rays of the point-in-solid test, the image
+// culls of the stages and the patch culls of the proofs (a tree against one leaf). A query is a
+// visitor with a node test, a leaf visitor and a descent rule; the walk owns the order and the
+// stack. The stack is a fixed array (no recursion, no allocation: it runs on the GPU too), and a
+// walk that would outgrow it ends with WalkEnd::Overflow for the caller to answer safely, never
+// writes past it.
+
+#include <cstdint>
+
+#include "rastercheck/device/HostDevice.h"
+
+namespace rastercheck::device
+{
+/** \brief Deepest tree the walk's stack allows (the builders check it): a walk that pushes both
+    children of a node and pops one holds at most depth + 1 entries per tree. */
+constexpr int kMaxTreeDepth = 60;
+
+/** \brief Entries of a pair walk's stack: it pushes two pairs per level descended in either tree and
+    pops one, so it never holds more than depthA + depthB + 1. */
+constexpr int kPairStackSize = 2 * kMaxTreeDepth + 2;
+
+/** \brief How a walk ended. */
+enum class WalkEnd : std::uint8_t
+{
+    Finished,  ///< every pair the node test kept was visited
+    Stopped,   ///< the leaf visitor asked to stop (a contact found, a ray grazed)
+    Overflow   ///< a tree deeper than kMaxTreeDepth: the walk is incomplete, the caller must answer safely
+};
+
+/** \brief Two node indices, one per tree. */
+struct NodePair
+{
+    std::int32_t a, b;
+};
+
+/** \brief Every node the walk reads follows one convention (device::TreeNode, device::PatchNode):
+    \a first < 0 for a leaf, else the index of the first child, the second child at first + 1,
+    both in the same array as the node. */
+template <class Node>
+RC_HD bool isLeafNode(const Node &node)
+{
+    return node.first < 0;
+}
+
+/** \brief Depth-first walk of the node pairs of two trees (root index 0 in each; both non-empty).
+    \a visitor provides:
+    - `bool test(NodePair)`: may the pair hold what the query looks for? Called when a pair is
+      popped, so a query whose reach shrinks as it goes (a distance query's best distance so far,
+      lowered in its leaf visitor) prunes the pairs still on the stack against the current reach.
+    - `bool leaves(NodePair)`: a pair of leaves the test kept; false ends the walk (Stopped).
+    - `bool splitA(NodePair)`: with both nodes inner, descend into A's (else B's). A leaf is never
+      split.
+    - `bool secondFirst(NodePair first, NodePair second)`: visit the pair with the second child
+      before the one with the first (the nearer first: a colliding query stops at the first
+      contact, a distance query's reach shrinks sooner). */
+template <class NodeA, class NodeB, class Visitor>
+RC_HD WalkEnd walkPairs(const NodeA *nodesA, const NodeB *nodesB, Visitor &visitor)
+{
+    NodePair stack[kPairStackSize];
+    int top = 0;
+    stack[top++] = NodePair{0, 0};
+    while (top > 0)
+    {
+        const NodePair pair = stack[--top];
+        if (!visitor.test(pair))
+            continue;
+        const bool leafA = isLeafNode(nodesA[pair.a]), leafB = isLeafNode(nodesB[pair.b]);
+        if (leafA && leafB)
+        {
+            if (!visitor.leaves(pair))
+                return WalkEnd::Stopped;
+            continue;
+        }
+        if (top + 2 > kPairStackSize)
+            return WalkEnd::Overflow;
+        const bool descendA = leafB || (!leafA && visitor.splitA(pair));
+        const std::int32_t child = descendA ? nodesA[pair.a].first : nodesB[pair.b].first;
+        NodePair first = descendA ? NodePair{child, pair.b} : NodePair{pair.a, child};
+        NodePair second = descendA ? NodePair{child + 1, pair.b} : NodePair{pair.a, child + 1};
+        if (visitor.secondFirst(first, second))
+        {
+            const NodePair swapped = first;
+            first = second;
+            second = swapped;
+        }
+        stack[top++] = second;
+        stack[top++] = first;  // popped next
+    }
+    return WalkEnd::Finished;
+}
+
+/** \brief Depth-first walk of one tree (\a numNodes nodes, root first): \a visit(leaf) for every leaf
+    whose node and ancestors all pass \a test(node), first children first; stops when \a visit
+    returns false. The pair walk against a tree of one leaf, as FCL walks a mesh against a shape. */
+template <class Node, class NodeTest, class LeafVisit>
+RC_HD WalkEnd walkTree(const Node *nodes, std::uint32_t numNodes, NodeTest &&test, LeafVisit &&visit)
+{
+    if (numNodes == 0)
+        return WalkEnd::Finished;
+    struct OneLeaf
+    {
+        std::int32_t first;
+    };
+    const OneLeaf single{-1};
+    // The pair walk's interface over the first tree; the second is the one leaf.
+    struct Adapter
+    {
+        const Node *nodes;
+        NodeTest &nodeTest;
+        LeafVisit &leafVisit;
+        RC_HD bool test(NodePair pair) { return nodeTest(nodes[pair.a]); }
+        RC_HD bool leaves(NodePair pair) { return leafVisit(nodes[pair.a]); }
+        RC_HD bool splitA(NodePair) { return true; }
+        RC_HD bool secondFirst(NodePair, NodePair) { return false; }
+    } adapter{nodes, test, visit};
+    return walkPairs(nodes, &single, adapter);
+}
+}  // namespace rastercheck::device
