@@ -114,9 +114,9 @@ bool shapesMeetMesh(const std::vector<PrimitiveShape> &shapes, const Pose<double
             {
                 ConvexShape triangle{};
                 triangle.kind = ConvexKind::Triangle;
-                const std::array<Eigen::Vector3d, 3> &corners = bvh.slotTriangle(slot);
+                const double *corners = bvh.slotCorners(slot);
                 for (int k = 0; k < 3; ++k)
-                    triangle.corner[k] = {corners[k].x(), corners[k].y(), corners[k].z()};
+                    triangle.corner[k] = {corners[3 * k], corners[3 * k + 1], corners[3 * k + 2]};
                 if (device::convexWithin(convex, triangle, padding))
                     return true;
             }
