@@ -105,7 +105,7 @@ run() {
                 step plan-cpu 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 0 ;;
             profile)
                 # Registers per thread and occupancy of every kernel of a few small and large Panda batches.
-                step profile 200 ncu --clock-control none --section LaunchStats --section Occupancy --launch-count 120 \
+                step profile 200 ncu --clock-control none --section SpeedOfLight --section LaunchStats --section Occupancy --launch-count 120 \
                     .gpu/bin/test_gpu_backend --gtest_filter='*To1000States*' ;;
             baseline)
                 # The same benchmark at an earlier revision (scripts/gpu-check.sh baseline REV), same device.

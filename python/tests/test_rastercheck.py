@@ -310,6 +310,8 @@ def test_check_releases_the_gil_while_it_works(rc, crane):
     worker.join()
     seconds = span["end"] - span["start"]
     assert seconds > 0.05, "the batch is too small to tell"
-    during = [t for t in ticks if span["start"] <= t <= span["end"]]
-    gaps = np.diff([span["start"], *during, span["end"]])
-    assert gaps.max() < 0.5 * seconds, f"the main thread stood still {gaps.max():.3f} s of the {seconds:.3f} s batch"
+    # With the GIL held the main thread could not tick at all during the batch; released, it ticks
+    # thousands of times even when the scheduler gives it only part of a loaded machine (a bound
+    # on the longest gap flaked there).
+    during = [t for t in ticks if span["start"] < t < span["end"]]
+    assert len(during) > 100, f"the main thread ticked {len(during)} times during the {seconds:.3f} s batch"
