@@ -313,7 +313,7 @@ TEST(StagedPipeline, ABatchCostsAFewWaitsAndNoAllocationAfterTheFirst)
         const rc::device::ExecutorCounts after = staged.executorCounts();
         return rc::device::ExecutorCounts{after.chunks - before.chunks, after.launches - before.launches,
                                           after.synchronizations - before.synchronizations,
-                                          after.allocations - before.allocations};
+                                          after.allocations - before.allocations, after.seconds - before.seconds};
     };
     rc::CollisionRequest safe, exact;
     exact.mode = rc::CollisionMode::Exact;
@@ -325,6 +325,7 @@ TEST(StagedPipeline, ABatchCostsAFewWaitsAndNoAllocationAfterTheFirst)
     // The survivors' count, the two scans' totals (triangles, fragments), the outcomes.
     EXPECT_LE(again.synchronizations, 4u);
     EXPECT_LE(again.launches, 24u);
+    EXPECT_GT(again.seconds, 0.0);
     call(exact);
     const rc::device::ExecutorCounts exactAgain = call(exact);
     EXPECT_EQ(exactAgain.allocations, 0u);

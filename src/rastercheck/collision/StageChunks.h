@@ -1,6 +1,7 @@
 #pragma once
 
 #include <algorithm>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -37,6 +38,7 @@ public:
     {
         std::unique_ptr<Exec> ex = take();
         ex->counts() = {};
+        const auto start = std::chrono::steady_clock::now();
         try
         {
             f(*ex);
@@ -46,7 +48,8 @@ public:
             giveBack(std::move(ex));
             throw;
         }
-        const device::ExecutorCounts used = ex->counts();
+        device::ExecutorCounts used = ex->counts();
+        used.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         giveBack(std::move(ex));
         return used;
     }

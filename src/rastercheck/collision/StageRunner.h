@@ -60,6 +60,7 @@ protected:
         executorCounts_.launches += executor.launches;
         executorCounts_.synchronizations += executor.synchronizations;
         executorCounts_.allocations += executor.allocations;
+        executorCounts_.seconds += executor.seconds;
     }
 
 private:

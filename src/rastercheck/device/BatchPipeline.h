@@ -234,6 +234,7 @@ struct ExecutorCounts
     unsigned long long launches = 0;          ///< kernels and CUB calls
     unsigned long long synchronizations = 0;  ///< waits of the host for the executor
     unsigned long long allocations = 0;       ///< scratch buffers grown
+    double seconds = 0;                       ///< host clock inside the passes (kernels, copies, waits)
 };
 
 /** \brief The executor's scratch buffers, one per stage output; sized per chunk, reused. */
