@@ -25,6 +25,13 @@ std::string label(const std::string &suite, rc::CollisionMode mode)
     return suite + " (" + rc::toString(mode) + ")";
 }
 
+/** \brief \a states per suite, a quarter under the sanitizers (scripts/sanitize.sh sets
+    RASTERCHECK_NONCONVEX_SCALE), which slow these comparisons 10 to 50 times. */
+std::size_t sanitizerScaled(int states)
+{
+    return static_cast<std::size_t>(rc::test::scaledCount(states, "RASTERCHECK_NONCONVEX_SCALE"));
+}
+
 /** \brief The stages on the host with poisoned scratch, as uninitialised device memory may be. */
 std::unique_ptr<rc::StageRunner> poisonedStages(const rc::CollisionModelConstPtr &model,
                                                 const rc::device::StageBudget &budget = {})
@@ -35,7 +42,7 @@ std::unique_ptr<rc::StageRunner> poisonedStages(const rc::CollisionModelConstPtr
 
 TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySuites)
 {
-    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(200))
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(200)))
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
@@ -63,7 +70,7 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
 
 TEST(StagedPipeline, PaddingAndSwitchedOffChecksMatchTheCpuBackend)
 {
-    const std::vector<rc::test::StateSuite> suites = rc::test::accuracySuites(80);
+    const std::vector<rc::test::StateSuite> suites = rc::test::accuracySuites(sanitizerScaled(80));
     for (const rc::test::StateSuite &suite : suites)
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
@@ -110,7 +117,7 @@ TEST(StagedPipeline, BatchesOfEverySizeGiveTheSameVerdicts)
 
 TEST(StagedPipeline, ChunksTooSmallForTheBatchGiveIdenticalVerdicts)
 {
-    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(60))
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(60)))
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
@@ -176,7 +183,7 @@ TEST(StagedPipeline, AScratchLimitSplitsTheBatchWithoutChangingVerdicts)
 
 TEST(StagedPipeline, AStateTooLargeForOnePassInRasterModeGetsTheExactAnswer)
 {
-    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(60))
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(60)))
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
@@ -268,10 +275,9 @@ TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
     // Certified midpoints (CertifiedMotionValidator, BatchRRTConnect) give every (state, pair) its own
     // padding; the stages take them in every cull, proof and raster window, and the host's exact
     // phase takes the open pair's own. Chunks of 5 states check that each chunk reads its own rows.
-    // 16 states per suite; a quarter under the sanitizers (scripts/sanitize.sh sets the scale).
-    const int states = rc::test::scaledCount(16, "RASTERCHECK_NONCONVEX_SCALE");
+    const std::size_t states = sanitizerScaled(16);
     std::size_t pandaSuites = 0, pandaValid = 0;  // free Panda states: the comparison covers both answers
-    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(static_cast<std::size_t>(states)))
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(states))
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
