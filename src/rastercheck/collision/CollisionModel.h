@@ -227,7 +227,7 @@ public:
     /** \brief Pair \a pair in CollisionModel's numbering (environment pairs, then self pairs). */
     double pair(std::uint32_t pair) const
     {
-        return pair < numEnvironmentPairs_ ? component(pair % numComponents_) : self(pair - numEnvironmentPairs_);
+        return device::paddingOfPair(base_, environment_, self_, numComponents_, numEnvironmentPairs_, pair);
     }
 
 private:

@@ -49,18 +49,8 @@ protected:
     {
         std::lock_guard<std::mutex> lock(countsMutex_);
         if (stages)
-        {
-            counts_.states += stages->states;
-            counts_.survivingPairs += stages->survivingPairs;
-            counts_.rasterizedPairs += stages->rasterizedPairs;
-            counts_.candidateTriangles += stages->candidateTriangles;
-            counts_.fragments += stages->fragments;
-        }
-        executorCounts_.chunks += executor.chunks;
-        executorCounts_.launches += executor.launches;
-        executorCounts_.synchronizations += executor.synchronizations;
-        executorCounts_.allocations += executor.allocations;
-        executorCounts_.seconds += executor.seconds;
+            counts_ += *stages;
+        executorCounts_ += executor;
     }
 
 private:

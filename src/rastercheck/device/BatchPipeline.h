@@ -149,15 +149,11 @@ struct StageSettings
 RC_HD double pairPadding(const ModelArrays &model, const StageSettings &settings, std::size_t s, std::uint32_t pair)
 {
     const PairPaddingRows &extra = settings.extraPadding;
-    if (!extra.any())
-        return settings.padding;
+    const std::size_t m = static_cast<std::size_t>(model.numComponents);
     const std::size_t row = extra.rowPerState ? s : 0;
-    const std::uint32_t m = static_cast<std::uint32_t>(model.numComponents);
-    const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
-    if (pair < environmentPairs)
-        return settings.padding + extra.environment[row * m + pair % m];
-    return settings.padding +
-           extra.self[row * static_cast<std::size_t>(model.numSelfPairs) + (pair - environmentPairs)];
+    return paddingOfPair(settings.padding, extra.any() ? extra.environment + row * m : nullptr,
+                         extra.any() ? extra.self + row * static_cast<std::size_t>(model.numSelfPairs) : nullptr, m,
+                         static_cast<std::size_t>(model.numObjects) * m, pair);
 }
 
 /** \brief The largest padding of state \a s's environment pairs: the distance filter and the layer
@@ -223,6 +219,16 @@ struct StageCounts
     unsigned long long rasterizedPairs = 0;     ///< of those, pairs neither proof settled that went to the raster
     unsigned long long candidateTriangles = 0;  ///< triangles of rasterized pairs the node culls kept
     unsigned long long fragments = 0;
+
+    StageCounts &operator+=(const StageCounts &other)
+    {
+        states += other.states;
+        survivingPairs += other.survivingPairs;
+        rasterizedPairs += other.rasterizedPairs;
+        candidateTriangles += other.candidateTriangles;
+        fragments += other.fragments;
+        return *this;
+    }
 };
 
 /** \brief The fixed costs of the passes an executor ran: what a small batch pays whatever its
@@ -235,6 +241,16 @@ struct ExecutorCounts
     unsigned long long synchronizations = 0;  ///< waits of the host for the executor
     unsigned long long allocations = 0;       ///< scratch buffers grown
     double seconds = 0;                       ///< host clock inside the passes (kernels, copies, waits)
+
+    ExecutorCounts &operator+=(const ExecutorCounts &other)
+    {
+        chunks += other.chunks;
+        launches += other.launches;
+        synchronizations += other.synchronizations;
+        allocations += other.allocations;
+        seconds += other.seconds;
+        return *this;
+    }
 };
 
 /** \brief The executor's scratch buffers, one per stage output; sized per chunk, reused. */

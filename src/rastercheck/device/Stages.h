@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 
@@ -104,6 +105,18 @@ RC_HD Box pairWindow(const Box &a, const Box &b, float padding)
         grownA.max[k] += padding;
     }
     return intersection(grownA, b);
+}
+
+/** \brief The padding of \a pair at one state: \a base plus the pair's entry in the state's rows of
+    extra padding (CollisionRequest::pairPadding; null rows: none). Pairs are numbered environment
+    pairs first (component pair % numComponents), then self pairs. The one lookup the CPU backend
+    (PairPaddings) and the stages (pairPadding) both read a pair's padding through. */
+RC_HD double paddingOfPair(double base, const double *environmentRow, const double *selfRow, std::size_t numComponents,
+                           std::size_t numEnvironmentPairs, std::uint32_t pair)
+{
+    if (!environmentRow)
+        return base;
+    return base + (pair < numEnvironmentPairs ? environmentRow[pair % numComponents] : selfRow[pair - numEnvironmentPairs]);
 }
 
 /** \brief The padding for the float culls: a double beyond float's range (a padding of 1e300 m is
