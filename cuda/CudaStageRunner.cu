@@ -349,6 +349,20 @@ public:
             uploadOnce(model_memory_, host.componentTriangleOrder, host.numComponentTriangleIndices / 3);
         model_.objectTreeNodes = uploadOnce(model_memory_, host.objectTreeNodes, host.numObjectTreeNodes);
         model_.objectTriangleOrder = uploadOnce(model_memory_, host.objectTriangleOrder, host.numObjectTriangleIndices / 3);
+        const auto uploadExact = [&](const device::ExactArrays &in, std::size_t triangles, std::size_t cells,
+                                     std::size_t probeDoubles, std::size_t shellStarts, std::size_t meshes) {
+            return device::ExactArrays{uploadOnce(model_memory_, in.corners, 9 * triangles),
+                                       uploadOnce(model_memory_, in.gridCells, cells),
+                                       uploadOnce(model_memory_, in.probePoints, probeDoubles),
+                                       uploadOnce(model_memory_, in.shellProbeStart, shellStarts),
+                                       uploadOnce(model_memory_, in.meshes, meshes)};
+        };
+        model_.componentExact = uploadExact(host.componentExact, host.numComponentTriangleIndices / 3,
+                                            host.numComponentGridCells, host.numComponentProbeDoubles,
+                                            host.numComponentShellStarts, m);
+        model_.curvedPairs = uploadOnce(model_memory_, host.curvedPairs, host.numCurvedPairFlags);
+        model_.objectExact = uploadExact(host.objectExact, host.numObjectTriangleIndices / 3, host.numObjectGridCells,
+                                         host.numObjectProbeDoubles, host.numObjectShellStarts, o);
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
         // non-blocking stream that does not wait for the legacy one: wait here.

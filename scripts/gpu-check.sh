@@ -96,6 +96,7 @@ run() {
             bench)
                 # The Panda scenes, the crane and FCL's env/rob meshes, FCL in the same run.
                 step bench-safe 280 .gpu/bin/rastercheck_bench_backends "$bench_states" safe
+                step bench-exact 200 .gpu/bin/rastercheck_bench_backends 100000 exact
                 step bench-raster 200 .gpu/bin/rastercheck_bench_backends 100000 raster ;;
             plan)
                 # BatchRRTConnect on Panda problems 1-10 of every scenario, certified edges, 1 s: the

@@ -218,21 +218,22 @@ TEST(StagedPipeline, BadStatesAreInvalidNotErrors)
     EXPECT_EQ(contacts[1].kind, rc::Contact::Kind::OutOfBounds);
 }
 
-TEST(StagedPipeline, TheStagesSettleMostPairsThemselvesAndNeverContradictTheOracle)
+TEST(StagedPipeline, TheStagesSettleEveryPairAndNeverContradictTheOracle)
 {
-    // What the GPU leaves to the host in safe mode: the pairs neither the hull proof nor a ray
-    // settles. Every pair the stages settle must agree with the exact oracle. On the Panda's scenes
-    // (convex-ish links, box and cylinder obstacles) almost every pair is settled; the crane's
-    // nested parts are settled shell by shell (its links are built of several boxes).
-    std::size_t pandaSurviving = 0, pandaOpen = 0, craneSurviving = 0, craneOpen = 0, checkedSuites = 0;
+    // Safe mode leaves the host nothing to decide: the hull proofs, the raster and the exact phase
+    // inside the stages settle every pair past the box culls. Every pair they settle must agree
+    // with the exact oracle, the CPU backend's decision of that pair. The hull proofs and the raster
+    // settle almost every pair; the exact phase takes the few they leave (the raster's misses near
+    // contact). A non-convex mesh obstacle goes to it always (test_nonconvex, test_gpu_backend).
+    std::size_t checkedSuites = 0;
+    unsigned long long exactPairs = 0;
     for (const rc::test::StateSuite &suite : rc::test::accuracySuites(300))
     {
-        if (suite.name.rfind("panda", 0) != 0 && suite.name.rfind("crane", 0) != 0)
-            continue;
         ++checkedSuites;
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend oracle(model);
         const std::unique_ptr<rc::StageRunner> runner = poisonedStages(model);
+        runner->countStages(true);
         const rc::CollisionRequest request;  // safe mode, no padding
         const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
         std::vector<std::uint8_t> admissible(n);
@@ -241,33 +242,34 @@ TEST(StagedPipeline, TheStagesSettleMostPairsThemselvesAndNeverContradictTheOrac
         std::vector<rc::device::PairOutcome> outcomes;
         runner->run(suite.states.data(), admissible.data(), n, rc::stageSettings(*model, request, false), outcomes);
         std::unique_ptr<rc::CpuWorkspace> ws = oracle.makeWorkspace();
-        std::size_t suiteOpen = 0;
+        std::size_t open = 0;
         for (const rc::device::PairOutcome &o : outcomes)
         {
             if (o.status == rc::device::PairOpen)
             {
-                ++suiteOpen;
+                ++open;
                 continue;
             }
             oracle.refitState(suite.states.data() + o.state * dof, *ws);
             rc::Contact contact;
-            EXPECT_EQ(oracle.decideOpenPair(o.pair, request, *ws, contact), o.status == rc::device::PairOverlaps)
+            const bool collides = oracle.decideOpenPair(o.pair, request, *ws, contact);
+            // The stages see curved primitives as their meshes, which lie outside the exact shapes:
+            // a mesh overlap there is confirmed on the shapes by the host (StagedBackend).
+            if (o.status == rc::device::PairOverlaps && model->curved.refines(o.pair))
+                continue;
+            EXPECT_EQ(collides, o.status == rc::device::PairOverlaps)
                 << suite.name << ", state " << o.state << ", pair " << o.pair << ", status " << o.status;
         }
-        std::printf("%s: %zu pairs survive the box culls, %zu (%.1f %%) left to the host\n", suite.name.c_str(),
-                    outcomes.size(), suiteOpen, 100.0 * suiteOpen / std::max<std::size_t>(1, outcomes.size()));
-        const bool panda = suite.name.rfind("panda", 0) == 0;
-        (panda ? pandaSurviving : craneSurviving) += outcomes.size();
-        (panda ? pandaOpen : craneOpen) += suiteOpen;
+        const rc::device::StageCounts counts = runner->counts();
+        std::printf(
+            "%s: %zu pairs survive the box culls, %llu rasterized, %llu decided by the exact phase in the "
+            "stages, %zu left to the host\n",
+            suite.name.c_str(), outcomes.size(), counts.rasterizedPairs, counts.exactPairs, open);
+        EXPECT_EQ(open, 0u) << suite.name;
+        exactPairs += counts.exactPairs;
     }
-    if (checkedSuites == 0)
-        GTEST_SKIP() << "shared data not found (set RASTERCHECK_DATA): the Panda and crane suites are needed";
-    ASSERT_GT(pandaSurviving, 1000u);
-    EXPECT_LT(pandaOpen, pandaSurviving / 20)
-        << pandaOpen << " of " << pandaSurviving << " Panda pairs left to the host";
-    ASSERT_GT(craneSurviving, 100u);
-    EXPECT_LT(craneOpen, craneSurviving / 8)
-        << craneOpen << " of " << craneSurviving << " crane pairs left to the host";
+    ASSERT_GT(checkedSuites, 0u);
+    EXPECT_GT(exactPairs, 0u) << "the exact phase never ran in the stages";
 }
 
 TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
@@ -337,14 +339,15 @@ TEST(StagedPipeline, ABatchCostsAFewWaitsAndNoAllocationAfterTheFirst)
     const rc::device::ExecutorCounts again = call(safe);
     EXPECT_EQ(again.chunks, 1u);
     EXPECT_EQ(again.allocations, 0u) << "buffers are kept between calls";
-    // The survivors' count, the two scans' totals (triangles, fragments), the outcomes.
-    EXPECT_LE(again.synchronizations, 4u);
-    EXPECT_LE(again.launches, 24u);
+    // The survivors' count, the two scans' totals (triangles, fragments), the count of the outcomes
+    // the reduction reads, the outcomes.
+    EXPECT_LE(again.synchronizations, 5u);
+    EXPECT_LE(again.launches, 30u);
     EXPECT_GT(again.seconds, 0.0);
     call(exact);
     const rc::device::ExecutorCounts exactAgain = call(exact);
     EXPECT_EQ(exactAgain.allocations, 0u);
-    EXPECT_LE(exactAgain.synchronizations, 2u) << "nothing to rasterize: no counts to wait for";
+    EXPECT_LE(exactAgain.synchronizations, 3u) << "nothing to rasterize: no counts to wait for";
     // Stage counts cost a wait per chunk: only when asked.
     EXPECT_EQ(staged.stageCounts().states, 0u);
     staged.countStages(true);

@@ -12,7 +12,7 @@
 #include <fcl/narrowphase/detail/primitive_shape_algorithm/triangle_distance.h>
 #include <fcl/narrowphase/detail/traversal/collision/intersect.h>
 
-#include "rastercheck/geometry/Predicates.h"
+#include "rastercheck/device/Predicates.h"
 #include "rastercheck/geometry/TriangleTests.h"
 
 namespace rc = rastercheck;
@@ -21,6 +21,11 @@ using Vec = Eigen::Vector3d;
 namespace
 {
 using Triangle = std::array<Vec, 3>;
+
+rc::device::Vec3<double> toDevice(const Vec &v)
+{
+    return {v.x(), v.y(), v.z()};
+}
 
 bool intersect(const Triangle &p, const Triangle &q)
 {
@@ -215,12 +220,14 @@ TEST(Predicates, MatchExactIntegerArithmeticOnNearlyDegenerateInput)
         const __int128 det = w[0] * (u[1] * v[2] - u[2] * v[1]) + w[1] * (u[2] * v[0] - u[0] * v[2]) +
                              w[2] * (u[0] * v[1] - u[1] * v[0]);
         const int expected = (det > 0) - (det < 0);
-        ASSERT_EQ(rc::orient3d(p[0], p[1], p[2], p[3]), expected) << "trial " << trial;
+        ASSERT_EQ(rc::device::orient3d(toDevice(p[0]), toDevice(p[1]), toDevice(p[2]), toDevice(p[3])), expected)
+            << "trial " << trial;
         const double naive = (p[3] - p[0]).dot((p[1] - p[0]).cross(p[2] - p[0]));
         wrongNaive += ((naive > 0) - (naive < 0)) != expected;
 
         const __int128 det2 = u[0] * v[1] - u[1] * v[0];
-        ASSERT_EQ(rc::orient2d(p[0].x(), p[0].y(), p[1].x(), p[1].y(), p[2].x(), p[2].y()), (det2 > 0) - (det2 < 0));
+        ASSERT_EQ(rc::device::orient2d(p[0].x(), p[0].y(), p[1].x(), p[1].y(), p[2].x(), p[2].y()),
+                  (det2 > 0) - (det2 < 0));
     }
     std::printf("[ info     ] naive orient3d got %d of 20000 nearly coplanar signs wrong\n", wrongNaive);
 }
@@ -234,7 +241,7 @@ TEST(Predicates, ClassicNearlyCollinearGrid)
         for (int j = 0; j < 64; ++j)
         {
             const int expected = (j > i) - (j < i);
-            EXPECT_EQ(rc::orient2d(12.0, 12.0, 24.0, 24.0, 0.5 + i * ulp, 0.5 + j * ulp), expected);
+            EXPECT_EQ(rc::device::orient2d(12.0, 12.0, 24.0, 24.0, 0.5 + i * ulp, 0.5 + j * ulp), expected);
         }
 }
 

@@ -70,8 +70,20 @@ void shareTrees(const std::vector<std::unique_ptr<MeshBvh>> &trees, std::vector<
         arrays.nodes.insert(arrays.nodes.end(), own.nodes, own.nodes + tree.numNodes());
         arrays.triangleOrder.insert(arrays.triangleOrder.end(), own.triangleOrder, own.triangleOrder + triangles);
         arrays.corners.insert(arrays.corners.end(), own.corners, own.corners + 9 * triangles);
+        device::ExactMeshInfo info{};
+        info.grid = tree.exactTree().grid;
+        info.hasGrid = tree.numGridCells() > 0 ? 1 : 0;
+        info.firstGridCell = arrays.gridCells.size();
+        info.firstProbe = static_cast<std::uint32_t>(arrays.probePoints.size() / 3);
+        info.firstShell = static_cast<std::uint32_t>(arrays.shellProbeStart.size());
+        info.numShells = static_cast<std::uint32_t>(tree.numShells());
+        arrays.meshes.push_back(info);
         arrays.gridCells.insert(arrays.gridCells.end(), own.gridCells, own.gridCells + tree.numGridCells());
         arrays.firstGridCell.push_back(arrays.gridCells.size());
+        arrays.probePoints.insert(arrays.probePoints.end(), tree.shellProbePoints().begin(),
+                                  tree.shellProbePoints().end());
+        arrays.shellProbeStart.insert(arrays.shellProbeStart.end(), tree.shellProbeStart().begin(),
+                                      tree.shellProbeStart().end());
     }
     for (std::size_t k = 0; k < trees.size(); ++k)
         trees[k]->useSharedArrays(MeshBvh::Arrays{

@@ -9,6 +9,7 @@
 #include "rastercheck/collision/CurvedSolids.h"
 #include "rastercheck/collision/SelfPairTables.h"
 #include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
 #include "rastercheck/geometry/MeshBvh.h"
@@ -157,6 +158,15 @@ public:
         std::vector<double> corners;               // n_triangles x 9, slot order (MeshBvh::slotCorners)
         std::vector<std::uint8_t> gridCells;       // inside grids (MeshBvh::insideGridAnswer)
         std::vector<std::size_t> firstGridCell;    // n_meshes + 1: mesh k's cells start there
+        std::vector<double> probePoints;           // every mesh's shell probes, 3 doubles each
+        std::vector<std::uint32_t> shellProbeStart;  // per mesh its n_shells + 1 starts (its own probe numbers)
+        std::vector<device::ExactMeshInfo> meshes;   // n_meshes: where each mesh's part lies
+        /** \brief The arrays as the exact phase reads them. */
+        device::ExactArrays exactArrays() const
+        {
+            return device::ExactArrays{corners.data(), gridCells.data(), probePoints.data(), shellProbeStart.data(),
+                                       meshes.data()};
+        }
     };
     TreeArrays componentTrees;  // link frame
     TreeArrays objectTrees;     // world frame

@@ -30,6 +30,8 @@ public:
 
     /** \brief Whether pair \a pair (CollisionModel numbering) is decided again by collide(). */
     bool refines(std::uint32_t pair) const { return pair < refines_.size() && refines_[pair] != 0; }
+    /** \brief refines() as flags, 1 per pair (shorter than the pair count when the last pairs have none). */
+    const std::vector<std::uint8_t> &refinedPairs() const { return refines_; }
 
     /** \brief Do the exact shapes of pair \a pair come within \a padding (>= 0)? \a poseA: the pair's
         component's link pose; \a poseB: the other component's link pose, or the identity for a

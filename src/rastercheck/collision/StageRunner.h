@@ -22,8 +22,9 @@ class StageRunner
 public:
     virtual ~StageRunner() = default;
     virtual std::string name() const = 0;
-    /** \brief Appends to \a outcomes every pair of states [0, n) that survives the culls, sorted by
-        (state, pair), with state indices of this batch. Thread-safe. */
+    /** \brief Appends to \a outcomes every pair of states [0, n) that survives the culls (with
+        StageSettings::onlyDecisive, only those the per-state reduction reads), sorted by (state,
+        pair), with state indices of this batch. Thread-safe. */
     virtual void run(const double *q, const std::uint8_t *admissible, std::size_t n,
                      const device::StageSettings &settings, std::vector<device::PairOutcome> &outcomes) = 0;
     /** \brief Whether runs add to counts(): counting the pairs that went to the raster costs a

@@ -55,6 +55,16 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.objectTrees.nodes.data(),
                                model.objectTrees.nodes.size(),
                                model.objectTrees.triangleOrder.data(),
+                               model.componentTrees.exactArrays(),
+                               model.objectTrees.exactArrays(),
+                               model.componentTrees.gridCells.size(),
+                               model.componentTrees.probePoints.size(),
+                               model.componentTrees.shellProbeStart.size(),
+                               model.objectTrees.gridCells.size(),
+                               model.objectTrees.probePoints.size(),
+                               model.objectTrees.shellProbeStart.size(),
+                               model.curved.refinedPairs().data(),
+                               model.curved.refinedPairs().size(),
                                model.objectTreePlacement};
 }
 
@@ -73,6 +83,8 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
     settings.confirmMisses = rules.confirmRasterMisses;
     settings.proveOverlaps = rules.proveOverlaps;
     settings.meshObstaclesUnproven = rules.meshObstaclesExact;
+    settings.unprovenCollides = rules.unprovenCollides;
+    settings.confirmCurvedOverlaps = request.mode == CollisionMode::Safe || request.mode == CollisionMode::Exact;
     return settings;
 }
 
@@ -292,7 +304,8 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
         admissible[i] = model.configurationAdmissible(q + static_cast<std::size_t>(i) * dof) ? 1 : 0;
 
-    const device::StageSettings settings = stageSettings(model, request, contacts != nullptr);
+    device::StageSettings settings = stageSettings(model, request, contacts != nullptr);
+    settings.onlyDecisive = true;  // the reduction below reads no pair settled apart
 
     std::vector<device::PairOutcome> outcomes;
     runner_->run(q, admissible.data(), n, settings, outcomes);
@@ -305,7 +318,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     // Per-state reduction: the first pair (in the CPU's order) that collides. An open pair is decided
     // with its own padding (the state's pairPadding row).
     const bool rowPerState = request.pairPadding && request.pairPadding->rows > 1;
-    const bool exactCurved = request.mode == CollisionMode::Safe || request.mode == CollisionMode::Exact;
+    const bool exactCurved = settings.confirmCurvedOverlaps;
 #pragma omp parallel num_threads(workers)
     {
         std::unique_ptr<CpuWorkspace> ws = exact_.borrow();
@@ -335,8 +348,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
                 {
                     model.nameParties(o->pair, contact);
                     contact.triangle = o->triangle;
-                    // The raster works relative to CollisionModel::origin.
-                    contact.position = Eigen::Vector3d(o->position[0], o->position[1], o->position[2]) + model.origin;
+                    contact.position = Eigen::Vector3d(o->position[0], o->position[1], o->position[2]);
                     collides = true;
                 }
                 else if (o->status != device::PairApart)

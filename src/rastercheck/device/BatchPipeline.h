@@ -16,14 +16,17 @@
 //      node culls, counted, scanned, written); per (pair, candidate triangle): the per-triangle
 //      cull and the pre-rasterization fragment count; scan;
 //   4. rasterization into the counted slots; segmented sort by (pixel, depth) per pair;
-//   5. Sort_Search_Pair per pixel run; per pair the first hit pixel (atomic minimum); outcomes.
-// The per-state reduction (the first colliding pair in pair order) runs on the host, which also
-// decides exactly the pairs the raster leaves open (StagedBackend).
+//   5. Sort_Search_Pair per pixel run; per pair the first hit pixel (atomic minimum); outcomes;
+//   6. the exact phase (device/ExactPhase.h) on every pair still open, with its first contact;
+//      the per-state reduction's compaction: only the outcomes that decide a state come back.
+// The host finishes the reduction (the first colliding pair in pair order), confirms curved
+// primitives on their exact shapes, and places conservative mode's unproven pairs (StagedBackend).
 
 #include <cstddef>
 #include <cstdint>
 
 #include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/HostDevice.h"
 #include "rastercheck/device/Kinematics.h"
 #include "rastercheck/device/MeshTree.h"
@@ -85,6 +88,14 @@ struct ModelArrays
     const TreeNode *objectTreeNodes;
     std::size_t numObjectTreeNodes;
     const std::uint32_t *objectTriangleOrder;
+    // The exact phase's arrays per party (CollisionModel::TreeArrays), with their sizes.
+    ExactArrays componentExact;
+    ExactArrays objectExact;
+    std::size_t numComponentGridCells, numComponentProbeDoubles, numComponentShellStarts;
+    std::size_t numObjectGridCells, numObjectProbeDoubles, numObjectShellStarts;
+    /** \brief 1 per pair with curved primitives (CurvedSolids::refines), numCurvedPairFlags of them. */
+    const std::uint8_t *curvedPairs;
+    std::size_t numCurvedPairFlags;
     /** \brief Places the objects' trees (world frame) in the stages' float frame (relative to
         origin). */
     Pose<float> objectTreePlacement;
@@ -142,6 +153,16 @@ struct StageSettings
         proof and stay open (raster or the host's exact phase), as the CPU backend decides them
         (every mode but raster). */
     bool meshObstaclesUnproven;
+    /** \brief A pair no test settles collides, placed by the host (conservative mode, but for mesh
+        obstacles): the stages leave those pairs open. Every other open pair is decided by the exact
+        phase in the stages (decideOpenPairs). */
+    bool unprovenCollides;
+    /** \brief An overlap of a pair with curved primitives is confirmed on the exact shapes by the host
+        (safe and exact mode): it does not settle its state. */
+    bool confirmCurvedOverlaps;
+    /** \brief Only the outcomes the per-state reduction reads come back (reduceOutcomes): per state,
+        the pairs up to its first settled overlap, none settled apart. */
+    bool onlyDecisive;
 };
 
 /** \brief The padding of \a pair for state \a s of a chunk: the request's, plus the pair's extra
@@ -176,7 +197,7 @@ RC_HD double environmentReachPadding(const ModelArrays &model, const StageSettin
 enum PairStatus : std::int32_t
 {
     PairApart = 0,     ///< settled: does not collide
-    PairOpen = 1,      ///< left to the exact narrow phase
+    PairOpen = 1,      ///< left to the host (conservative mode's unproven pairs)
     PairOverlaps = 2   ///< a ray found the solids overlapping (triangle and position set), or the hulls did (neither)
 };
 
@@ -187,7 +208,7 @@ struct PairOutcome
     std::uint32_t pair;
     std::int32_t status;
     std::int32_t triangle;
-    float position[3];
+    double position[3];  ///< world frame
 };
 
 /** \brief Limits of one pass; a chunk that would exceed them is split (verdicts do not change). */
@@ -219,6 +240,7 @@ struct StageCounts
     unsigned long long rasterizedPairs = 0;     ///< of those, pairs neither proof settled that went to the raster
     unsigned long long candidateTriangles = 0;  ///< triangles of rasterized pairs the node culls kept
     unsigned long long fragments = 0;
+    unsigned long long exactPairs = 0;  ///< pairs the exact phase decided in the stages
 
     StageCounts &operator+=(const StageCounts &other)
     {
@@ -227,6 +249,7 @@ struct StageCounts
         rasterizedPairs += other.rasterizedPairs;
         candidateTriangles += other.candidateTriangles;
         fragments += other.fragments;
+        exactPairs += other.exactPairs;
         return *this;
     }
 };
@@ -289,6 +312,11 @@ enum StageBuffer : int
     BufferSegmentStart,
     BufferHit,
     BufferOutcomes,
+    BufferExactFlags,
+    BufferFirstSettled,
+    BufferKeep,
+    BufferKept,
+    BufferKeptOutcomes,
     kNumStageBuffers
 };
 
@@ -374,6 +402,117 @@ RC_HD int rasterizePairTriangle(const StageSolid &a, const StageSolid &b, std::u
     const std::uint32_t code = partyB ? (local | kPartyB) : local;
     return rasterizeTriangle(grid, p0, p1, p2,
                              [&](int pixel, float depth, bool entering) { emit(pixel, depth, entering ? code | kEntering : code); });
+}
+
+/** \brief The two meshes of a pair as the exact phase reads them, with their poses (double,
+    world frame) at a state whose link poses are \a links, and whether each is closed. */
+RC_HD void exactSolids(const ModelArrays &model, std::uint32_t pair, const Pose<double> *links, ExactTree &a,
+                       Pose<double> &poseA, bool &closedA, ExactTree &b, Pose<double> &poseB, bool &closedB)
+{
+    const std::uint32_t m = static_cast<std::uint32_t>(model.numComponents);
+    const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
+    auto component = [&](std::uint32_t c, ExactTree &tree, Pose<double> &pose, bool &closed) {
+        const MeshSlice &slice = model.components[c];
+        tree = exactTreeOf(model.componentExact, c,
+                           TreeView{model.componentTreeNodes + slice.firstNode,
+                                    model.componentTriangleOrder + slice.firstTriangle, slice.numNodes},
+                           slice.firstTriangle, slice.numTriangles);
+        pose = links[model.componentLink[c]];
+        closed = slice.closed;
+    };
+    if (pair < environmentPairs)
+    {
+        component(pair % m, a, poseA, closedA);
+        const std::uint32_t o = pair / m;
+        const MeshSlice &slice = model.objects[o];
+        b = exactTreeOf(model.objectExact, o,
+                        TreeView{model.objectTreeNodes + slice.firstNode, model.objectTriangleOrder + slice.firstTriangle,
+                                 slice.numNodes},
+                        slice.firstTriangle, slice.numTriangles);
+        poseB = Pose<double>::identity();
+        closedB = slice.closed;
+        return;
+    }
+    const int *self = model.selfPairs + 2 * (pair - environmentPairs);
+    component(static_cast<std::uint32_t>(self[0]), a, poseA, closedA);
+    component(static_cast<std::uint32_t>(self[1]), b, poseB, closedB);
+}
+
+/** \brief The exact phase in the stages: every pair still open after the raster (or without one) is
+    decided on the executor by the exact test (solidsOverlap, what the CPU backend decides it by),
+    with its first contact: the triangle of B and the place. Not conservative mode's unproven pairs
+    other than mesh obstacles, which the host settles as colliding. One element per candidate, in
+    \a order when given (pair order: the same trees in a warp). \a exactFlags (numCandidates) gets
+    1 per pair decided here. */
+template <class Exec>
+void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
+                     std::uint32_t numCandidates, const std::uint32_t *order, PairOutcome *decided,
+                     std::uint8_t *exactFlags)
+{
+    const int numLinks = md.numLinks;
+    const std::uint32_t m = static_cast<std::uint32_t>(md.numComponents);
+    const std::uint32_t environmentPairs = static_cast<std::uint32_t>(md.numObjects) * m;
+    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t k) {
+        const std::size_t c = order ? order[k] : k;
+        PairOutcome &out = decided[c];
+        exactFlags[c] = 0;
+        if (out.status != PairOpen)
+            return;
+        const bool meshObstacle = out.pair < environmentPairs && hasPatches(md.convex, m + out.pair / m);
+        if (st.unprovenCollides && !(st.meshObstaclesUnproven && meshObstacle))
+            return;
+        ExactTree a, b;
+        Pose<double> poseA, poseB;
+        bool closedA = false, closedB = false;
+        exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
+                    closedB);
+        ExactContact contact;
+        exactFlags[c] = 1;
+        if (!solidsOverlap(a, poseA, closedA, b, poseB, closedB, pairPadding(md, st, out.state, out.pair), &contact))
+        {
+            out.status = PairApart;
+            return;
+        }
+        out.status = PairOverlaps;
+        out.triangle = contact.triangleB;
+        out.position[0] = contact.position.x;
+        out.position[1] = contact.position.y;
+        out.position[2] = contact.position.z;
+    });
+}
+
+/** \brief The per-state reduction's part on the executor (StageSettings::onlyDecisive): of each
+    state's outcomes (in pair order) only those the host reads: the first overlap that settles the
+    state (a curved pair's does not when the host confirms it on the exact shapes), and the pairs
+    before it the host must still decide; no pair settled apart. Every other outcome stays on the
+    executor, so a batch's download is about one outcome per colliding state. */
+template <class Exec>
+void reduceOutcomes(Exec &ex, const ModelArrays &md, const StageSettings &st, std::uint32_t numStates,
+                    std::uint32_t numCandidates, const PairOutcome *decided, const PairOutcome *&outcomes,
+                    std::uint32_t &numOutcomes)
+{
+    outcomes = decided;
+    numOutcomes = numCandidates;
+    if (!st.onlyDecisive)
+        return;
+    unsigned long long *firstSettled = ex.template buffer<unsigned long long>(BufferFirstSettled, numStates + 1);
+    std::uint8_t *keep = ex.template buffer<std::uint8_t>(BufferKeep, numCandidates + 1);
+    ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) { firstSettled[s] = ~0ull; });
+    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
+        const PairOutcome &o = decided[c];
+        const bool curved = st.confirmCurvedOverlaps && o.pair < md.numCurvedPairFlags && md.curvedPairs[o.pair];
+        if (o.status == PairOverlaps && !curved)
+            atomicMinimum(&firstSettled[o.state], static_cast<unsigned long long>(c));
+    });
+    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
+        keep[c] = decided[c].status != PairApart && c <= firstSettled[decided[c].state] ? 1 : 0;
+    });
+    std::uint32_t *kept = ex.template buffer<std::uint32_t>(BufferKept, numCandidates + 1);
+    const std::uint32_t numKept = ex.selectFlagged(keep, numCandidates, kept);
+    PairOutcome *compact = ex.template buffer<PairOutcome>(BufferKeptOutcomes, numKept + 1);
+    ex.forEach(numKept, [=] RC_LAMBDA(std::size_t k) { compact[k] = decided[kept[k]]; });
+    outcomes = compact;
+    numOutcomes = numKept;
 }
 
 /** \brief Runs the stages for \a numStates states (host arrays: \a hostStates row-major,
@@ -542,14 +681,17 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         // Nothing to rasterize (exact and conservative mode, contacts asked): no counts to wait for.
         ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
             decided[c] = PairOutcome{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs,
-                                     status[c], -1, {0.0f, 0.0f, 0.0f}};
+                                     status[c], -1, {0.0, 0.0, 0.0}};
         });
-        outcomes = decided;
-        numOutcomes = numCandidates;
+        std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, numCandidates + 1);
+        decideOpenPairs(ex, md, st, links, numCandidates, proofOrder, decided, exactFlags);
+        reduceOutcomes(ex, md, st, numStates, numCandidates, decided, outcomes, numOutcomes);
         if (counts)
         {
             counts->states += numStates;
             counts->survivingPairs += numCandidates;
+            std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, numCandidates + 1);
+            counts->exactPairs += ex.selectFlagged(exactFlags, numCandidates, list);
         }
         return true;
     }
@@ -646,7 +788,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     // Outcomes, in (state, pair) order.
     ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
         PairOutcome out{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs, status[c], -1,
-                        {0.0f, 0.0f, 0.0f}};
+                        {0.0, 0.0, 0.0}};
         if (out.status == PairOpen && rasterized[c])
         {
             if (hit[c] != ~0ull)
@@ -660,7 +802,10 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
                 StageSolid a, b;
                 pairSolids(md, out.pair, poses + s * m, bounds + s * m, a, b);
                 const int at = sortSearchPair(fragments + run, static_cast<int>(end - run), a.slice.closed, b.slice.closed);
-                hitContact(fragments + run, at, grids[c], pixel, out.triangle, out.position);
+                float position[3];  // relative to the model's origin, as the raster works
+                hitContact(fragments + run, at, grids[c], pixel, out.triangle, position);
+                for (int k = 0; k < 3; ++k)
+                    out.position[k] = static_cast<double>(position[k]) + md.origin[k];
                 out.status = PairOverlaps;
             }
             else if (!st.confirmMisses && !(pairPadding(md, st, out.state, out.pair) > 0))
@@ -668,14 +813,16 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         }
         decided[c] = out;
     });
-    outcomes = decided;
-    numOutcomes = numCandidates;
+    std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, numCandidates + 1);
+    decideOpenPairs(ex, md, st, links, numCandidates, proofOrder, decided, exactFlags);
+    reduceOutcomes(ex, md, st, numStates, numCandidates, decided, outcomes, numOutcomes);
     if (counts)
     {
         counts->states += numStates;
         counts->survivingPairs += numCandidates;
         std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, numCandidates + 1);
         counts->rasterizedPairs += ex.selectFlagged(rasterized, numCandidates, list);
+        counts->exactPairs += ex.selectFlagged(exactFlags, numCandidates, list);
         counts->candidateTriangles += numItems;
         counts->fragments += numFragments;
     }

@@ -3,8 +3,16 @@
 // Functions marked RC_HD are compiled by both g++ (CPU backend) and nvcc (CUDA kernels), so every
 // per-element step of the pipeline has exactly one implementation. Headers under device/ must not
 // include Eigen or the standard library containers.
+//
+// RC_HD_CALL marks the few large ones that many call sites share (the exact phase's triangle tests
+// and predicates, its tree walks): on the device they stay real calls, not forced inline, which
+// would copy them into every caller (the kernel with the exact phase took nvcc over half an hour
+// to compile fully inlined) and give each copy its own registers. On the host they are inline as
+// usual, which leaves the choice to the compiler.
 #if defined(__CUDACC__)
 #define RC_HD __host__ __device__ __forceinline__
+#define RC_HD_CALL __host__ __device__ __noinline__
 #else
 #define RC_HD inline
+#define RC_HD_CALL inline
 #endif

@@ -3,9 +3,8 @@
 // Every mesh's triangle hierarchy as flat arrays that the CPU and the GPU read alike: the nodes
 // geometry/MeshBvh builds (oriented boxes in the mesh's own frame), and per mesh the order of its
 // triangles in the leaves. The batched stages walk them (walkTree below) per surviving pair to pick
-// the triangles a pair's image can see, so no stage scans a whole large mesh. The exact phase on the
-// host reads the same nodes, but its tree-against-tree descent (MeshBvh's surfacesWithin) is a loop
-// of its own; only its point-in-solid rays use walkTree.
+// the triangles a pair's image can see, so no stage scans a whole large mesh; the exact phase
+// (device/ExactPhase.h) walks them tree against tree, on both backends.
 
 #include <cstdint>
 

@@ -24,6 +24,8 @@ template <class T>
 struct Vec3
 {
     T x, y, z;
+
+    RC_HD T operator[](int k) const { return k == 0 ? x : (k == 1 ? y : z); }
 };
 
 template <class T>

@@ -10,8 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "rastercheck/core/Error.h"
-#include "rastercheck/device/SolidRelation.h"
-#include "rastercheck/geometry/TriangleTests.h"
+#include "rastercheck/device/ExactPhase.h"
 
 namespace rastercheck
 {
@@ -19,62 +18,7 @@ namespace
 {
 using Vec = Eigen::Vector3d;
 using CornersMap = Eigen::Map<const Vec>;
-
-// Separating-axis test (Gottschalk's 15 axes) of a fixed-tree node's box against a moving-tree
-// node's box placed in the fixed frame (its axes the columns of P, its centre at `between` from the
-// fixed box's centre): false when some axis shows a gap wider than reach. Lazy: the fixed box's
-// face axes first, one row of the relative rotation at a time (on FCL's env/rob, 73 % of the
-// rejections come from those three axes), and a moving box whose centre lies in the fixed box
-// meets it without further test. The cross-product axes are not normalised; their length is at
-// most 1, so comparing their projected gap against the full reach only keeps more pairs.
-bool boxesMayMeet(const MeshBvh::Node &nf, const Eigen::Matrix3d &P, const MeshBvh::Node &nm, const Vec &between,
-                  double reach)
-{
-    const float *f = nf.axes;  // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
-    const double ea[3] = {nf.halfExtents[0], nf.halfExtents[1], nf.halfExtents[2]};
-    const double eb[3] = {nm.halfExtents[0], nm.halfExtents[1], nm.halfExtents[2]};
-    double d[3];
-    for (int i = 0; i < 3; ++i)
-        d[i] = f[i] * between[0] + f[3 + i] * between[1] + f[6 + i] * between[2];
-    if (std::abs(d[0]) <= ea[0] && std::abs(d[1]) <= ea[1] && std::abs(d[2]) <= ea[2])
-        return true;
-    const double *p = P.data();  // column-major: the moving box's axis j is p[3j .. 3j + 2]
-    double R[3][3], Q[3][3];     // R(i, j) = axis i of the fixed box . axis j of the moving box; Q = |R|
-    for (int i = 0; i < 3; ++i)
-    {
-        const double a0 = f[i], a1 = f[3 + i], a2 = f[6 + i];
-        for (int j = 0; j < 3; ++j)
-        {
-            R[i][j] = a0 * p[3 * j] + a1 * p[3 * j + 1] + a2 * p[3 * j + 2];
-            Q[i][j] = std::abs(R[i][j]);
-        }
-        if (std::abs(d[i]) > ea[i] + Q[i][0] * eb[0] + Q[i][1] * eb[1] + Q[i][2] * eb[2] + reach)
-            return false;
-    }
-    for (int j = 0; j < 3; ++j)
-        if (std::abs(d[0] * R[0][j] + d[1] * R[1][j] + d[2] * R[2][j]) >
-            ea[0] * Q[0][j] + ea[1] * Q[1][j] + ea[2] * Q[2][j] + eb[j] + reach)
-            return false;
-    for (int i = 0; i < 3; ++i)
-    {
-        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-        for (int j = 0; j < 3; ++j)
-        {
-            const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-            const double gap = std::abs(d[i2] * R[i1][j] - d[i1] * R[i2][j]);
-            const double radii = ea[i1] * Q[i2][j] + ea[i2] * Q[i1][j] + eb[j1] * Q[i][j2] + eb[j2] * Q[i][j1];
-            if (gap > radii + reach)
-                return false;
-        }
-    }
-    return true;
-}
-
-// What the float storage of the nodes may be off by, as a fraction of the coordinates'
-// magnitude: their axes depart from orthonormal by a few float ulps (about 1e-7), so a corner may
-// sit that fraction of the node's size outside its stored box. Ten times that is the slack every
-// node test adds; it only keeps more pairs.
-constexpr double kNodeRounding = 1e-6;
+using device::kNodeRounding;
 
 // Levels of the tree split by the surface area heuristic (the rest at the median): 24 +
 // log2(2^31) stays below MeshBvh::kMaxDepth. And the bins it weighs cuts between (32 gave up to 3 %
@@ -90,26 +34,46 @@ float roundedUp(double x)
     return f;
 }
 
-// A magnitude of a tree's coordinates: its root's radius plus its distance from the origin.
-double treeScale(const MeshBvh &bvh)
+device::Vec3<double> toDevice(const Vec &v)
 {
-    const MeshBvh::Node &root = bvh.nodes()[0];
-    return root.radius + nodeCentre(root).norm();
+    return {v.x(), v.y(), v.z()};
 }
-// pointInsideClosedMesh() without the inside grid: device::pointInsideTree.
-bool insideByRays(const MeshBvh &bvh, const Vec &point)
+
+device::Pose<double> toDevice(const Eigen::Isometry3d &pose)
 {
-    if (bvh.empty())
-        return false;
-    const MeshBvh::Node &root = bvh.nodes()[0];
-    // Large against the rounding of the ray/triangle arithmetic (1e-16 of these magnitudes), small
-    // against any feature a mesh is meant to resolve.
-    const double tolerance = 1e-9 * (2.0 * root.radius + (point - nodeCentre(root)).norm());
-    const double margin = tolerance + kNodeRounding * (treeScale(bvh) + point.norm());
-    if (!nodeContains(root, point, margin))
-        return false;
-    return device::pointInsideTree(bvh.view(), bvh.slotCorners(0), {point.x(), point.y(), point.z()}, tolerance,
-                                   margin);
+    device::Pose<double> p;
+    for (int r = 0; r < 3; ++r)
+    {
+        for (int c = 0; c < 3; ++c)
+            p.m[4 * r + c] = pose.linear()(r, c);
+        p.m[4 * r + 3] = pose.translation()[r];
+    }
+    return p;
+}
+
+// The caller's workspace lent to the exact phase: the placed-node cache sized for the smaller tree
+// (the one a query moves), and the leaf hints.
+device::ExactScratch lend(ExactWorkspace *workspace, const MeshBvh &a, const MeshBvh &b)
+{
+    if (!workspace)
+        return {};
+    const std::size_t moving = std::min(a.numNodes(), b.numNodes());
+    if (moving <= ExactWorkspace::kMaxPlacedNodes && workspace->stamps.size() < moving)
+    {
+        workspace->placed.resize(moving);
+        workspace->stamps.resize(moving, 0);
+    }
+    return device::ExactScratch{workspace->placed.data(), workspace->stamps.data(), workspace->stamps.size(),
+                                &workspace->query,        workspace->hints.data(),  workspace->hints.size()};
+}
+
+MeshContact fromDevice(const device::ExactContact &c)
+{
+    MeshContact contact;
+    contact.position = Vec(c.position.x, c.position.y, c.position.z);
+    contact.triangleA = c.triangleA;
+    contact.triangleB = c.triangleB;
+    return contact;
 }
 }  // namespace
 
@@ -208,15 +172,16 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
                     extreme[2 * k + 1] = v;
             }
         }
+    std::vector<std::uint32_t> probes;
     for (std::size_t shell = 0; shell < shells; ++shell)
     {
-        const std::size_t begin = shellProbes_.size();
-        shellProbes_.push_back(firstVertex[shell]);
+        probes.assign(1, firstVertex[shell]);
         for (std::uint32_t v : extremes[shell])
-            if (std::find(shellProbes_.begin() + static_cast<std::ptrdiff_t>(begin), shellProbes_.end(), v) ==
-                shellProbes_.end())
-                shellProbes_.push_back(v);
-        shellProbeStart_.push_back(static_cast<std::uint32_t>(shellProbes_.size()));
+            if (std::find(probes.begin(), probes.end(), v) == probes.end())
+                probes.push_back(v);
+        for (std::uint32_t v : probes)
+            shellProbePoints_.insert(shellProbePoints_.end(), mesh.vertices[v].data(), mesh.vertices[v].data() + 3);
+        shellProbeStart_.push_back(static_cast<std::uint32_t>(shellProbePoints_.size() / 3));
     }
     ownCorners_.resize(9 * n);
     for (std::size_t slot = 0; slot < n; ++slot)
@@ -247,7 +212,7 @@ void MeshBvh::buildInsideGrid()
     }
     // Far above the rounding of a cell index or a plane distance (1e-16 of the coordinates), far
     // below any feature: a cell this close to a triangle is left to the ray.
-    const double margin = kNodeRounding * (treeScale(*this) + std::max(lower.norm(), upper.norm()));
+    const double margin = kNodeRounding * (device::treeScale(exactTree()) + std::max(lower.norm(), upper.norm()));
     lower.array() -= 2.0 * margin;
     upper.array() += 2.0 * margin;
     const Vec size = upper - lower;
@@ -309,7 +274,7 @@ void MeshBvh::buildInsideGrid()
         const int si = static_cast<int>(seed % nx), sj = static_cast<int>(seed / nx % ny),
                   sk = static_cast<int>(seed / nx / ny);
         const Vec centre = lower + cellSize.cwiseProduct(Vec(si + 0.5, sj + 0.5, sk + 0.5));
-        const std::uint8_t answer = insideByRays(*this, centre) ? 2 : 1;
+        const std::uint8_t answer = device::pointInsideClosedTree(exactTree(), toDevice(centre)) ? 2 : 1;
         ownGridCells_[seed] = answer;
         queue.assign(1, static_cast<std::uint32_t>(seed));
         while (!queue.empty())
@@ -338,18 +303,7 @@ void MeshBvh::buildInsideGrid()
 
 int MeshBvh::insideGridAnswer(const Eigen::Vector3d &point) const
 {
-    if (numGridCells_ == 0)
-        return 0;
-    int cell[3];
-    for (int k = 0; k < 3; ++k)
-    {
-        const double at = (point[k] - gridLower_[k]) * gridInverseCell_[k];
-        // Beyond the grid (grown past every vertex) is outside; NaN is too, as the ray would say.
-        if (!(at >= 0.0 && at < gridSize_[k]))
-            return 1;
-        cell[k] = static_cast<int>(at);
-    }
-    return gridCells_[(static_cast<std::size_t>(cell[2]) * gridSize_[1] + cell[1]) * gridSize_[0] + cell[0]];
+    return device::insideGridAnswer(exactTree(), toDevice(point));
 }
 
 bool MeshBvh::sahSplit(std::uint32_t begin, std::uint32_t end, const Eigen::Matrix3d &axes,
@@ -519,284 +473,52 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
     return 1 + std::max(left, right);
 }
 
-namespace
+device::ExactTree MeshBvh::exactTree() const
 {
-using PlacedNode = ExactWorkspace::PlacedNode;
-using LeafHint = ExactWorkspace::LeafHint;
-
-LeafHint &leafHint(ExactWorkspace &workspace, const MeshBvh &fixed, const MeshBvh &moving)
-{
-    const auto key = reinterpret_cast<std::uintptr_t>(&fixed) * 0x9E3779B97F4A7C15ull ^
-                     reinterpret_cast<std::uintptr_t>(&moving) * 0xC2B2AE3D27D4EB4Full;
-    return workspace.hints[(key >> 32) % ExactWorkspace::kLeafHints];
+    device::ExactTree t{};
+    t.tree = view();
+    t.numTriangles = static_cast<std::uint32_t>(mesh_->triangles.size());
+    t.corners = corners_;
+    for (int k = 0; k < 3; ++k)
+    {
+        t.grid.lower[k] = gridLower_[k];
+        t.grid.inverseCell[k] = gridInverseCell_[k];
+        t.grid.size[k] = gridSize_[k];
+    }
+    t.gridCells = numGridCells_ > 0 ? gridCells_ : nullptr;
+    t.probePoints = shellProbePoints_.data();
+    t.shellProbeStart = shellProbeStart_.data();
+    t.numShells = static_cast<std::uint32_t>(numShells());
+    return t;
 }
-
-// The exact phase's query for device::walkPairs, with `fixed`'s frame as the working frame and
-// `moving` placed there by R, T: bounding spheres, then boxesMayMeet(), both grown by `reach`;
-// leaf pairs by the triangle tests, in the order (a, b) of the caller (`movingIsA` says which tree
-// is A). Stops at the first contact.
-struct ExactQuery
-{
-    const MeshBvh &fixed, &moving;
-    const MeshBvh::Node *nodesF, *nodesM;
-    Eigen::Matrix3d R;
-    Vec T;
-    bool movingIsA;
-    double padding, reach;
-    ExactWorkspace *workspace;  // null: nodes placed per visit, no hint
-    bool cached;                // the moving tree's placed nodes are kept in the workspace
-    LeafHint *hint;
-    Vec *point;  // receives the contact's point (working frame)
-    PlacedNode scratch{};
-    Vec between = Vec::Zero();  // of the pair last tested: the moving node's centre less the fixed one's
-    double nearestGap = std::numeric_limits<double>::infinity();
-    std::uint32_t slotFixed = 0, slotMoving = 0;
-
-    const PlacedNode &placed(std::int32_t index)
-    {
-        PlacedNode &slot = cached ? workspace->placed[index] : scratch;
-        if (!cached || workspace->stamps[index] != workspace->query)
-        {
-            slot.axes = R * nodeAxes(nodesM[index]);
-            slot.centre = R * nodeCentre(nodesM[index]) + T;
-            if (cached)
-                workspace->stamps[index] = workspace->query;
-        }
-        return slot;
-    }
-
-    // The moving tree's triangle in slot sm, placed in the working frame.
-    void place(std::uint32_t sm, Vec placedTriangle[3]) const
-    {
-        const double *cm = moving.slotCorners(sm);
-        for (int k = 0; k < 3; ++k)
-            placedTriangle[k] = R * CornersMap(cm + 3 * k) + T;
-    }
-
-    bool triangles(std::uint32_t sf, const Vec placedTriangle[3])
-    {
-        const double *cf = fixed.slotCorners(sf);
-        const Vec fixedTriangle[3] = {CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6)};
-        const Vec *ta = movingIsA ? placedTriangle : fixedTriangle, *tb = movingIsA ? fixedTriangle : placedTriangle;
-        return padding > 0.0 ? trianglesWithin(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], padding, point)
-                             : trianglesIntersect(ta[0], ta[1], ta[2], tb[0], tb[1], tb[2], point);
-    }
-
-    void remember(std::uint32_t sf, std::uint32_t sm)
-    {
-        if (!hint)
-            return;
-        hint->fixed = &fixed;
-        hint->moving = &moving;
-        hint->slotFixed = sf;
-        hint->slotMoving = sm;
-    }
-
-    bool test(device::NodePair pair)
-    {
-        const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
-        const PlacedNode &pm = placed(pair.b);
-        // Bounding spheres first: they settle most pairs that are far apart for one dot product.
-        between = pm.centre - nodeCentre(nf);
-        const double spheres = static_cast<double>(nf.radius) + nm.radius + reach;
-        if (between.squaredNorm() > spheres * spheres)
-            return false;
-        return boxesMayMeet(nf, pm.axes, nm, between, reach);
-    }
-
-    bool leaves(device::NodePair pair)
-    {
-        const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
-        Vec placedTriangle[3];
-        for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
-        {
-            place(sm, placedTriangle);
-            for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
-                if (triangles(sf, placedTriangle))
-                {
-                    remember(sf, sm);
-                    slotFixed = sf;
-                    slotMoving = sm;
-                    return false;
-                }
-        }
-        const double gap = std::sqrt(between.squaredNorm()) - (static_cast<double>(nf.radius) + nm.radius);
-        if (gap < nearestGap)
-        {
-            nearestGap = gap;
-            remember(nf.firstSlot(), nm.firstSlot());
-        }
-        return true;
-    }
-
-    // Descend into the bigger node, so both trees shrink at a similar pace.
-    bool splitA(device::NodePair pair) const { return nodesF[pair.a].radius >= nodesM[pair.b].radius; }
-
-    // The child nearer the other node first: in a colliding state the contact is more likely
-    // there, and the walk stops at the first one.
-    bool secondFirst(device::NodePair first, device::NodePair second)
-    {
-        if (first.a != second.a)
-        {
-            const Vec centre = placed(first.b).centre;
-            return (nodeCentre(nodesF[second.a]) - centre).squaredNorm() <
-                   (nodeCentre(nodesF[first.a]) - centre).squaredNorm();
-        }
-        // One at a time: placed() may hand back the same scratch node for both.
-        const Vec fixedCentre = nodeCentre(nodesF[first.a]);
-        const double toSecond = (placed(second.b).centre - fixedCentre).squaredNorm();
-        return toSecond < (placed(first.b).centre - fixedCentre).squaredNorm();
-    }
-};
-
-// The query's outcome: no contact, a contact (slots set), or a walk its stack could not hold.
-enum class Traversal
-{
-    Apart,
-    Contact,
-    Overflow
-};
-
-Traversal traverse(const MeshBvh &fixed, const MeshBvh &moving, const Eigen::Isometry3d &fMm, bool movingIsA,
-                   double padding, double reach, bool useHint, ExactWorkspace *workspace, Vec *point,
-                   std::uint32_t *slotFixed, std::uint32_t *slotMoving)
-{
-    const bool cached = workspace && moving.numNodes() <= ExactWorkspace::kMaxPlacedNodes;
-    if (cached)
-    {
-        if (workspace->stamps.size() < moving.numNodes())
-        {
-            workspace->placed.resize(moving.numNodes());
-            workspace->stamps.resize(moving.numNodes(), 0);
-        }
-        if (++workspace->query == 0)  // the stamps wrapped: forget them all
-        {
-            std::fill(workspace->stamps.begin(), workspace->stamps.end(), 0);
-            workspace->query = 1;
-        }
-    }
-    ExactQuery query{fixed,
-                     moving,
-                     fixed.nodes(),
-                     moving.nodes(),
-                     fMm.linear(),
-                     fMm.translation(),
-                     movingIsA,
-                     padding,
-                     reach,
-                     workspace,
-                     cached,
-                     workspace ? &leafHint(*workspace, fixed, moving) : nullptr,
-                     point};
-    const LeafHint *hint = query.hint;
-    Vec placedTriangle[3];
-    if (useHint && hint && hint->fixed == &fixed && hint->moving == &moving &&
-        hint->slotFixed < fixed.mesh().triangles.size() && hint->slotMoving < moving.mesh().triangles.size() &&
-        (query.place(hint->slotMoving, placedTriangle), query.triangles(hint->slotFixed, placedTriangle)))
-    {
-        *slotFixed = hint->slotFixed;
-        *slotMoving = hint->slotMoving;
-        return Traversal::Contact;
-    }
-    const device::WalkEnd end = device::walkPairs(fixed.nodes(), moving.nodes(), query);
-    if (end == device::WalkEnd::Finished)
-        return Traversal::Apart;
-    *slotFixed = query.slotFixed;
-    *slotMoving = query.slotMoving;
-    return end == device::WalkEnd::Stopped ? Traversal::Contact : Traversal::Overflow;
-}
-}  // namespace
 
 bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
                     double padding, MeshContact *contact, ExactWorkspace *workspace)
 {
-    if (a.empty() || b.empty())
-        return false;
-    padding = std::max(0.0, padding);
-    // The tree with fewer nodes is the one moved (its nodes placed once per query); the other's
-    // frame is the working frame, where the moved tree's triangles are placed by one transform
-    // before the exact tests.
-    const bool movingIsA = a.numNodes() <= b.numNodes();
-    const MeshBvh &fixed = movingIsA ? b : a, &moving = movingIsA ? a : b;
-    const Eigen::Isometry3d &fixedPose = movingIsA ? poseB : poseA, &movingPose = movingIsA ? poseA : poseB;
-    const Eigen::Isometry3d fMm = fixedPose.inverse(Eigen::Isometry) * movingPose;
-    // The node tests must never drop a pair the triangle test would accept: the slack covers the
-    // nodes' float storage (kNodeRounding) and the rounding of the transform and the projections.
-    const double reach = padding + kNodeRounding * (fMm.translation().norm() + treeScale(a) + treeScale(b));
-    Vec point;
-    std::uint32_t slotFixed = 0, slotMoving = 0;
-    // A caller that asks for the contact gets the walk's own first one, independent of what this
-    // workspace asked before (the backends promise the same first contacts); the others may start
-    // from the remembered leaf pair.
-    const Traversal outcome = traverse(fixed, moving, fMm, movingIsA, padding, reach, contact == nullptr, workspace,
-                                       &point, &slotFixed, &slotMoving);
-    if (outcome == Traversal::Apart)
-        return false;
-    if (contact && outcome == Traversal::Overflow)  // the safe answer, with no triangle to name
-    {
-        contact->position = fixedPose * nodeCentre(fixed.nodes()[0]);
-        contact->triangleA = -1;
-        contact->triangleB = -1;
-    }
-    else if (contact)
-    {
-        contact->position = fixedPose * point;
-        const std::int32_t triangleFixed = static_cast<std::int32_t>(fixed.triangleOrder()[slotFixed]);
-        const std::int32_t triangleMoving = static_cast<std::int32_t>(moving.triangleOrder()[slotMoving]);
-        contact->triangleA = movingIsA ? triangleMoving : triangleFixed;
-        contact->triangleB = movingIsA ? triangleFixed : triangleMoving;
-    }
-    return true;
+    device::ExactScratch scratch = lend(workspace, a, b);
+    device::ExactContact found;
+    const bool within = device::surfacesWithin(a.exactTree(), toDevice(poseA), b.exactTree(), toDevice(poseB), padding,
+                                               contact ? &found : nullptr, &scratch);
+    if (within && contact)
+        *contact = fromDevice(found);
+    return within;
 }
 
 bool pointInsideClosedMesh(const MeshBvh &bvh, const Vec &point)
 {
-    const int known = bvh.insideGridAnswer(point);
-    return known != 0 ? known == 2 : insideByRays(bvh, point);
+    return device::pointInsideClosedTree(bvh.exactTree(), toDevice(point));
 }
 
 bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closedA, const MeshBvh &b,
                    const Eigen::Isometry3d &poseB, bool closedB, double padding, MeshContact *contact,
                    ExactWorkspace *workspace)
 {
-    if (surfacesWithin(a, poseA, b, poseB, padding, contact, workspace))
-        return true;
-    if (a.empty() || b.empty())
-        return false;
-    // The surfaces do not meet, so each shell of one solid lies wholly inside or wholly outside
-    // the other: any one vertex of a shell tells which. The first probe the outer mesh's inside
-    // grid knows answers; a ray is cast only when it knows none (near-contact states of OMPL.app's
-    // Home: 80 % of the free states needed a ray from the first vertex alone, 9 % with the probes).
-    const auto containedIn = [contact](const MeshBvh &inner, const Eigen::Isometry3d &innerPose, const MeshBvh &outer,
-                                       const Eigen::Isometry3d &outerPose)
-    {
-        const Eigen::Isometry3d innerToOuter = outerPose.inverse(Eigen::Isometry) * innerPose;
-        const std::uint32_t *probes = inner.shellProbes(), *start = inner.shellProbeStart();
-        for (std::size_t shell = 0; shell < inner.numShells(); ++shell)
-        {
-            int known = 0;
-            Vec vertex;
-            for (std::uint32_t k = start[shell]; k < start[shell + 1]; ++k)
-            {
-                vertex = inner.mesh().vertices[probes[k]];
-                known = outer.insideGridAnswer(innerToOuter * vertex);
-                if (known != 0)
-                    break;
-            }
-            if (known == 0)
-                vertex = inner.mesh().vertices[probes[start[shell]]];
-            if (known == 0 ? !insideByRays(outer, innerToOuter * vertex) : known == 1)
-                continue;
-            if (contact)
-            {
-                contact->position = innerPose * vertex;
-                contact->triangleA = -1;
-                contact->triangleB = -1;
-            }
-            return true;
-        }
-        return false;
-    };
-    return (closedB && containedIn(a, poseA, b, poseB)) || (closedA && containedIn(b, poseB, a, poseA));
+    device::ExactScratch scratch = lend(workspace, a, b);
+    device::ExactContact found;
+    const bool overlap = device::solidsOverlap(a.exactTree(), toDevice(poseA), closedA, b.exactTree(), toDevice(poseB),
+                                               closedB, padding, contact ? &found : nullptr, &scratch);
+    if (overlap && contact)
+        *contact = fromDevice(found);
+    return overlap;
 }
 }  // namespace rastercheck

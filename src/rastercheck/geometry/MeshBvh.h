@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/MeshTree.h"
 #include "rastercheck/geometry/Mesh.h"
 
@@ -98,13 +99,17 @@ public:
     int insideGridAnswer(const Eigen::Vector3d &point) const;
     bool hasInsideGrid() const { return numGridCells_ > 0; }
 
-    /** \brief Per connected shell of the mesh, a few of its vertex indices (its first vertex, then
-        its extreme vertices along the axes), for containment tests: when two surfaces do not meet,
-        any vertex of a shell is inside the other solid exactly when the whole shell is. Shell s's
-        probes are shellProbes()[shellProbeStart()[s] .. shellProbeStart()[s + 1]). */
+    /** \brief Per connected shell of the mesh, a few of its vertices (its first vertex, then its
+        extreme vertices along the axes; mesh frame, 3 doubles each), for containment tests: when
+        two surfaces do not meet, any vertex of a shell is inside the other solid exactly when the
+        whole shell is. Shell s's probes are [shellProbeStart()[s], shellProbeStart()[s + 1]). */
     std::size_t numShells() const { return shellProbeStart_.size() - 1; }
-    const std::uint32_t *shellProbes() const { return shellProbes_.data(); }
-    const std::uint32_t *shellProbeStart() const { return shellProbeStart_.data(); }
+    const std::vector<double> &shellProbePoints() const { return shellProbePoints_; }
+    const std::vector<std::uint32_t> &shellProbeStart() const { return shellProbeStart_; }
+
+    /** \brief The tree, corners, inside grid and probes as the exact phase reads them
+        (device/ExactPhase.h). A view: valid while this tree and its arrays live. */
+    device::ExactTree exactTree() const;
 
 private:
     int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level,
@@ -125,7 +130,7 @@ private:
     const std::uint32_t *triangleOrder_ = nullptr;
     std::vector<double> ownCorners_;  // n_triangles x 9, slot order
     const double *corners_ = nullptr;
-    std::vector<std::uint32_t> shellProbes_;         // n_probes: vertex numbers
+    std::vector<double> shellProbePoints_;           // n_probes x 3
     std::vector<std::uint32_t> shellProbeStart_{0};  // n_shells + 1
     int depth_ = -1;
     // Inside grid: a regular grid over the mesh's bounding box (mesh frame), one byte per cell
@@ -148,11 +153,7 @@ struct ExactWorkspace
         query, where a node pair's test would otherwise redo it for every node of the other tree it
         meets. Stamped by query, so that nothing is cleared between queries; trees above
         kMaxPlacedNodes are placed per visit instead (100 bytes per node). */
-    struct PlacedNode
-    {
-        Eigen::Matrix3d axes;
-        Eigen::Vector3d centre;
-    };
+    using PlacedNode = device::PlacedNode;
     static constexpr std::size_t kMaxPlacedNodes = std::size_t(1) << 17;
     std::vector<PlacedNode> placed;
     std::vector<std::uint32_t> stamps;
@@ -168,12 +169,7 @@ struct ExactWorkspace
         miss goes on to the walk, so no verdict depends on it. Keyed by the trees' addresses; a
         stale entry (a tree freed and another built at its address) names slots that are checked
         against the tree's size. */
-    struct LeafHint
-    {
-        const void *fixed = nullptr;
-        const void *moving = nullptr;
-        std::uint32_t slotFixed = 0, slotMoving = 0;
-    };
+    using LeafHint = device::LeafHint;
     static constexpr std::size_t kLeafHints = 64;
     std::array<LeafHint, kLeafHints> hints{};
 };
@@ -198,11 +194,11 @@ struct MeshContact
     pair where the workspace's last query of the same two trees touched or came nearest (nearby
     states often touch there again); that may change which contact is found first, never the
     answer, so a query with \a contact skips it and its first contact does not depend on earlier
-    queries. The smaller tree's nodes are placed in the other's frame once per query, in the
-    workspace (up to 13 MB for a tree of 2^17 nodes; larger trees, and queries without a
-    workspace, place them per visit). Thread-safe given one workspace per thread. The walk is
-    device::walkPairs; a tree too deep for its stack (which the constructor rules out) would
-    answer true, with no triangles named. */
+    queries. This is device::surfacesWithin on exactTree(), the code the batched stages run per pair. The smaller tree's
+   nodes are placed in the other's frame once per query, in the workspace (up to 13 MB for a tree of 2^17 nodes; larger
+   trees, and queries without a workspace, place them per visit). Thread-safe given one workspace per thread. The walk
+   is device::walkPairs; a tree too deep for its stack (which the constructor rules out) would answer true, with no
+   triangles named. */
 bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
                     double padding, MeshContact *contact = nullptr, ExactWorkspace *workspace = nullptr);
 

@@ -5,7 +5,7 @@
 namespace rastercheck
 {
 /** \brief Exact triangle/triangle intersection of closed triangles (touching counts), including
-    the coplanar case. Every decision is an exact orientation predicate (orient3d/orient2d) on the
+    the coplanar case (device::trianglesIntersect on these coordinates). Every decision is an exact orientation predicate (orient3d/orient2d) on the
     double coordinates given, so the answer is the true one for those coordinates: it is
     symmetric in the two triangles and in the order of their vertices. A degenerate triangle
     (collinear or repeated vertices) is treated as the segment or point it covers.

@@ -1,16 +1,24 @@
-#include "rastercheck/geometry/Predicates.h"
+#pragma once
+
+// Exact orientation predicates on doubles, for the exact phase on both backends (the triangle tests
+// of device/TriangleTests.h). A floating-point filter decides almost every call; the rest are
+// evaluated exactly with floating-point expansions after J. R. Shewchuk, "Adaptive Precision
+// Floating-Point Arithmetic and Fast Robust Geometric Predicates" (1997): a value is held exactly as
+// a sum of non-overlapping doubles of increasing magnitude, so its sign is the sign of the last
+// (largest) term. Only the rare calls the filter cannot decide come there, so that part favours
+// clarity over speed; the capacity covers the largest intermediate of orient3d (3 terms of 64
+// components). Exact only where every operation rounds once: nvcc builds with --fmad=false (no
+// contraction into fused multiply-adds) and twoProduct's fma is the one fused operation meant.
 
 #include <cmath>
 
-namespace rastercheck
+#include "rastercheck/device/HostDevice.h"
+#include "rastercheck/device/Pose.h"
+
+namespace rastercheck::device
 {
-namespace
+namespace predicates
 {
-// Floating-point expansions after J. R. Shewchuk, "Adaptive Precision Floating-Point Arithmetic and
-// Fast Robust Geometric Predicates" (1997): a value is held exactly as a sum of non-overlapping
-// doubles of increasing magnitude, so its sign is the sign of the last (largest) term. Only the
-// rare calls the filter cannot decide come here, so the code favours clarity over speed; the
-// capacity covers the largest intermediate of orient3d (3 terms of 64 components).
 constexpr double kEpsilon = 0x1p-53;  // half an ulp of 1: the relative rounding error of one operation
 constexpr double kOrient2dBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;
 constexpr double kOrient3dBound = (7.0 + 56.0 * kEpsilon) * kEpsilon;
@@ -22,7 +30,7 @@ struct Expansion
     int size = 0;
 };
 
-inline void twoSum(double a, double b, double &sum, double &error)
+RC_HD void twoSum(double a, double b, double &sum, double &error)
 {
     sum = a + b;
     const double bVirtual = sum - a;
@@ -30,19 +38,19 @@ inline void twoSum(double a, double b, double &sum, double &error)
     error = (a - aVirtual) + (b - bVirtual);
 }
 
-inline void fastTwoSum(double a, double b, double &sum, double &error)
+RC_HD void fastTwoSum(double a, double b, double &sum, double &error)
 {
     sum = a + b;
     error = b - (sum - a);
 }
 
-inline void twoProduct(double a, double b, double &product, double &error)
+RC_HD void twoProduct(double a, double b, double &product, double &error)
 {
     product = a * b;
-    error = std::fma(a, b, -product);  // exact: fma rounds once, and a*b - product is representable
+    error = fma(a, b, -product);  // exact: fma rounds once, and a*b - product is representable
 }
 
-inline Expansion<2> exactDifference(double a, double b)
+RC_HD Expansion<2> exactDifference(double a, double b)
 {
     Expansion<2> e;
     double sum = 0.0, error = 0.0;
@@ -56,7 +64,7 @@ inline Expansion<2> exactDifference(double a, double b)
 // h = e + b (Shewchuk's GROW-EXPANSION with zero elimination).
 // The caller guarantees room for e.size + 1 terms.
 template <int Out, int In>
-void growExpansion(const Expansion<In> &e, double b, Expansion<Out> &h)
+RC_HD void growExpansion(const Expansion<In> &e, double b, Expansion<Out> &h)
 {
     double q = b;
     h.size = 0;
@@ -73,7 +81,7 @@ void growExpansion(const Expansion<In> &e, double b, Expansion<Out> &h)
 }
 
 template <int Out, int In>
-void copyExpansion(const Expansion<In> &e, Expansion<Out> &h)
+RC_HD void copyExpansion(const Expansion<In> &e, Expansion<Out> &h)
 {
     h.size = e.size;
     for (int i = 0; i < e.size; ++i)
@@ -83,7 +91,7 @@ void copyExpansion(const Expansion<In> &e, Expansion<Out> &h)
 // h = e + f, by growing e with each term of f (the result stays non-overlapping). The caller
 // guarantees room for e.size + f.size terms.
 template <int Out, int InE, int InF>
-void sumExpansions(const Expansion<InE> &e, const Expansion<InF> &f, Expansion<Out> &h)
+RC_HD void sumExpansions(const Expansion<InE> &e, const Expansion<InF> &f, Expansion<Out> &h)
 {
     Expansion<Out> scratch;
     copyExpansion(e, h);
@@ -96,7 +104,7 @@ void sumExpansions(const Expansion<InE> &e, const Expansion<InF> &f, Expansion<O
 
 // h = e * b (Shewchuk's SCALE-EXPANSION with zero elimination).
 template <int Out, int In>
-void scaleExpansion(const Expansion<In> &e, double b, Expansion<Out> &h)
+RC_HD void scaleExpansion(const Expansion<In> &e, double b, Expansion<Out> &h)
 {
     static_assert(Out >= 2 * In, "expansion capacity");
     h.size = 0;
@@ -120,7 +128,7 @@ void scaleExpansion(const Expansion<In> &e, double b, Expansion<Out> &h)
 }
 
 template <int Out, int InE, int InF>
-void multiplyExpansions(const Expansion<InE> &e, const Expansion<InF> &f, Expansion<Out> &h)
+RC_HD void multiplyExpansions(const Expansion<InE> &e, const Expansion<InF> &f, Expansion<Out> &h)
 {
     static_assert(Out >= 2 * InE * InF, "expansion capacity");
     h.size = 1;
@@ -136,7 +144,7 @@ void multiplyExpansions(const Expansion<InE> &e, const Expansion<InF> &f, Expans
 }
 
 template <int Capacity>
-Expansion<Capacity> negated(Expansion<Capacity> e)
+RC_HD Expansion<Capacity> negated(Expansion<Capacity> e)
 {
     for (int i = 0; i < e.size; ++i)
         e.term[i] = -e.term[i];
@@ -144,14 +152,15 @@ Expansion<Capacity> negated(Expansion<Capacity> e)
 }
 
 template <int Capacity>
-int sign(const Expansion<Capacity> &e)
+RC_HD int sign(const Expansion<Capacity> &e)
 {
     const double top = e.term[e.size - 1];
     return (top > 0.0) - (top < 0.0);
 }
 
 // e1 * f1 - e2 * f2 for two-term factors.
-Expansion<16> exactMinor(const Expansion<2> &e1, const Expansion<2> &f1, const Expansion<2> &e2, const Expansion<2> &f2)
+RC_HD Expansion<16> exactMinor(const Expansion<2> &e1, const Expansion<2> &f1, const Expansion<2> &e2,
+                               const Expansion<2> &f2)
 {
     Expansion<8> left, right;
     multiplyExpansions(e1, f1, left);
@@ -161,15 +170,14 @@ Expansion<16> exactMinor(const Expansion<2> &e1, const Expansion<2> &f1, const E
     return minor;
 }
 
-int orient2dExact(double ax, double ay, double bx, double by, double cx, double cy)
+RC_HD_CALL int orient2dExact(double ax, double ay, double bx, double by, double cx, double cy)
 {
     const Expansion<16> det =
         exactMinor(exactDifference(bx, ax), exactDifference(cy, ay), exactDifference(by, ay), exactDifference(cx, ax));
     return sign(det);
 }
 
-int orient3dExact(const Eigen::Vector3d &a, const Eigen::Vector3d &b, const Eigen::Vector3d &c,
-                  const Eigen::Vector3d &d)
+RC_HD_CALL int orient3dExact(const Vec3<double> &a, const Vec3<double> &b, const Vec3<double> &c, const Vec3<double> &d)
 {
     // ((b - a) x (c - a)) . (d - a) as a cofactor expansion along d - a.
     Expansion<2> u[3], v[3], w[3];
@@ -191,38 +199,44 @@ int orient3dExact(const Eigen::Vector3d &a, const Eigen::Vector3d &b, const Eige
     sumExpansions(partial, terms[2], det);
     return sign(det);
 }
-}  // namespace
+}  // namespace predicates
 
-int orient2d(double ax, double ay, double bx, double by, double cx, double cy)
+/** \brief Exact sign of (b - a) x (c - a) in the plane: positive when a, b, c turn counter-clockwise,
+    0 when collinear (exactly, for the double coordinates given). */
+RC_HD int orient2d(double ax, double ay, double bx, double by, double cx, double cy)
 {
     const double left = (bx - ax) * (cy - ay);
     const double right = (by - ay) * (cx - ax);
     const double det = left - right;
-    const double bound = kOrient2dBound * (std::abs(left) + std::abs(right));
+    const double bound = predicates::kOrient2dBound * (std::fabs(left) + std::fabs(right));
     if (det > bound)
         return 1;
     if (-det > bound)
         return -1;
-    return orient2dExact(ax, ay, bx, by, cx, cy);
+    return predicates::orient2dExact(ax, ay, bx, by, cx, cy);
 }
 
-int orient3d(const Eigen::Vector3d &a, const Eigen::Vector3d &b, const Eigen::Vector3d &c, const Eigen::Vector3d &d)
+/** \brief Exact sign of the orientation of \a d against the plane through \a a, \a b, \a c: sign of
+    ((b - a) x (c - a)) . (d - a). Positive when \a d lies on the side the normal of the
+    counter-clockwise triangle abc points to, 0 when the four points are coplanar (exactly, for the
+    double coordinates given), barring overflow or underflow of the products. */
+RC_HD int orient3d(const Vec3<double> &a, const Vec3<double> &b, const Vec3<double> &c, const Vec3<double> &d)
 {
-    const double ux = b.x() - a.x(), uy = b.y() - a.y(), uz = b.z() - a.z();
-    const double vx = c.x() - a.x(), vy = c.y() - a.y(), vz = c.z() - a.z();
-    const double wx = d.x() - a.x(), wy = d.y() - a.y(), wz = d.z() - a.z();
+    const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+    const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+    const double wx = d.x - a.x, wy = d.y - a.y, wz = d.z - a.z;
     const double uyvz = uy * vz, uzvy = uz * vy;
     const double uzvx = uz * vx, uxvz = ux * vz;
     const double uxvy = ux * vy, uyvx = uy * vx;
     const double det = wx * (uyvz - uzvy) + wy * (uzvx - uxvz) + wz * (uxvy - uyvx);
-    const double permanent = std::abs(wx) * (std::abs(uyvz) + std::abs(uzvy)) +
-                             std::abs(wy) * (std::abs(uzvx) + std::abs(uxvz)) +
-                             std::abs(wz) * (std::abs(uxvy) + std::abs(uyvx));
-    const double bound = kOrient3dBound * permanent;
+    const double permanent = std::fabs(wx) * (std::fabs(uyvz) + std::fabs(uzvy)) +
+                             std::fabs(wy) * (std::fabs(uzvx) + std::fabs(uxvz)) +
+                             std::fabs(wz) * (std::fabs(uxvy) + std::fabs(uyvx));
+    const double bound = predicates::kOrient3dBound * permanent;
     if (det > bound)
         return 1;
     if (-det > bound)
         return -1;
-    return orient3dExact(a, b, c, d);
+    return predicates::orient3dExact(a, b, c, d);
 }
-}  // namespace rastercheck
+}  // namespace rastercheck::device
