@@ -1,0 +1,252 @@
+#include "rastercheck/geometry/MeshDistance.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "rastercheck/device/Traversal.h"
+#include "rastercheck/geometry/TriangleTests.h"
+
+namespace rastercheck
+{
+namespace
+{
+using Vec = Eigen::Vector3d;
+using CornersMap = Eigen::Map<const Vec>;
+
+// The nodes are stored in float, so a corner may sit a few 1e-7 of the coordinates' magnitude
+// outside its node's box (MeshBvh); ten times that is taken off every node bound, which only
+// visits more pairs, never skips one that holds a nearer triangle pair.
+constexpr double kNodeRounding = 1e-6;
+
+double treeScale(const MeshBvh &bvh)
+{
+    const MeshBvh::Node &root = bvh.nodes()[0];
+    return root.radius + nodeCentre(root).norm();
+}
+
+// The distance query for device::walkPairs, in the fixed tree's frame with the moving tree placed
+// there by R, T. `best` is the reach: it starts at the caller's bound and shrinks with every nearer
+// triangle pair, so the pairs still on the walk's stack are pruned against it when popped.
+struct DistanceQuery
+{
+    const MeshBvh &fixed, &moving;
+    const MeshBvh::Node *nodesF, *nodesM;
+    Eigen::Matrix3d R;
+    Vec T;
+    double slack;
+    ExactWorkspace *workspace;  // null: nodes placed per visit
+    bool cached;
+    double best;
+    bool found = false;
+    std::uint32_t slotFixed = 0, slotMoving = 0;
+    Vec pointFixed = Vec::Zero(), pointMoving = Vec::Zero();  // fixed frame
+    ExactWorkspace::PlacedNode scratch{};
+
+    const ExactWorkspace::PlacedNode &placed(std::int32_t index)
+    {
+        ExactWorkspace::PlacedNode &slot = cached ? workspace->placed[index] : scratch;
+        if (!cached || workspace->stamps[index] != workspace->query)
+        {
+            slot.axes = R * nodeAxes(nodesM[index]);
+            slot.centre = R * nodeCentre(nodesM[index]) + T;
+            if (cached)
+                workspace->stamps[index] = workspace->query;
+        }
+        return slot;
+    }
+
+    bool test(device::NodePair pair)
+    {
+        const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
+        const ExactWorkspace::PlacedNode &pm = placed(pair.b);
+        const Vec between = pm.centre - nodeCentre(nf);
+        // Bounding spheres first: one square root settles most pairs far from the best.
+        const double spheres = static_cast<double>(nf.radius) + nm.radius + best + slack;
+        if (between.squaredNorm() >= spheres * spheres)
+            return false;
+        return nodeDistanceLowerBound(nf, pm.axes, nm, between) - slack < best;
+    }
+
+    bool leaves(device::NodePair pair)
+    {
+        const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
+        for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
+        {
+            const double *cm = moving.slotCorners(sm);
+            const Vec placedTriangle[3] = {R * CornersMap(cm) + T, R * CornersMap(cm + 3) + T,
+                                           R * CornersMap(cm + 6) + T};
+            for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
+            {
+                const double *cf = fixed.slotCorners(sf);
+                Vec onFixed, onMoving;
+                const double d =
+                    triangleDistance(CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6), placedTriangle[0],
+                                     placedTriangle[1], placedTriangle[2], &onFixed, &onMoving);
+                if (d < best)
+                {
+                    best = d;
+                    found = true;
+                    slotFixed = sf;
+                    slotMoving = sm;
+                    pointFixed = onFixed;
+                    pointMoving = onMoving;
+                    if (d <= 0.0)
+                        return false;  // the surfaces meet: nothing is nearer
+                }
+            }
+        }
+        return true;
+    }
+
+    // Descend into the bigger node, so both trees shrink at a similar pace.
+    bool splitA(device::NodePair pair) const { return nodesF[pair.a].radius >= nodesM[pair.b].radius; }
+
+    // The child pair whose spheres are nearer first: the best distance shrinks sooner, and the walk
+    // prunes more of what remains.
+    bool secondFirst(device::NodePair first, device::NodePair second)
+    {
+        const auto gap = [&](device::NodePair p)
+        {
+            return (placed(p.b).centre - nodeCentre(nodesF[p.a])).norm() -
+                   (static_cast<double>(nodesF[p.a].radius) + nodesM[p.b].radius);
+        };
+        const double gapFirst = gap(first);  // one at a time: placed() may reuse its scratch
+        return gap(second) < gapFirst;
+    }
+};
+}  // namespace
+
+double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P, const MeshBvh::Node &nm,
+                              const Vec &between)
+{
+    const double centres = between.norm();
+    double bound = centres - (static_cast<double>(nf.radius) + nm.radius);
+    const float *f = nf.axes;  // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
+    const double ea[3] = {nf.halfExtents[0], nf.halfExtents[1], nf.halfExtents[2]};
+    const double eb[3] = {nm.halfExtents[0], nm.halfExtents[1], nm.halfExtents[2]};
+    double d[3];
+    for (int i = 0; i < 3; ++i)
+        d[i] = f[i] * between[0] + f[3 + i] * between[1] + f[6 + i] * between[2];
+    const double *p = P.data();  // column-major: the moving box's axis j is p[3j .. 3j + 2]
+    double R[3][3], Q[3][3];     // R(i, j) = axis i of the fixed box . axis j of the moving box; Q = |R|
+    for (int i = 0; i < 3; ++i)
+    {
+        const double a0 = f[i], a1 = f[3 + i], a2 = f[6 + i];
+        for (int j = 0; j < 3; ++j)
+        {
+            R[i][j] = a0 * p[3 * j] + a1 * p[3 * j + 1] + a2 * p[3 * j + 2];
+            Q[i][j] = std::abs(R[i][j]);
+        }
+        bound = std::max(bound, std::abs(d[i]) - (ea[i] + Q[i][0] * eb[0] + Q[i][1] * eb[1] + Q[i][2] * eb[2]));
+    }
+    for (int j = 0; j < 3; ++j)
+        bound = std::max(bound, std::abs(d[0] * R[0][j] + d[1] * R[1][j] + d[2] * R[2][j]) -
+                                    (ea[0] * Q[0][j] + ea[1] * Q[1][j] + ea[2] * Q[2][j] + eb[j]));
+    for (int i = 0; i < 3; ++i)
+    {
+        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+        for (int j = 0; j < 3; ++j)
+        {
+            // Axis i of the fixed box cross axis j of the moving one: its length is the sine of their
+            // angle, read from the two other rows of R (no cancellation when they are parallel;
+            // a near-zero axis is skipped, the face axes cover that case).
+            const double length = std::sqrt(R[i1][j] * R[i1][j] + R[i2][j] * R[i2][j]);
+            if (length < 1e-6)
+                continue;
+            const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            const double gap = std::abs(d[i2] * R[i1][j] - d[i1] * R[i2][j]) -
+                               (ea[i1] * Q[i2][j] + ea[i2] * Q[i1][j] + eb[j1] * Q[i][j2] + eb[j2] * Q[i][j1]);
+            bound = std::max(bound, gap / length);
+        }
+    }
+    return std::max(bound, 0.0);
+}
+
+bool surfaceDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
+                     double bound, SurfaceDistance &result, ExactWorkspace *workspace)
+{
+    if (a.empty() || b.empty() || !(bound > 0.0))
+        return false;
+    // As surfacesWithin: the tree with fewer nodes is the one moved (its nodes placed once per query).
+    const bool movingIsA = a.numNodes() <= b.numNodes();
+    const MeshBvh &fixed = movingIsA ? b : a, &moving = movingIsA ? a : b;
+    const Eigen::Isometry3d &fixedPose = movingIsA ? poseB : poseA, &movingPose = movingIsA ? poseA : poseB;
+    const Eigen::Isometry3d fMm = fixedPose.inverse(Eigen::Isometry) * movingPose;
+    const bool cached = workspace && moving.numNodes() <= ExactWorkspace::kMaxPlacedNodes;
+    if (cached)
+    {
+        if (workspace->stamps.size() < moving.numNodes())
+        {
+            workspace->placed.resize(moving.numNodes());
+            workspace->stamps.resize(moving.numNodes(), 0);
+        }
+        if (++workspace->query == 0)  // the stamps wrapped: forget them all
+        {
+            std::fill(workspace->stamps.begin(), workspace->stamps.end(), 0);
+            workspace->query = 1;
+        }
+    }
+    DistanceQuery query{fixed,
+                        moving,
+                        fixed.nodes(),
+                        moving.nodes(),
+                        fMm.linear(),
+                        fMm.translation(),
+                        kNodeRounding * (fMm.translation().norm() + treeScale(a) + treeScale(b)),
+                        workspace,
+                        cached,
+                        bound};
+    const device::WalkEnd end = device::walkPairs(fixed.nodes(), moving.nodes(), query);
+    if (end == device::WalkEnd::Overflow)
+    {
+        // A tree deeper than the walk's stack (the builder rules it out): no bound can be trusted.
+        result = SurfaceDistance{};
+        result.distance = 0.0;
+        result.pointA = result.pointB = fixedPose * nodeCentre(fixed.nodes()[0]);
+        return true;
+    }
+    if (!query.found)
+        return false;
+    const std::int32_t triangleFixed = static_cast<std::int32_t>(fixed.triangleOrder()[query.slotFixed]);
+    const std::int32_t triangleMoving = static_cast<std::int32_t>(moving.triangleOrder()[query.slotMoving]);
+    const Vec worldFixed = fixedPose * query.pointFixed, worldMoving = fixedPose * query.pointMoving;
+    result.distance = query.best;
+    result.pointA = movingIsA ? worldMoving : worldFixed;
+    result.pointB = movingIsA ? worldFixed : worldMoving;
+    result.triangleA = movingIsA ? triangleMoving : triangleFixed;
+    result.triangleB = movingIsA ? triangleFixed : triangleMoving;
+    return true;
+}
+
+bool solidInside(const MeshBvh &inner, const Eigen::Isometry3d &innerPose, const MeshBvh &outer,
+                 const Eigen::Isometry3d &outerPose, Vec *point)
+{
+    if (inner.empty() || outer.empty())
+        return false;
+    const Eigen::Isometry3d innerToOuter = outerPose.inverse(Eigen::Isometry) * innerPose;
+    const std::uint32_t *probes = inner.shellProbes(), *start = inner.shellProbeStart();
+    for (std::size_t shell = 0; shell < inner.numShells(); ++shell)
+    {
+        // The first probe the outer mesh's inside grid knows answers; a ray only when it knows none.
+        int known = 0;
+        Vec vertex;
+        for (std::uint32_t k = start[shell]; k < start[shell + 1] && known == 0; ++k)
+        {
+            vertex = inner.mesh().vertices[probes[k]];
+            known = outer.insideGridAnswer(innerToOuter * vertex);
+        }
+        if (known == 0)
+        {
+            vertex = inner.mesh().vertices[probes[start[shell]]];
+            known = pointInsideClosedMesh(outer, innerToOuter * vertex) ? 2 : 1;
+        }
+        if (known == 2)
+        {
+            if (point)
+                *point = innerPose * vertex;
+            return true;
+        }
+    }
+    return false;
+}
+}  // namespace rastercheck
