@@ -24,6 +24,25 @@ double treeScale(const MeshBvh &bvh)
     return root.radius + nodeCentre(root).norm();
 }
 
+// A lower bound on the distance between triangles p and q: how far q's corners all lie on one side
+// of p's plane (0 when they do not). It settles most leaf pairs near the best distance for a cross
+// product and three dot products, where the exact distance costs the exact intersection test and
+// fifteen feature pairs. The margin covers its rounding, so a pair it skips is farther than the
+// best by more than rounding.
+double planeGap(const Vec p[3], const Vec q[3])
+{
+    const Vec normal = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double length = normal.norm();
+    if (!(length > 0.0))
+        return 0.0;
+    const double s0 = normal.dot(q[0] - p[0]), s1 = normal.dot(q[1] - p[0]), s2 = normal.dot(q[2] - p[0]);
+    const double low = std::min(s0, std::min(s1, s2)), high = std::max(s0, std::max(s1, s2));
+    const double gap = low > 0.0 ? low : (high < 0.0 ? -high : 0.0);
+    const double scale = (p[1] - p[0]).norm() + (p[2] - p[0]).norm() + (q[0] - p[0]).norm() + (q[1] - p[0]).norm() +
+                         (q[2] - p[0]).norm();
+    return gap / length - 1e-12 * scale;
+}
+
 // The distance query for device::walkPairs, in the fixed tree's frame with the moving tree placed
 // there by R, T. `best` is the reach: it starts at the caller's bound and shrinks with every nearer
 // triangle pair, so the pairs still on the walk's stack are pruned against it when popped.
@@ -55,17 +74,43 @@ struct DistanceQuery
         return slot;
     }
 
-    bool test(device::NodePair pair)
+    // The pair's lower bound, or the best distance when the bounding spheres already show that
+    // the pair holds nothing nearer.
+    double bound(device::NodePair pair)
     {
         const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
         const ExactWorkspace::PlacedNode &pm = placed(pair.b);
         const Vec between = pm.centre - nodeCentre(nf);
-        // Bounding spheres first: one square root settles most pairs far from the best.
+        // Bounding spheres first: one dot product settles most pairs far from the best.
         const double spheres = static_cast<double>(nf.radius) + nm.radius + best + slack;
         if (between.squaredNorm() >= spheres * spheres)
-            return false;
-        return nodeDistanceLowerBound(nf, pm.axes, nm, between) - slack < best;
+            return best;
+        return nodeDistanceLowerBound(nf, pm.axes, nm, between) - slack;
     }
+
+    // secondFirst() bounds both children; the walk tests the nearer at once and the other later, so
+    // the bounds are kept by pair for test() (direct-mapped; a bound only grows stale on the safe
+    // side, since the best distance only shrinks).
+    struct KeptBound
+    {
+        std::int32_t a = -1, b = -1;
+        double bound = 0.0;
+    };
+    static constexpr unsigned kKept = 64;
+    KeptBound kept[kKept]{};
+    static unsigned keptSlot(device::NodePair pair)
+    {
+        return (static_cast<unsigned>(pair.a) * 2654435761u ^ static_cast<unsigned>(pair.b)) % kKept;
+    }
+    double keptBound(device::NodePair pair)
+    {
+        KeptBound &slot = kept[keptSlot(pair)];
+        if (slot.a != pair.a || slot.b != pair.b)
+            slot = KeptBound{pair.a, pair.b, bound(pair)};
+        return slot.bound;
+    }
+
+    bool test(device::NodePair pair) { return keptBound(pair) < best; }
 
     bool leaves(device::NodePair pair)
     {
@@ -78,9 +123,12 @@ struct DistanceQuery
             for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
             {
                 const double *cf = fixed.slotCorners(sf);
+                const Vec fixedTriangle[3] = {CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6)};
+                if (planeGap(fixedTriangle, placedTriangle) >= best || planeGap(placedTriangle, fixedTriangle) >= best)
+                    continue;
                 Vec onFixed, onMoving;
                 const double d =
-                    triangleDistance(CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6), placedTriangle[0],
+                    triangleDistance(fixedTriangle[0], fixedTriangle[1], fixedTriangle[2], placedTriangle[0],
                                      placedTriangle[1], placedTriangle[2], &onFixed, &onMoving);
                 if (d < best)
                 {
@@ -101,17 +149,12 @@ struct DistanceQuery
     // Descend into the bigger node, so both trees shrink at a similar pace.
     bool splitA(device::NodePair pair) const { return nodesF[pair.a].radius >= nodesM[pair.b].radius; }
 
-    // The child pair whose spheres are nearer first: the best distance shrinks sooner, and the walk
-    // prunes more of what remains.
+    // The child pair with the lower bound first (as FCL's distanceRecurse): the best distance
+    // shrinks sooner, and the walk prunes more of what remains.
     bool secondFirst(device::NodePair first, device::NodePair second)
     {
-        const auto gap = [&](device::NodePair p)
-        {
-            return (placed(p.b).centre - nodeCentre(nodesF[p.a])).norm() -
-                   (static_cast<double>(nodesF[p.a].radius) + nodesM[p.b].radius);
-        };
-        const double gapFirst = gap(first);  // one at a time: placed() may reuse its scratch
-        return gap(second) < gapFirst;
+        const double boundFirst = keptBound(first);  // one at a time: placed() may reuse its scratch
+        return keptBound(second) < boundFirst;
     }
 };
 }  // namespace
@@ -139,9 +182,24 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P,
         }
         bound = std::max(bound, std::abs(d[i]) - (ea[i] + Q[i][0] * eb[0] + Q[i][1] * eb[1] + Q[i][2] * eb[2]));
     }
+    // Each box against the other's centre: no point of the moving node is nearer the fixed box than
+    // its centre less its radius, and the other way round. Tight where a node is small against the
+    // gap, which the axes' projections are not when the gap runs diagonally to every axis.
+    double outsideFixed = 0.0, outsideMoving = 0.0;
+    for (int i = 0; i < 3; ++i)
+    {
+        const double t = std::max(std::abs(d[i]) - ea[i], 0.0);
+        outsideFixed += t * t;
+    }
     for (int j = 0; j < 3; ++j)
-        bound = std::max(bound, std::abs(d[0] * R[0][j] + d[1] * R[1][j] + d[2] * R[2][j]) -
-                                    (ea[0] * Q[0][j] + ea[1] * Q[1][j] + ea[2] * Q[2][j] + eb[j]));
+    {
+        const double along = std::abs(d[0] * R[0][j] + d[1] * R[1][j] + d[2] * R[2][j]);
+        bound = std::max(bound, along - (ea[0] * Q[0][j] + ea[1] * Q[1][j] + ea[2] * Q[2][j] + eb[j]));
+        const double t = std::max(along - eb[j], 0.0);
+        outsideMoving += t * t;
+    }
+    bound = std::max(bound, std::sqrt(outsideFixed) - nm.radius);
+    bound = std::max(bound, std::sqrt(outsideMoving) - nf.radius);
     for (int i = 0; i < 3; ++i)
     {
         const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
