@@ -4,7 +4,10 @@
 // the distance valid, just above it invalid).
 
 #include <cmath>
+#include <fstream>
+#include <iomanip>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -351,5 +354,56 @@ TEST(CheckerDistance, BatchOverThreadsEqualsOneAtATime)
     {
         EXPECT_EQ(batch[i].distance, single[i].distance) << "state " << i;
         EXPECT_EQ(batch[i].component, single[i].component) << "state " << i;
+    }
+}
+
+TEST(CheckerDistance, CheckCommandWritesTheDistanceColumns)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const std::string folder = rc::test::makeTempDir("distance_cli");
+    const std::string urdf = root + "/mbm/panda/panda.urdf", srdf = root + "/mbm/panda/panda.srdf";
+    const std::string scene = root + "/mbm/panda/problems/box_panda/scene0001.yaml";
+    const rc::Problem problem = rc::test::pandaProblem(root, "box");
+    const rc::Checker checker(problem.robot, problem.scene);
+    const std::size_t n = 12;
+    const std::vector<double> q = rc::test::randomStates(checker.robot(), n, 31);
+    std::ostringstream csv;
+    csv << std::setprecision(17);
+    for (std::size_t k = 0; k < checker.dof(); ++k)
+        csv << (k ? "," : "") << checker.robot().coordinateNames[k];
+    csv << '\n';
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = 0; k < checker.dof(); ++k)
+            csv << q[i * checker.dof() + k] << (k + 1 < checker.dof() ? "," : "\n");
+    const std::string states = rc::test::writeFile(folder + "/states.csv", csv.str());
+    const rc::test::CommandRun run =
+        rc::test::runCli("check --robot " + urdf + " --srdf " + srdf + " --scene " + scene + " --states " + states +
+                         " --out " + folder + "/out.csv --distance");
+    ASSERT_EQ(run.status, 0) << run.output;
+    EXPECT_NE(run.output.find(" min_distance="), std::string::npos) << run.output;
+    std::ifstream out(folder + "/out.csv");
+    std::string header;
+    std::getline(out, header);
+    EXPECT_EQ(header,
+              "valid,component,object,triangle,x,y,z,reason,distance,distance_component,distance_other,ax,ay,az,bx,by,"
+              "bz");
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        std::string line;
+        ASSERT_TRUE(std::getline(out, line)) << "row " << i;
+        std::vector<std::string> fields;
+        std::stringstream row(line);
+        for (std::string field; std::getline(row, field, ',');)
+            fields.push_back(field);
+        ASSERT_EQ(fields.size(), 17u) << line;
+        rc::DistanceResult expected;
+        checker.distance(q.data() + i * checker.dof(), rc::DistanceRequest{}, &expected);
+        EXPECT_NEAR(std::stod(fields[8]), expected.distance, 1e-8 * std::max(1.0, expected.distance)) << line;
+        EXPECT_EQ(fields[9], checker.robot().components[expected.component].name) << line;
+        const Vector3d a(std::stod(fields[11]), std::stod(fields[12]), std::stod(fields[13]));
+        const Vector3d b(std::stod(fields[14]), std::stod(fields[15]), std::stod(fields[16]));
+        EXPECT_NEAR((a - b).norm(), expected.distance, 1e-7) << line;
+        // A colliding row has distance 0, a free one more.
+        EXPECT_EQ(fields[0] == "1", expected.distance > 0.0) << line;
     }
 }

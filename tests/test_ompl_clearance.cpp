@@ -25,9 +25,10 @@ namespace og = ::ompl::geometric;
 
 namespace
 {
-/** \brief RRT* with MaximizeMinClearanceObjective for \a seconds; expects an exact solution whose
-    states are all valid with positive clearance (\a range and \a goalBias: the planner's, 0 = OMPL's defaults), the
-   path's cost (the minimum clearance along its motions) positive and no larger than its states' smallest clearance. */
+/** \brief RRT* with MaximizeMinClearanceObjective for \a seconds (\a range, \a goalBias: the
+    planner's; 0 = OMPL's defaults); expects an exact solution whose states are all valid with
+    positive clearance, the path's cost (the minimum clearance along its motions) positive and no
+    larger than its states' smallest clearance. */
 void planForClearance(og::SimpleSetup &setup, double seconds, double range = 0.0, double goalBias = 0.0)
 {
     const ob::SpaceInformationPtr &si = setup.getSpaceInformation();
