@@ -32,6 +32,7 @@ struct DistanceWorkspace
     RobotData data;
     ExactWorkspace exact;
     std::vector<Candidate> candidates;
+    std::vector<SurfaceHint> hints;  // n_pairs: each pair's nearest triangles at its last query
 };
 
 namespace
@@ -119,6 +120,7 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
         return;
     }
     forwardKinematics(*model.robot, ws.data, q);
+    ws.hints.resize(model.numPairs());
     const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
     const std::size_t m = model.numComponents();
     const std::size_t environmentPairs = model.numObjects() * m;
@@ -171,6 +173,28 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
     bool found = false;
     std::uint32_t bestPair = 0;
     SurfaceDistance nearest;
+    const auto keep = [&](std::uint32_t pair, const SurfaceDistance &measured)
+    {
+        found = true;
+        best = measured.distance;
+        bestPair = pair;
+        nearest = measured;
+    };
+    // Every candidate's triangle pair of its last query first, one triangle distance each: their
+    // smallest is a real distance of this state, at or near the answer where the state is near the
+    // workspace's last (a planner's next state) or the pair's relative pose depends on a few joints
+    // only (a wrist), so the walks below prune against it from their first node pair.
+    for (const DistanceWorkspace::Candidate &candidate : ws.candidates)
+    {
+        if (candidate.bound >= best)
+            break;
+        const Sides s = sides(candidate.pair);
+        SurfaceDistance measured;
+        if (!model.curved.refines(candidate.pair) &&
+            hintedDistance(*s.a, *s.poseA, *s.b, *s.poseB, ws.hints[candidate.pair], best, measured) &&
+            measured.distance > 0.0)  // a contact is left to the walks, which name the first pair in order
+            keep(candidate.pair, measured);
+    }
     for (const DistanceWorkspace::Candidate &candidate : ws.candidates)
     {
         if (candidate.bound >= best)
@@ -183,7 +207,8 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
                                            measured);
         else
         {
-            nearer = surfaceDistance(*s.a, *s.poseA, *s.b, *s.poseB, best, measured, &ws.exact);
+            nearer =
+                surfaceDistance(*s.a, *s.poseA, *s.b, *s.poseB, best, measured, &ws.exact, &ws.hints[candidate.pair]);
             // Surfaces apart but the root boxes overlapping: one solid may hold the other, which is a
             // collision however far apart the surfaces are.
             Eigen::Vector3d inside;
@@ -199,10 +224,7 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
         }
         if (!nearer)
             continue;
-        found = true;
-        best = measured.distance;
-        bestPair = candidate.pair;
-        nearest = measured;
+        keep(candidate.pair, measured);
         if (best <= 0.0)
             break;  // colliding: nothing is nearer
     }

@@ -112,36 +112,47 @@ struct DistanceQuery
 
     bool test(device::NodePair pair) { return keptBound(pair) < best; }
 
+    // The moving tree's triangle in slot sm, placed in the fixed frame.
+    void place(std::uint32_t sm, Vec placedTriangle[3]) const
+    {
+        const double *cm = moving.slotCorners(sm);
+        for (int k = 0; k < 3; ++k)
+            placedTriangle[k] = R * CornersMap(cm + 3 * k) + T;
+    }
+
+    // Measures the fixed tree's triangle in slot sf against the placed one from slot sm, keeping the
+    // pair when it is nearer than the best; false once the surfaces meet (nothing is nearer).
+    bool measure(std::uint32_t sf, std::uint32_t sm, const Vec placedTriangle[3])
+    {
+        const double *cf = fixed.slotCorners(sf);
+        const Vec fixedTriangle[3] = {CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6)};
+        if (planeGap(fixedTriangle, placedTriangle) >= best || planeGap(placedTriangle, fixedTriangle) >= best)
+            return true;
+        Vec onFixed, onMoving;
+        const double d = triangleDistance(fixedTriangle[0], fixedTriangle[1], fixedTriangle[2], placedTriangle[0],
+                                          placedTriangle[1], placedTriangle[2], &onFixed, &onMoving);
+        if (d < best)
+        {
+            best = d;
+            found = true;
+            slotFixed = sf;
+            slotMoving = sm;
+            pointFixed = onFixed;
+            pointMoving = onMoving;
+        }
+        return d > 0.0;
+    }
+
     bool leaves(device::NodePair pair)
     {
         const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
+        Vec placedTriangle[3];
         for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
         {
-            const double *cm = moving.slotCorners(sm);
-            const Vec placedTriangle[3] = {R * CornersMap(cm) + T, R * CornersMap(cm + 3) + T,
-                                           R * CornersMap(cm + 6) + T};
+            place(sm, placedTriangle);
             for (std::uint32_t sf = nf.firstSlot(); sf < nf.firstSlot() + nf.count; ++sf)
-            {
-                const double *cf = fixed.slotCorners(sf);
-                const Vec fixedTriangle[3] = {CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6)};
-                if (planeGap(fixedTriangle, placedTriangle) >= best || planeGap(placedTriangle, fixedTriangle) >= best)
-                    continue;
-                Vec onFixed, onMoving;
-                const double d =
-                    triangleDistance(fixedTriangle[0], fixedTriangle[1], fixedTriangle[2], placedTriangle[0],
-                                     placedTriangle[1], placedTriangle[2], &onFixed, &onMoving);
-                if (d < best)
-                {
-                    best = d;
-                    found = true;
-                    slotFixed = sf;
-                    slotMoving = sm;
-                    pointFixed = onFixed;
-                    pointMoving = onMoving;
-                    if (d <= 0.0)
-                        return false;  // the surfaces meet: nothing is nearer
-                }
-            }
+                if (!measure(sf, sm, placedTriangle))
+                    return false;
         }
         return true;
     }
@@ -220,8 +231,12 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P,
     return std::max(bound, 0.0);
 }
 
-bool surfaceDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
-                     double bound, SurfaceDistance &result, ExactWorkspace *workspace)
+namespace
+{
+// surfaceDistance, or with `walk` false only the hint's pair (hintedDistance): one setup and one
+// placement arithmetic for both, so a hinted pair measures the same as it does in the walk.
+bool measureSurfaces(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
+                     double bound, SurfaceDistance &result, ExactWorkspace *workspace, SurfaceHint *hint, bool walk)
 {
     if (a.empty() || b.empty() || !(bound > 0.0))
         return false;
@@ -254,7 +269,19 @@ bool surfaceDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mes
                         workspace,
                         cached,
                         bound};
-    const device::WalkEnd end = device::walkPairs(fixed.nodes(), moving.nodes(), query);
+    // The hint's triangle pair first: at a state near the last one it is at or near the nearest
+    // pair, and the walk then prunes against it from its first node pair.
+    const std::uint32_t hintFixed = hint ? (movingIsA ? hint->slotB : hint->slotA) : 0;
+    const std::uint32_t hintMoving = hint ? (movingIsA ? hint->slotA : hint->slotB) : 0;
+    if (hint && hintFixed < fixed.mesh().triangles.size() && hintMoving < moving.mesh().triangles.size())
+    {
+        Vec placedTriangle[3];
+        query.place(hintMoving, placedTriangle);
+        query.measure(hintFixed, hintMoving, placedTriangle);
+    }
+    const device::WalkEnd end = !walk || (query.found && query.best <= 0.0)
+                                    ? device::WalkEnd::Stopped
+                                    : device::walkPairs(fixed.nodes(), moving.nodes(), query);
     if (end == device::WalkEnd::Overflow)
     {
         // A tree deeper than the walk's stack (the builder rules it out): no bound can be trusted.
@@ -273,7 +300,26 @@ bool surfaceDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mes
     result.pointB = movingIsA ? worldFixed : worldMoving;
     result.triangleA = movingIsA ? triangleMoving : triangleFixed;
     result.triangleB = movingIsA ? triangleFixed : triangleMoving;
+    if (hint)
+    {
+        hint->slotA = movingIsA ? query.slotMoving : query.slotFixed;
+        hint->slotB = movingIsA ? query.slotFixed : query.slotMoving;
+    }
     return true;
+}
+}  // namespace
+
+bool surfaceDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
+                     double bound, SurfaceDistance &result, ExactWorkspace *workspace, SurfaceHint *hint)
+{
+    return measureSurfaces(a, poseA, b, poseB, bound, result, workspace, hint, true);
+}
+
+bool hintedDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
+                    const SurfaceHint &hint, double bound, SurfaceDistance &result)
+{
+    SurfaceHint copy = hint;
+    return measureSurfaces(a, poseA, b, poseB, bound, result, nullptr, &copy, false);
 }
 
 bool solidInside(const MeshBvh &inner, const Eigen::Isometry3d &innerPose, const MeshBvh &outer,

@@ -19,6 +19,18 @@ struct SurfaceDistance
     std::int32_t triangleB = -1;
 };
 
+/** \brief Where a pair of trees was nearest at the last query: a triangle slot of each
+    (MeshBvh::triangleOrder positions). surfaceDistance() measures that triangle pair first, so a
+    query at a nearby state starts with a distance at or near the answer and prunes from its first
+    node pair. It only reorders work: the distance is the same with or without it (the pair named
+    may differ between pairs of equal distance). A stale or foreign hint (slots out of range) is
+    ignored. */
+struct SurfaceHint
+{
+    std::uint32_t slotA = UINT32_MAX;
+    std::uint32_t slotB = UINT32_MAX;
+};
+
 /** \brief Lower bound on the distance between a fixed tree's node and a moving tree's node placed in
     the fixed frame (its axes the columns of \a axesM, its centre at \a between from the fixed node's
     centre): the larger of the bounding spheres' gap and the widest gap between the boxes along
@@ -39,9 +51,19 @@ double nodeDistanceLowerBound(const MeshBvh::Node &fixed, const Eigen::Matrix3d 
     distance is exact for the coordinates after that one rigid transform (an intersection is decided
     by exact predicates); the walk stops at the first crossing. Surfaces only: a solid inside
     another is apart by this measure (solidInside() tells). \a workspace (optional) caches the
-    placed nodes as for surfacesWithin. Thread-safe given one workspace per thread. */
+    placed nodes as for surfacesWithin; \a hint (optional) is read first and receives this query's
+    nearest pair when one is found. Thread-safe given one workspace and hint per thread. */
 bool surfaceDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
-                     double bound, SurfaceDistance &result, ExactWorkspace *workspace = nullptr);
+                     double bound, SurfaceDistance &result, ExactWorkspace *workspace = nullptr,
+                     SurfaceHint *hint = nullptr);
+
+/** \brief The distance between the triangle pair \a hint names, when below \a bound: true and
+    \a result (as surfaceDistance's, computed as its walk computes it, so the same value). False for
+    a pair at least \a bound apart or a hint that names no pair of these trees. An upper bound on
+    surfaceDistance() for one triangle distance: a caller with many pairs to measure seeds its best
+    distance with these before walking any tree. */
+bool hintedDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
+                    const SurfaceHint &hint, double bound, SurfaceDistance &result);
 
 /** \brief Is the closed solid of \a inner (placed by \a innerPose) inside the closed solid of
     \a outer, given that their surfaces do not meet? Then every shell of inner lies wholly inside
