@@ -407,3 +407,67 @@ TEST(CheckerDistance, CheckCommandWritesTheDistanceColumns)
         EXPECT_EQ(fields[0] == "1", expected.distance > 0.0) << line;
     }
 }
+
+// A ball (a URDF sphere, measured on its exact shape: CurvedSolids::distance) moved about a U-shaped
+// solid: its distance is its centre's distance to the U's surface less its radius, which a scan of
+// every triangle gives independently of the tree's node bounds.
+TEST(CheckerDistance, BallAgainstAMeshIsItsCentresDistanceLessItsRadius)
+{
+    const std::string folder = rc::test::makeTempDir("distance_ball");
+    const rc::Mesh u = rc::test::uShape(0.2);
+    std::ostringstream obj;
+    obj << std::setprecision(17);
+    for (const Vector3d &v : u.vertices)
+        obj << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+    for (const rc::Mesh::Triangle &t : u.triangles)
+        obj << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+    rc::ProblemSource source;
+    source.scenePath = rc::test::writeFile(folder + "/u.obj", obj.str());
+    const std::string limit = "<axis xyz=\"%\"/><limit lower=\"-1\" upper=\"3\" effort=\"1\" velocity=\"1\"/>";
+    const auto axis = [&](const char *xyz)
+    {
+        std::string text = limit;
+        return text.replace(text.find('%'), 1, xyz);
+    };
+    source.urdfPath = rc::test::writeFile(
+        folder + "/ball.urdf",
+        rc::test::urdfRobot(rc::test::urdfLink("base") + rc::test::urdfLink("lx") + rc::test::urdfLink("ly") +
+                            rc::test::urdfLink("ball",
+                                               "<collision><geometry><sphere radius=\"0.15\"/></geometry>"
+                                               "</collision>") +
+                            rc::test::urdfJoint("x", "prismatic", "base", "lx", axis("1 0 0")) +
+                            rc::test::urdfJoint("y", "prismatic", "lx", "ly", axis("0 1 0")) +
+                            rc::test::urdfJoint("z", "prismatic", "ly", "ball", axis("0 0 1"))));
+    const rc::Problem problem = rc::loadProblem(source);
+    ASSERT_EQ(problem.robot->components.size(), 1u);
+    ASSERT_EQ(problem.robot->components[0].shapes.size(), 1u);
+    const rc::Checker checker(problem.robot, problem.scene);
+    ASSERT_TRUE(checker.collisionModel().curved.refines(0));
+    const rc::Mesh &scene = problem.scene->objects.at(0).mesh;  // as loaded (the file's float precision)
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> coordinate(-0.5, 2.5);
+    int apart = 0;
+    for (int i = 0; i < 200; ++i)
+    {
+        const Vector3d centre(coordinate(rng), coordinate(rng), coordinate(rng));
+        rc::DistanceResult r;
+        checker.distance(centre.data(), rc::DistanceRequest{}, &r);
+        double toSurface = std::numeric_limits<double>::infinity();
+        for (const rc::Mesh::Triangle &t : scene.triangles)
+            toSurface = std::min(toSurface, rc::triangleDistance(centre, centre, centre, scene.vertices[t[0]],
+                                                                 scene.vertices[t[1]], scene.vertices[t[2]]));
+        rc::CollisionRequest exact;
+        exact.mode = rc::CollisionMode::Exact;
+        if (!checker.isValid(centre.data(), exact))
+        {
+            EXPECT_EQ(r.distance, 0.0) << centre.transpose();
+            continue;
+        }
+        ++apart;
+        EXPECT_NEAR(r.distance, toSurface - 0.15, 1e-9) << centre.transpose() << ": " << checker.describe(r);
+        EXPECT_EQ(r.triangle, -1);  // the ball's side is its exact shape
+        EXPECT_LT(pointToTriangle(r.pointOnOther, scene, r.otherTriangle, Isometry3d::Identity()), 1e-9);
+        EXPECT_NEAR((r.pointOnComponent - centre).norm(), 0.15, 1e-9);
+    }
+    EXPECT_GT(apart, 100);
+}
