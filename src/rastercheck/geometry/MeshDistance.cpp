@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "rastercheck/device/Traversal.h"
 #include "rastercheck/geometry/TriangleTests.h"
@@ -234,31 +235,32 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P,
 namespace
 {
 // Widening: the first reach is the roots' lower bound plus this fraction of the smaller root's
-// radius, doubled after each walk that finds nothing; a caller's bound within this many first
-// steps of the roots' lower bound is walked at once.
+// radius, doubled after each walk that finds nothing.
 constexpr double kWideningStep = 0.05;
-constexpr double kWideningRange = 16.0;
 
-// Walks the trees for query.best (the caller's bound, or the hint's distance), which then holds the
-// nearest pair below it, if any. A cold walk spends most of its time before its best distance gets
-// near the answer (FCL env/rob, 1000 uniform poses: 113-132 us cold, 38 us with the answer itself
-// as the bound). So where the reach is far above the roots' lower bound, walks with a reach widened
-// from that lower bound come first: the first that finds a pair within its reach has found the
-// nearest (every node pair nearer than the reach was visited). bench/distance, FCL env/rob, 300
-// uniform poses, us per query by first step (fraction of the radius): 0.01: 59, 0.02: 54, 0.05:
-// 55-57, 0.1: 63, 0.2: 94; 105 without widening, FCL 102.
-device::WalkEnd widenedWalks(DistanceQuery &query)
+// Walks the trees for query.best (the caller's bound, or the hint's distance below it), which then
+// holds the nearest pair below it, if any. A walk without a good bound spends most of its time
+// before its best distance gets near the answer (FCL env/rob, 1000 uniform poses: 113-132 us cold,
+// 38 us with the answer itself as the bound). So where the caller gave no bound (\a unbounded),
+// walks with a reach widened from the roots' lower bound come first, up to the hint's distance:
+// the first that finds a pair within its reach has found the nearest (every node pair nearer than
+// the reach was visited). bench/distance, FCL env/rob, 300 uniform poses, us per query by first
+// step (fraction of the radius): 0.01: 59, 0.02: 54, 0.05: 55-57, 0.1: 63, 0.2: 94; 105 without
+// widening, FCL 102. Only without a bound: a pair measured against another pair's distance
+// (Checker::distance's pairs after the first) mostly finds nothing nearer, and would walk every
+// widened reach in vain (Panda scenes: 10 to 25 % slower when it widened below finite bounds).
+device::WalkEnd widenedWalks(DistanceQuery &query, bool unbounded)
 {
     const MeshBvh::Node *nodesF = query.nodesF, *nodesM = query.nodesM;
-    const double reach = query.best;
-    const double lowest = std::max(0.0, query.bound(device::NodePair{0, 0}));
     double step = kWideningStep * std::min<double>(nodesF[0].radius, nodesM[0].radius);
-    if (step > 0.0 && lowest + kWideningRange * step < reach)
+    if (unbounded && step > 0.0)
     {
         // The hint's pair (if any) stands unless a widened walk finds a nearer one.
+        const double reach = query.best;
         const bool found = query.found;
         const std::uint32_t slotFixed = query.slotFixed, slotMoving = query.slotMoving;
         const Vec pointFixed = query.pointFixed, pointMoving = query.pointMoving;
+        const double lowest = std::max(0.0, query.bound(device::NodePair{0, 0}));
         for (double widened = lowest + step; widened < reach; step *= 2.0, widened = lowest + step)
         {
             query.best = widened;
@@ -327,7 +329,7 @@ bool measureSurfaces(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mes
     }
     device::WalkEnd end = device::WalkEnd::Stopped;
     if (walk && !(query.found && query.best <= 0.0))
-        end = widenedWalks(query);
+        end = widenedWalks(query, std::isinf(bound));
     if (end == device::WalkEnd::Overflow)
     {
         // A tree deeper than the walk's stack (the builder rules it out): no bound can be trusted.

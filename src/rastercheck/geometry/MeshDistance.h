@@ -49,7 +49,10 @@ double nodeDistanceLowerBound(const MeshBvh::Node &fixed, const Eigen::Matrix3d 
     storage) is not below the best distance found so far, and leaf pairs are measured by
     triangleDistance() with the smaller tree's triangles placed in the other's frame. So the
     distance is exact for the coordinates after that one rigid transform (an intersection is decided
-    by exact predicates); the walk stops at the first crossing. Surfaces only: a solid inside
+    by exact predicates); the walk stops at the first crossing. With an infinite bound the walk's
+    reach is first widened from the roots' lower bound (doubling from a twentieth of the smaller
+    root's radius) until a walk finds a pair within it, which is then the nearest: a cold walk
+    spends most of its time before its best distance nears the answer. Surfaces only: a solid inside
     another is apart by this measure (solidInside() tells). \a workspace (optional) caches the
     placed nodes as for surfacesWithin; \a hint (optional) is read first and receives this query's
     nearest pair when one is found. Thread-safe given one workspace and hint per thread. */
