@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <cstdint>
 #include <filesystem>
@@ -267,6 +268,60 @@ public:
             perState.append(std::move(list));
         }
         return states.array.ndim() == 1 ? py::reinterpret_borrow<py::list>(perState[0]) : perState;
+    }
+
+    py::dict distance(const py::handle &q, double upperBound) const
+    {
+        const StatesArgument states = statesArgument(q, *problem_, "q");
+        rc::DistanceRequest request;
+        request.checkEnvironment = request_.checkEnvironment;
+        request.checkSelfCollision = request_.checkSelfCollision;
+        request.upperBound = upperBound;
+        try
+        {
+            rc::validate(request);
+        }
+        catch (const rc::ConfigurationError &error)
+        {
+            throw py::value_error(error.what());
+        }
+        std::vector<rc::DistanceResult> results(states.rows);
+        {
+            py::gil_scoped_release release;
+            checker_->distance(states.data, states.rows, request, results.data());
+        }
+        const py::ssize_t n = static_cast<py::ssize_t>(states.rows);
+        py::array_t<double> distances(n);
+        py::array_t<double> points({n, py::ssize_t{2}, py::ssize_t{3}});
+        py::list components, others;
+        auto d = distances.mutable_unchecked<1>();
+        auto p = points.mutable_unchecked<3>();
+        const rc::RobotModel &robot = checker_->robot();
+        for (py::ssize_t i = 0; i < n; ++i)
+        {
+            const rc::DistanceResult &r = results[static_cast<std::size_t>(i)];
+            d(i) = r.distance;
+            const bool pair = r.kind == rc::Contact::Kind::Environment || r.kind == rc::Contact::Kind::SelfCollision;
+            for (int k = 0; k < 3; ++k)
+            {
+                p(i, 0, k) = pair ? r.pointOnComponent[k] : std::nan("");
+                p(i, 1, k) = pair ? r.pointOnOther[k] : std::nan("");
+            }
+            components.append(pair ? py::cast(robot.components[static_cast<std::size_t>(r.component)].name)
+                                   : py::object(py::none()));
+            if (!pair)
+                others.append(py::none());
+            else if (r.kind == rc::Contact::Kind::Environment)
+                others.append(checker_->scene().objects[static_cast<std::size_t>(r.object)].name);
+            else
+                others.append(robot.components[static_cast<std::size_t>(r.otherComponent)].name);
+        }
+        py::dict answer;
+        answer["distance"] = distances;
+        answer["points"] = points;
+        answer["component"] = components;
+        answer["other"] = others;
+        return answer;
     }
 
     py::object checkMotions(const py::handle &a, const py::handle &b, bool certified) const
@@ -598,6 +653,18 @@ dicts with "kind" ("environment", "self" or "out_of_bounds"), "component"
 the other), "point" (x, y, z, world frame) and "description". Decided exactly
 whatever the mode; empty for a valid state. For q of shape (N, dof), one such
 list per row.)doc")
+        .def("distance", &PyChecker::distance, py::arg("q"),
+             py::arg("upper_bound") = std::numeric_limits<double>::infinity(),
+             R"doc(Exact distances of configurations q (shape (N, dof) or (dof,)): the smallest
+distance between the robot and the scene and between its self pairs that the
+SRDF does not exempt (those the mode's request checks), not padded. Returns a
+dict of "distance" (float array (N,): 0 where the state collides, the
+upper bound where it is at least upper_bound), "points" ((N, 2, 3): a nearest
+point on the component and on the other solid, world frame; NaN where no pair
+is named), "component" and "other" (lists of N names, None where no pair is
+named). upper_bound (> 0): stop as soon as the distance is known to reach it.
+A state outside the limits has distance 0 and no pair; a value that is not
+finite is a ValueError, as for check.)doc")
         .def("check_motions", &PyChecker::checkMotions, py::arg("a"), py::arg("b"), py::arg("certified") = true,
              R"doc(Straight edges from a[i] to b[i] (shapes (N, dof), or (dof,) for one edge), straight
 in the planners' state space: a continuous joint turns the shorter way round.

@@ -316,6 +316,23 @@ TEST_F(ViewServerTest, FreeStateIsValidWithTheComponentPoses)
     }
 }
 
+TEST_F(ViewServerTest, FreeStateHasItsClearanceAndAColliderNone)
+{
+    const json free = post(checkBody(kFree).dump());
+    ASSERT_TRUE(free["distance"].is_object()) << free.dump();
+    // The checker's exact distance: the same value, pair and points.
+    const rc::Checker checker(plant().robot, plant().scene);
+    rc::DistanceResult expected;
+    checker.distance(kFree.data(), rc::DistanceRequest{}, &expected);
+    ASSERT_GT(expected.distance, 0.0);
+    EXPECT_EQ(free["distance"]["distance"].get<double>(), expected.distance);
+    EXPECT_EQ(free["distance"]["component"], plant().robot->components[expected.component].name);
+    const std::vector<double> a = free["distance"]["points"][0].get<std::vector<double>>();
+    const std::vector<double> b = free["distance"]["points"][1].get<std::vector<double>>();
+    EXPECT_NEAR(std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]), expected.distance, 1e-9);
+    EXPECT_TRUE(post(checkBody(kBoomInRack).dump())["distance"].is_null());
+}
+
 TEST_F(ViewServerTest, BoomInTheRackListsEveryContact)
 {
     const json answer = post(checkBody(kBoomInRack).dump());

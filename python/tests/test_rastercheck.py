@@ -64,6 +64,26 @@ def test_crane_straight_line_swings_the_load_into_tank_1(crane, crane_checker):
     assert [not c for c in per_state] == list(valid[::10])
 
 
+def test_crane_distance_is_zero_exactly_where_the_lift_collides_and_its_points_that_far_apart(rc, crane, crane_checker):
+    states = line(crane.start, crane.goal, 41)
+    answer = crane_checker.distance(states)
+    distance, points = answer["distance"], answer["points"]
+    assert distance.shape == (41,) and points.shape == (41, 2, 3)
+    assert len(answer["component"]) == 41 and len(answer["other"]) == 41
+    # Safe mode without padding is exact: a state is valid exactly when its distance is positive.
+    assert np.array_equal(distance > 0, crane_checker.check(states))
+    assert np.allclose(np.linalg.norm(points[:, 0] - points[:, 1], axis=1), distance, atol=1e-9)
+    # The skid hangs 0.3 m above its support at the start (robots/sites/README.md).
+    assert 0.25 < distance[0] <= 0.3 + 1e-9
+    # The bounded form: the distance where it is below the bound, else the bound itself.
+    capped = crane_checker.distance(states, upper_bound=0.1)["distance"]
+    assert np.array_equal(capped, np.minimum(distance, 0.1))
+    assert crane_checker.distance(crane.start)["distance"].shape == (1,)
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match="upperBound"):
+            crane_checker.distance(states, upper_bound=bad)
+
+
 def test_crane_straight_edge_is_rejected_certified_and_discrete(crane, crane_checker):
     assert crane_checker.check_motions(crane.start, crane.goal).tolist() == [False]
     valid, last_valid = crane_checker.check_motions(crane.start, crane.goal, certified=False)

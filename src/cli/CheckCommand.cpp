@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 
 #include <CLI/CLI.hpp>
@@ -31,6 +32,7 @@ struct CheckOptions
     double pixel = 0.0;
     double boundsTolerance = kDefaultBoundsTolerance;
     std::size_t deviceMemoryMiB = 0;
+    bool distance = false;
 };
 
 /** \brief Why a state is invalid, for the verdicts file: "bounds:<coordinate>", "environment" or
@@ -53,26 +55,51 @@ std::string reason(const Checker &checker, bool valid, const Contact &c)
     return "";
 }
 
-void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<std::uint8_t> &valid,
-                   const std::vector<Contact> &contacts)
+/** \brief The --distance columns of one state: the distance, the pair and a closest point on each
+    side (world frame); empty for a state outside the bounds or with nothing to measure. */
+void writeDistance(std::ostream &out, const Checker &checker, const DistanceResult &d)
 {
-    out << "valid,component,object,triangle,x,y,z,reason\n" << std::setprecision(9);
+    if (d.kind != Contact::Kind::Environment && d.kind != Contact::Kind::SelfCollision)
+    {
+        out << ",,,,,,,,";
+        return;
+    }
+    const RobotModel &robot = checker.robot();
+    const std::string other = d.kind == Contact::Kind::Environment ? checker.scene().objects[d.object].name
+                                                                   : robot.components[d.otherComponent].name;
+    const Eigen::Vector3d &a = d.pointOnComponent, &b = d.pointOnOther;
+    out << ',' << d.distance << ',' << robot.components[d.component].name << ',' << other << ',' << a.x() << ','
+        << a.y() << ',' << a.z() << ',' << b.x() << ',' << b.y() << ',' << b.z();
+}
+
+/** \brief The verdicts file; with \a distances (one per state), the --distance columns at the end
+    of each row. */
+void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<std::uint8_t> &valid,
+                   const std::vector<Contact> &contacts, const std::vector<DistanceResult> &distances)
+{
+    out << "valid,component,object,triangle,x,y,z,reason";
+    if (!distances.empty())
+        out << ",distance,distance_component,distance_other,ax,ay,az,bx,by,bz";
+    out << '\n' << std::setprecision(9);
     const RobotModel &robot = checker.robot();
     for (std::size_t i = 0; i < valid.size(); ++i)
     {
         const Contact &c = contacts[i];
         if (valid[i] || c.kind == Contact::Kind::OutOfBounds)
+            out << (valid[i] ? 1 : 0) << ",,,,,,," << reason(checker, valid[i], c);
+        else
         {
-            out << (valid[i] ? 1 : 0) << ",,,,,,," << reason(checker, valid[i], c) << '\n';
-            continue;
+            const std::string other = c.kind == Contact::Kind::Environment ? checker.scene().objects[c.object].name
+                                                                           : robot.components[c.otherComponent].name;
+            out << "0," << robot.components[c.component].name << ',' << other << ',';
+            if (c.triangle >= 0)
+                out << c.triangle;
+            out << ',' << c.position.x() << ',' << c.position.y() << ',' << c.position.z() << ','
+                << reason(checker, false, c);
         }
-        const std::string other = c.kind == Contact::Kind::Environment ? checker.scene().objects[c.object].name
-                                                                       : robot.components[c.otherComponent].name;
-        out << "0," << robot.components[c.component].name << ',' << other << ',';
-        if (c.triangle >= 0)
-            out << c.triangle;
-        out << ',' << c.position.x() << ',' << c.position.y() << ',' << c.position.z() << ','
-            << reason(checker, false, c) << '\n';
+        if (!distances.empty())
+            writeDistance(out, checker, distances[i]);
+        out << '\n';
     }
 }
 
@@ -117,13 +144,25 @@ int runCheck(const CheckOptions &options)
     const auto start = std::chrono::steady_clock::now();
     checker.check(states.values.data(), states.rows, valid.data(), request, contacts.data());
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::vector<DistanceResult> distances;
+    double distanceSeconds = 0.0;
+    if (options.distance)
+    {
+        distances.resize(states.rows);
+        DistanceRequest distanceRequest;
+        distanceRequest.checkEnvironment = request.checkEnvironment;
+        distanceRequest.checkSelfCollision = request.checkSelfCollision;
+        const auto distanceStart = std::chrono::steady_clock::now();
+        checker.distance(states.values.data(), states.rows, distanceRequest, distances.data());
+        distanceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - distanceStart).count();
+    }
 
     if (!options.outPath.empty())
     {
         std::ofstream out(options.outPath);
         if (!out)
             throw InputError(options.outPath, "", "cannot write the verdicts file");
-        writeVerdicts(out, checker, valid, contacts);
+        writeVerdicts(out, checker, valid, contacts, distances);
     }
     std::size_t invalid = 0, bounds = 0, environment = 0, self = 0;
     for (std::size_t i = 0; i < states.rows; ++i)
@@ -138,7 +177,16 @@ int runCheck(const CheckOptions &options)
     std::cerr << "rastercheck: backend " << checker.backendName() << ", mode " << options.checking.mode << '\n';
     std::cout << "states=" << states.rows << " invalid=" << invalid << " bounds=" << bounds
               << " environment=" << environment << " self=" << self << " seconds=" << seconds
-              << " states_per_s=" << (seconds > 0 ? static_cast<double>(states.rows) / seconds : 0.0) << std::endl;
+              << " states_per_s=" << (seconds > 0 ? static_cast<double>(states.rows) / seconds : 0.0);
+    if (options.distance)
+    {
+        double smallest = std::numeric_limits<double>::infinity();
+        for (const DistanceResult &d : distances)
+            if (d.kind == Contact::Kind::Environment || d.kind == Contact::Kind::SelfCollision)
+                smallest = std::min(smallest, d.distance);
+        std::cout << " min_distance=" << smallest << " distance_seconds=" << distanceSeconds;
+    }
+    std::cout << std::endl;
     return 0;
 }
 }  // namespace
@@ -148,17 +196,19 @@ void addCheckCommand(CLI::App &app)
     auto options = std::make_shared<CheckOptions>();
     CLI::App *command = app.add_subcommand("check", "Decide a batch of states from a CSV file");
     options->problem.addTo(*command);
-    command->add_option("--states", options->statesPath,
-                        "CSV with a header row: the robot's coordinate names (x,y,z,qx,qy,qz,qw for rigid bodies)")
+    command
+        ->add_option("--states", options->statesPath,
+                     "CSV with a header row: the robot's coordinate names (x,y,z,qx,qy,qz,qw for rigid bodies)")
         ->required();
     command->add_option("--out", options->outPath,
                         "verdicts CSV: valid,component,object,triangle,x,y,z,reason (reason: bounds:COORDINATE, "
-                        "environment or self)");
+                        "environment or self), then the --distance columns");
     options->checking.addModeAndPadding(*command, "how the states are checked");
     options->checking.addBackendAndThreads(*command, "worker threads");
-    command->add_option("--device-memory", options->deviceMemoryMiB,
-                        "MiB of GPU memory the batch buffers may take (0 = half the free memory); a batch that "
-                        "needs more runs in several passes, with the same verdicts")
+    command
+        ->add_option("--device-memory", options->deviceMemoryMiB,
+                     "MiB of GPU memory the batch buffers may take (0 = half the free memory); a batch that "
+                     "needs more runs in several passes, with the same verdicts")
         ->check(CLI::Range(std::size_t{0}, std::size_t{1} << 30));
     command
         ->add_option("--bounds-tolerance", options->boundsTolerance,
@@ -167,6 +217,11 @@ void addCheckCommand(CLI::App &app)
         ->check(CLI::NonNegativeNumber);
     command->add_option("--pixel", options->pixel, "raster pixel size in scene units (0 = automatic)")
         ->check(CLI::NonNegativeNumber);
+    command->add_flag("--distance", options->distance,
+                      "also measure each state's exact distance (robot to scene and non-exempt self pairs, "
+                      "not padded): --out gains the columns distance,distance_component,distance_other,ax,ay,az,"
+                      "bx,by,bz (a closest point on the component and on the other solid, world frame; 0 and the "
+                      "contact for a colliding state), the summary min_distance= and distance_seconds=");
     command->callback([options]() { throw CommandResult{runCheck(*options)}; });
 }
 }  // namespace rastercheck::cli

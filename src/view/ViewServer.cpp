@@ -388,6 +388,27 @@ struct ViewServer::Impl
         return entry;
     }
 
+    /** \brief The distance at \a q (Checker::distance over the pairs the request checks): the
+        value, the pair and the two nearest points; null when there is nothing to measure. */
+    json distanceJson(const std::vector<double> &q) const
+    {
+        DistanceRequest request;
+        request.checkEnvironment = options.request.checkEnvironment;
+        request.checkSelfCollision = options.request.checkSelfCollision;
+        DistanceResult result;
+        checker.distance(q.data(), request, &result);
+        if (result.kind != Contact::Kind::Environment && result.kind != Contact::Kind::SelfCollision)
+            return nullptr;
+        const std::string other = result.kind == Contact::Kind::Environment
+                                      ? scene().objects[static_cast<std::size_t>(result.object)].name
+                                      : robot().components[static_cast<std::size_t>(result.otherComponent)].name;
+        return json{{"distance", result.distance},
+                    {"kind", toString(result.kind)},
+                    {"component", robot().components[static_cast<std::size_t>(result.component)].name},
+                    {"other", other},
+                    {"points", json::array({vectorJson(result.pointOnComponent), vectorJson(result.pointOnOther)})}};
+    }
+
     /** \brief Pose of every component (world frame) at \a q: position and quaternion x y z w. */
     json componentPoses(const std::vector<double> &q) const
     {
@@ -413,12 +434,18 @@ struct ViewServer::Impl
         std::vector<Contact> contacts;
         if (!valid)
             contacts = checker.contacts(q.data(), options.request);
+        // A valid state's clearance: how far, and between which two points, it is from the nearest
+        // solid (the pairs the request checks; not padded).
+        json distance = nullptr;
+        if (valid)
+            distance = distanceJson(q);
         const double milliseconds = millisecondsSince(start);
         json contactList = json::array();
         for (const Contact &contact : contacts)
             contactList.push_back(contactJson(contact));
         return json{{"valid", valid},
                     {"contacts", std::move(contactList)},
+                    {"distance", std::move(distance)},
                     {"links", componentPoses(q)},
                     {"milliseconds", milliseconds}};
     }

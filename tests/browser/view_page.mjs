@@ -181,6 +181,11 @@ async function main()
         expect(
             status.state === 'valid' && status.text === 'Collision-free',
             `the free state shows as free (status '${status.text}')`);
+        const clearance =
+            await page.$eval('#clearance', (span) => ({text: span.textContent, distance: span.dataset.distance}));
+        expect(
+            Number(clearance.distance) > 0 && clearance.text.startsWith('clearance '),
+            `the free state shows its clearance ('${clearance.text}')`);
         const joints =
             await page.$$eval('#joints .joint label span:first-child', (labels) => labels.map((l) => l.textContent));
         expect(

@@ -208,4 +208,76 @@ bool FclReference::collides(const double *q, double padding)
     }
     return false;
 }
+
+struct FclDistance::Impl
+{
+    const CollisionModel &model;
+    RobotData data;
+    std::vector<std::unique_ptr<fcl::CollisionObjectd>> components;
+    std::vector<Eigen::Isometry3d> componentOffsets;
+    std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
+
+    Impl(const CollisionModel &m, bool exactPrimitives) : model(m), data(*m.robot)
+    {
+        for (const Component &component : m.robot->components)
+        {
+            const bool primitive = exactPrimitives && component.shapes.size() == 1;
+            components.push_back(std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(component.shapes[0])
+                                                                                   : toFcl(component.mesh)));
+            componentOffsets.push_back(primitive ? component.shapes[0].pose : Eigen::Isometry3d::Identity());
+        }
+        for (const SceneObject &object : m.scene->objects)
+        {
+            const bool primitive = exactPrimitives && object.shapes.size() == 1;
+            objects.push_back(
+                std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(object.shapes[0]) : toFcl(object.mesh)));
+            if (primitive)
+                objects.back()->setTransform(object.shapes[0].pose);
+        }
+    }
+};
+
+FclDistance::FclDistance(const CollisionModel &model, bool exactPrimitives)
+    : impl_(std::make_unique<Impl>(model, exactPrimitives))
+{
+}
+
+FclDistance::~FclDistance() = default;
+
+double FclDistance::distance(const double *q, bool environment, bool self, Eigen::Vector3d *points)
+{
+    const CollisionModel &model = impl_->model;
+    forwardKinematics(*model.robot, impl_->data, q);
+    for (std::size_t c = 0; c < impl_->components.size(); ++c)
+    {
+        const Eigen::Isometry3d pose = impl_->data.oMl[model.componentLink[c]] * impl_->componentOffsets[c];
+        impl_->components[c]->setTransform(pose.linear(), pose.translation());
+    }
+    fcl::DistanceRequestd request;
+    request.enable_nearest_points = points != nullptr;
+    fcl::DistanceResultd result;  // shared: every pair prunes against the running minimum
+    if (environment)
+        for (auto &component : impl_->components)
+            for (auto &object : impl_->objects)
+                fcl::distance(component.get(), object.get(), request, result);
+    if (self)
+        for (const auto &[a, b] : model.selfPairs)
+            fcl::distance(impl_->components[a].get(), impl_->components[b].get(), request, result);
+    if (points)
+    {
+        points[0] = result.nearest_points[0];
+        points[1] = result.nearest_points[1];
+    }
+    return result.min_distance;
+}
+
+double fclMeshDistance(const Mesh &a, const Eigen::Isometry3d &poseA, const Mesh &b, const Eigen::Isometry3d &poseB)
+{
+    fcl::CollisionObjectd oa(toFcl(a), poseA.linear(), poseA.translation());
+    fcl::CollisionObjectd ob(toFcl(b), poseB.linear(), poseB.translation());
+    fcl::DistanceRequestd request;
+    fcl::DistanceResultd result;
+    fcl::distance(&oa, &ob, request, result);
+    return result.min_distance;
+}
 }  // namespace rastercheck::test

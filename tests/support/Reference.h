@@ -30,4 +30,27 @@ private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
+/** \brief FCL 0.7's fcl::distance over the pairs a validity check decides (components against
+    objects, the self pairs the ACM does not exempt), meshes as BVHModel<OBBRSS> (and, with
+    \a exactPrimitives, single primitives as FCL shapes, as FclReference). Per state one
+    DistanceResult is shared by every pair, so each pair's traversal prunes against the running
+    minimum (FCL's traversal reads the result's min_distance), which is how FCL's own broadphase
+    distance runs. Exact (rel_err = abs_err = 0) for meshes; FCL's GJK decides shapes. Surfaces
+    only: a solid inside another is apart. Not thread-safe (one per thread). */
+class FclDistance
+{
+public:
+    explicit FclDistance(const CollisionModel &model, bool exactPrimitives = false);
+    ~FclDistance();
+    /** \brief The minimum distance at \a q (an admissible state) over the pairs asked for; the
+        two nearest points (world frame) when \a points is not null. Infinity with no pair. */
+    double distance(const double *q, bool environment = true, bool self = true, Eigen::Vector3d *points = nullptr);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+/** \brief fcl::distance between two meshes (BVHModel<OBBRSS>, built per call) placed by the poses. */
+double fclMeshDistance(const Mesh &a, const Eigen::Isometry3d &poseA, const Mesh &b, const Eigen::Isometry3d &poseB);
 }  // namespace rastercheck::test

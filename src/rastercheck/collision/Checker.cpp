@@ -64,6 +64,7 @@ std::unique_ptr<Backend> makeCudaBackend(const CollisionModelConstPtr &model, st
 Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOptions &options)
     : model_(std::make_shared<const CollisionModel>(std::move(robot), std::move(scene))),
       reference_(model_),
+      distances_(model_),
       threads_(options.threads),
       minDeviceBatch_(options.minDeviceBatch > 0
                           ? options.minDeviceBatch
@@ -199,6 +200,43 @@ std::vector<Contact> Checker::contacts(const double *q, const CollisionRequest &
     }
     reference_.giveBack(std::move(workspace));
     return found;
+}
+
+void Checker::distance(const double *q, const DistanceRequest &request, DistanceResult *result) const
+{
+    distance(q, 1, request, result);
+}
+
+void Checker::distance(const double *q, std::size_t n, const DistanceRequest &request, DistanceResult *results) const
+{
+    warnOnceIfNotFinite(q, n);
+    distances_.distance(q, n, results, request, n > 1 ? threads_ : 1);
+}
+
+std::string Checker::describe(const DistanceResult &result) const
+{
+    if (result.kind == Contact::Kind::None || result.kind == Contact::Kind::OutOfBounds)
+    {
+        Contact contact;
+        contact.kind = result.kind;
+        contact.coordinate = result.coordinate;
+        if (result.kind == Contact::Kind::OutOfBounds)
+            return describe(contact);
+        std::ostringstream text;
+        text << (result.capped ? "at least " : "") << result.distance;
+        return text.str();
+    }
+    const RobotModel &robot = *model_->robot;
+    std::ostringstream text;
+    text << robot.components[result.component].name << " vs ";
+    if (result.kind == Contact::Kind::Environment)
+        text << "object '" << model_->scene->objects[result.object].name << "'";
+    else
+        text << robot.components[result.otherComponent].name;
+    const Eigen::Vector3d &a = result.pointOnComponent, &b = result.pointOnOther;
+    text << " at " << result.distance << " (" << a.x() << ", " << a.y() << ", " << a.z() << ") - (" << b.x() << ", "
+         << b.y() << ", " << b.z() << ")";
+    return text.str();
 }
 
 bool Checker::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,

@@ -11,6 +11,7 @@
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/collision/CollisionRequest.h"
 #include "rastercheck/collision/CpuBackend.h"
+#include "rastercheck/collision/Distance.h"
 
 namespace rastercheck
 {
@@ -99,6 +100,21 @@ public:
         (docs/viewer.md). Thread-safe. */
     std::vector<Contact> contacts(const double *q, const CollisionRequest &request = {}) const;
 
+    /** \brief The smallest distance at state \a q between the robot and the scene and between its
+        non-exempt self pairs (\a request says which), with the pair, a closest pair of points and
+        the triangles they lie on: exact for meshes, primitives and mixed pairs (DistanceQueries);
+        0 and a contact when the state collides. With a finite DistanceRequest::upperBound the query
+        stops as soon as it knows the distance reaches it (\a result capped). A state outside the
+        bounds or not finite is OutOfBounds (named in the checker's one warning). Throws
+        ConfigurationError for a bad request. Thread-safe. */
+    void distance(const double *q, const DistanceRequest &request, DistanceResult *result) const;
+    /** \brief \a n states (n x dof, row-major) into \a results (n entries), over the checker's CPU
+        threads (CheckerOptions::threads). */
+    void distance(const double *q, std::size_t n, const DistanceRequest &request, DistanceResult *results) const;
+
+    /** \brief "panda_link5 vs object 'box_3' at 0.0421 (0.41, 0.02, 0.33) - (0.43, 0.05, 0.33)". */
+    std::string describe(const DistanceResult &result) const;
+
     /** \brief The raster image of the pair named by \a contact at state \a q (CPU pipeline; for
         pictures such as the paper's Fig. 6). False when the contact names no pair. */
     bool rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
@@ -117,6 +133,7 @@ private:
     CollisionModelConstPtr model_;
     std::unique_ptr<Backend> backend_;
     CpuBackend reference_;  // pictures and diagnostics run the CPU pipeline whatever the backend
+    DistanceQueries distances_;
     int threads_;
     std::size_t minDeviceBatch_;
     mutable std::atomic<bool> warnedNotFinite_{false};  // one warning per checker, not one per state

@@ -4,7 +4,9 @@
 #include <cmath>
 
 #include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/device/ConvexClosest.h"
 #include "rastercheck/device/ConvexDistance.h"
+#include "rastercheck/device/Traversal.h"
 #include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
@@ -127,6 +129,103 @@ bool shapesMeetMesh(const std::vector<PrimitiveShape> &shapes, const Pose<double
     }
     return false;
 }
+
+Eigen::Vector3d toEigen(const Vec3<double> &v) { return Eigen::Vector3d(v.x, v.y, v.z); }
+
+/** \brief The nearest pair of \a a's and \a b's shapes when nearer than result.distance (the best so
+    far, initially the caller's bound): result updated, true. */
+bool shapesDistance(const std::vector<PrimitiveShape> &a, const Pose<double> &poseA,
+                    const std::vector<PrimitiveShape> &b, const Pose<double> &poseB, SurfaceDistance &result)
+{
+    bool found = false;
+    for (const PrimitiveShape &sa : a)
+    {
+        const ConvexShape ca = placed(sa, poseA);
+        for (const PrimitiveShape &sb : b)
+        {
+            Vec3<double> onA, onB;
+            const double d = device::convexClosest(ca, placed(sb, poseB), onA, onB);
+            if (d < result.distance)
+            {
+                result.distance = d;
+                result.pointA = toEigen(onA);
+                result.pointB = toEigen(onB);
+                result.triangleA = result.triangleB = -1;
+                found = true;
+            }
+        }
+    }
+    return found;
+}
+
+/** \brief The nearest point pair of \a shapes (placed by \a poseShapes) and the solid of \a bvh's
+    mesh (placed by \a poseMesh) when nearer than result.distance: result updated (pointA on the
+    shapes, triangleB the mesh's), true. The search runs in the mesh's frame; a node is skipped when
+    the ball about the primitive's origin that holds it is no nearer to the node's box or sphere
+    than the best so far (less the nodes' float rounding). */
+bool shapesToMeshDistance(const std::vector<PrimitiveShape> &shapes, const Pose<double> &poseShapes,
+                          const MeshBvh &bvh, bool closed, const Pose<double> &poseMesh, SurfaceDistance &result)
+{
+    if (bvh.empty())
+        return false;
+    const Pose<double> inMesh = device::relativePose(poseMesh, poseShapes);  // shapes' frame -> mesh frame
+    const Eigen::Isometry3d meshToWorld = fromDevicePose(poseMesh);
+    const MeshBvh::Node *nodes = bvh.nodes();
+    bool found = false;
+    for (const PrimitiveShape &shape : shapes)
+    {
+        const ConvexShape convex = placed(shape, inMesh);
+        const Eigen::Vector3d centre(convex.pose.m[3], convex.pose.m[7], convex.pose.m[11]);
+        const double radius = reach(shape);
+        const double slack = 1e-5 * (centre.cwiseAbs().sum() + nodes[0].radius);
+        const auto nodeTest = [&](const MeshBvh::Node &node)
+        {
+            const Eigen::Vector3d offset = centre - nodeCentre(node);
+            const double sphereGap = offset.norm() - node.radius;
+            // The ball's centre to the box, along the box's axes.
+            const Eigen::Vector3d local = nodeAxes(node).transpose() * offset;
+            const Eigen::Vector3d outside = (local.cwiseAbs() - nodeExtents(node)).cwiseMax(0.0);
+            return std::max(sphereGap, outside.norm()) - radius - slack < result.distance;
+        };
+        const auto leaf = [&](const MeshBvh::Node &node)
+        {
+            for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
+            {
+                ConvexShape triangle{};
+                triangle.kind = ConvexKind::Triangle;
+                const double *corners = bvh.slotCorners(slot);
+                for (int k = 0; k < 3; ++k)
+                    triangle.corner[k] = {corners[3 * k], corners[3 * k + 1], corners[3 * k + 2]};
+                Vec3<double> onShape, onTriangle;
+                const double d = device::convexClosest(convex, triangle, onShape, onTriangle);
+                if (d < result.distance)
+                {
+                    result.distance = d;
+                    result.pointA = meshToWorld * toEigen(onShape);
+                    result.pointB = meshToWorld * toEigen(onTriangle);
+                    result.triangleA = -1;
+                    result.triangleB = static_cast<std::int32_t>(bvh.triangleOrder()[slot]);
+                    found = true;
+                    if (d <= 0.0)
+                        return false;
+                }
+            }
+            return true;
+        };
+        device::walkTree(nodes, static_cast<std::uint32_t>(bvh.numNodes()), nodeTest, leaf);
+        if (result.distance <= 0.0)
+            return true;
+        // No surface touches the primitive: it is inside the mesh's solid or wholly outside it.
+        if (closed && pointInsideClosedMesh(bvh, centre))
+        {
+            result.distance = 0.0;
+            result.pointA = result.pointB = meshToWorld * centre;
+            result.triangleA = result.triangleB = -1;
+            return true;
+        }
+    }
+    return found;
+}
 }  // namespace
 
 CurvedSolids::CurvedSolids(const CollisionModel &model)
@@ -171,5 +270,43 @@ bool CurvedSolids::collide(const CollisionModel &model, std::uint32_t pair, cons
     if (!shapesA.empty())
         return shapesMeetMesh(shapesA, poseA, bvhB, closedB, poseB, padding);
     return shapesMeetMesh(shapesB, poseB, *model.componentBvhs[a], model.components[a].closed, poseA, padding);
+}
+
+bool CurvedSolids::distance(const CollisionModel &model, std::uint32_t pair, const Pose<double> &poseA,
+                            const Pose<double> &poseB, double bound, SurfaceDistance &result) const
+{
+    Contact parties;
+    model.nameParties(pair, parties);
+    const RobotModel &robot = *model.robot;
+    const std::size_t a = static_cast<std::size_t>(parties.component);
+    const bool environment = parties.kind == Contact::Kind::Environment;
+    const std::size_t b = static_cast<std::size_t>(environment ? parties.object : parties.otherComponent);
+    const std::vector<PrimitiveShape> &shapesA = robot.components[a].shapes;
+    const std::vector<PrimitiveShape> &shapesB =
+        environment ? model.scene->objects[b].shapes : robot.components[b].shapes;
+    SurfaceDistance best;
+    best.distance = bound;
+    if (!shapesA.empty() && !shapesB.empty())
+    {
+        if (!shapesDistance(shapesA, poseA, shapesB, poseB, best))
+            return false;
+    }
+    else if (!shapesA.empty())
+    {
+        const MeshBvh &bvhB = environment ? *model.objectBvhs[b] : *model.componentBvhs[b];
+        const bool closedB = environment ? model.objects[b].closed : model.components[b].closed;
+        if (!shapesToMeshDistance(shapesA, poseA, bvhB, closedB, poseB, best))
+            return false;
+    }
+    else
+    {
+        // The shapes are B's: measured the other way round, then A and B swapped back.
+        if (!shapesToMeshDistance(shapesB, poseB, *model.componentBvhs[a], model.components[a].closed, poseA, best))
+            return false;
+        std::swap(best.pointA, best.pointB);
+        std::swap(best.triangleA, best.triangleB);
+    }
+    result = best;
+    return true;
 }
 }  // namespace rastercheck

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "rastercheck/device/Pose.h"
+#include "rastercheck/geometry/MeshDistance.h"
 
 namespace rastercheck
 {
@@ -38,6 +39,17 @@ public:
         scene object (world frame). Only for pairs that refines(). Thread-safe, no allocation. */
     bool collide(const CollisionModel &model, std::uint32_t pair, const device::Pose<double> &poseA,
                  const device::Pose<double> &poseB, double padding) const;
+
+    /** \brief The distance between the exact shapes of pair \a pair (one that refines()) when it is
+        below \a bound (metres): true, and \a result holds it with a closest pair of points (world
+        frame; A is the pair's component) and the triangle of a mesh side (-1 on a shape). False
+        when they are at least \a bound apart. Primitive against primitive by GJK
+        (device::convexClosest) on each pair of shapes; primitives against the other side's mesh by
+        GJK against each triangle its tree cannot rule out (node bounds against the best distance so
+        far), then 0 when the primitive lies inside that mesh (closed meshes). Poses as collide().
+        Thread-safe, no allocation. */
+    bool distance(const CollisionModel &model, std::uint32_t pair, const device::Pose<double> &poseA,
+                  const device::Pose<double> &poseB, double bound, SurfaceDistance &result) const;
 
 private:
     std::vector<std::uint8_t> refines_;  // n_pairs

@@ -11,6 +11,7 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/device/ExactPhase.h"
+#include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
 {
@@ -37,18 +38,6 @@ float roundedUp(double x)
 device::Vec3<double> toDevice(const Vec &v)
 {
     return {v.x(), v.y(), v.z()};
-}
-
-device::Pose<double> toDevice(const Eigen::Isometry3d &pose)
-{
-    device::Pose<double> p;
-    for (int r = 0; r < 3; ++r)
-    {
-        for (int c = 0; c < 3; ++c)
-            p.m[4 * r + c] = pose.linear()(r, c);
-        p.m[4 * r + 3] = pose.translation()[r];
-    }
-    return p;
 }
 
 // The caller's workspace lent to the exact phase: the placed-node cache sized for the smaller tree
@@ -497,7 +486,7 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
 {
     device::ExactScratch scratch = lend(workspace, a, b);
     device::ExactContact found;
-    const bool within = device::surfacesWithin(a.exactTree(), toDevice(poseA), b.exactTree(), toDevice(poseB), padding,
+    const bool within = device::surfacesWithin(a.exactTree(), toDevicePose(poseA), b.exactTree(), toDevicePose(poseB), padding,
                                                contact ? &found : nullptr, &scratch);
     if (within && contact)
         *contact = fromDevice(found);
@@ -515,7 +504,7 @@ bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closed
 {
     device::ExactScratch scratch = lend(workspace, a, b);
     device::ExactContact found;
-    const bool overlap = device::solidsOverlap(a.exactTree(), toDevice(poseA), closedA, b.exactTree(), toDevice(poseB),
+    const bool overlap = device::solidsOverlap(a.exactTree(), toDevicePose(poseA), closedA, b.exactTree(), toDevicePose(poseB),
                                                closedB, padding, contact ? &found : nullptr, &scratch);
     if (overlap && contact)
         *contact = fromDevice(found);

@@ -1,5 +1,6 @@
 #include "rastercheck/ompl/StateValidityChecker.h"
 
+#include <algorithm>
 #include <vector>
 
 #include <ompl/base/SpaceInformation.h>
@@ -23,6 +24,7 @@ StateValidityChecker::StateValidityChecker(const ::ompl::base::SpaceInformationP
         throw ConfigurationError("StateValidityChecker: the checker's robot has " + std::to_string(checker_->dof()) +
                                  " coordinates, the mapping's " + std::to_string(mapping_->numCoordinates()));
     validate(request_);  // here, not first inside a planner's isValid()
+    specs_.clearanceComputationType = ::ompl::base::StateValidityCheckerSpecs::EXACT;
 }
 
 bool StateValidityChecker::decide(const ::ompl::base::State *state, Contact *contact) const
@@ -75,5 +77,28 @@ bool StateValidityChecker::isValid(const ::ompl::base::State *state) const
 bool StateValidityChecker::isValid(const ::ompl::base::State *state, Contact &contact) const
 {
     return decide(state, &contact);
+}
+
+bool StateValidityChecker::isValid(const ::ompl::base::State *state, double &dist) const
+{
+    const bool valid = decide(state, nullptr);
+    dist = valid ? clearance(state) : 0.0;
+    return valid;
+}
+
+double StateValidityChecker::clearance(const ::ompl::base::State *state) const
+{
+    if (!si_->satisfiesBounds(state))
+        return 0.0;
+    thread_local std::vector<double> q;
+    q.resize(mapping_->numCoordinates());
+    mapping_->toConfiguration(state, q.data());
+    DistanceRequest request;
+    request.checkEnvironment = request_.checkEnvironment;
+    request.checkSelfCollision = request_.checkSelfCollision;
+    DistanceResult result;
+    checker_->distance(q.data(), request, &result);  // a state not finite is OutOfBounds: distance 0
+    // Nothing to measure (no object, no self pair): nothing can make the state invalid.
+    return std::max(0.0, result.distance - request_.padding);
 }
 }  // namespace rastercheck::ompl

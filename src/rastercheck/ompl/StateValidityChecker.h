@@ -19,6 +19,10 @@ using CheckerConstPtr = std::shared_ptr<const Checker>;
     satisfies the space's bounds (SpaceInformation::satisfiesBounds), its coordinates are finite and
     Checker::isValid accepts its configuration under the request given here.
 
+    It computes clearance exactly (OMPL's specs say ClearanceComputationType EXACT): clearance() is
+    Checker::distance less the request's padding, over the pairs the request checks (environment,
+    self), so optimizing planners can maximise it (ompl::base::MaximizeMinClearanceObjective).
+
     The implementation is thread safe: it holds no mutable scratch (the configuration lives in a
     thread-local buffer) and counts calls and invalid verdicts with atomics, so one instance can serve
     parallel planners (pRRT, pSBL, CForest) and threaded benchmarks. */
@@ -36,6 +40,17 @@ public:
     /** \brief Same verdict as isValid(state); \a contact receives why an invalid state is invalid
         (Contact::Kind::OutOfBounds for states outside the space's bounds). */
     bool isValid(const ::ompl::base::State *state, Contact &contact) const;
+
+    /** \brief isValid(state), and \a dist = clearance(state) for a valid state, 0 for an invalid one
+        (the distance is then not computed). */
+    bool isValid(const ::ompl::base::State *state, double &dist) const override;
+
+    /** \brief The exact distance (metres) from the robot at \a state to the scene and between its
+        non-exempt self pairs (those the request checks), less the request's padding: how far the
+        robot is from an invalid state in the workspace. 0 for a state outside the bounds, not finite
+        or colliding, never negative. CollisionRequest::pairPadding entries are not subtracted (its
+        users, the certified edges, ask Checker::distance directly). Thread-safe. */
+    double clearance(const ::ompl::base::State *state) const override;
 
     /** \brief Decides \a n states in one Checker::check call (one batch: one GPU pass where the
         checker has a device): valid[i] = 1 when isValid(states[i]) would return true. Counted as n

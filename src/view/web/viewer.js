@@ -47,6 +47,8 @@ const componentNodes = [];  // per component: a group placed at the link pose, h
 const objectMeshes = [];
 const hitGroup = new THREE.Group();  // red hit triangles and contact points, rebuilt per answer
 scene.add(hitGroup);
+const clearanceGroup = new THREE.Group();  // a free state's nearest points and the segment between them
+scene.add(clearanceGroup);
 let sceneRadius = 1;
 const sceneCentre = new THREE.Vector3();
 
@@ -401,6 +403,7 @@ function showAnswer(asked, answer, roundTrip)
         material.depthWrite = !touched;
     });
     showHits(answer.contacts);
+    showClearance(answer.distance);
     requestRender();
 
     const status = $('status');
@@ -446,6 +449,39 @@ function showAnswer(asked, answer, roundTrip)
     if (!answer.contacts.length)
         list.innerHTML = '<li class="note">none</li>';
     requestRaster(answer.valid ? null : asked);
+}
+
+/**
+   A free state's clearance: the distance and the pair in the header, and the segment between the
+   two nearest points (green, drawn over everything). Nothing for a colliding state.
+ */
+function showClearance(distance)
+{
+    for (const child of clearanceGroup.children.slice())
+    {
+        child.geometry.dispose();
+        child.material.dispose();
+        clearanceGroup.remove(child);
+    }
+    const text = $('clearance');
+    text.textContent =
+        distance ? `clearance ${distance.distance.toFixed(4)} (${distance.component} ↔ ${distance.other})` : '';
+    text.dataset.distance = distance ? String(distance.distance) : '';
+    if (!distance)
+        return;
+    const ends = distance.points.map((point) => new THREE.Vector3().fromArray(point));
+    const segment = new THREE.Line(new THREE.BufferGeometry().setFromPoints(ends),
+                                   new THREE.LineBasicMaterial({color: 0x108030, depthTest: false}));
+    segment.renderOrder = 12;
+    clearanceGroup.add(segment);
+    for (const end of ends)
+    {
+        const dot = new THREE.Mesh(new THREE.SphereBufferGeometry(sceneRadius * 0.004, 12, 8),
+                                   new THREE.MeshBasicMaterial({color: 0x108030, depthTest: false, transparent: true}));
+        dot.position.copy(end);
+        dot.renderOrder = 12;
+        clearanceGroup.add(dot);
+    }
 }
 
 /**

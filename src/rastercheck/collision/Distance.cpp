@@ -1,0 +1,253 @@
+#include "rastercheck/collision/Distance.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <omp.h>
+
+#include "rastercheck/collision/CpuBackend.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/geometry/MeshDistance.h"
+#include "rastercheck/model/Kinematics.h"
+
+namespace rastercheck
+{
+void validate(const DistanceRequest &request)
+{
+    if (!(request.upperBound > 0.0))
+        throw ConfigurationError("DistanceRequest::upperBound must be > 0 (infinity for the exact distance), got " +
+                                 std::to_string(request.upperBound));
+}
+
+/** \brief Scratch of one query at a time: the link poses, the placed nodes, the pairs in order. */
+struct DistanceWorkspace
+{
+    explicit DistanceWorkspace(const RobotModel &robot) : data(robot) {}
+
+    struct Candidate
+    {
+        double bound;  // lower bound on the pair's distance (its root boxes)
+        std::uint32_t pair;
+    };
+    RobotData data;
+    ExactWorkspace exact;
+    std::vector<Candidate> candidates;
+    std::vector<SurfaceHint> hints;  // n_pairs: each pair's nearest triangles at its last query
+};
+
+namespace
+{
+// As MeshDistance.cpp's slack: the float nodes' rounding, taken off the root bounds.
+constexpr double kNodeRounding = 1e-6;
+
+/** \brief Lower bound on the distance between the solids of \a a and \a b (their root boxes), less
+    the float nodes' rounding; 0 when the boxes may overlap. */
+double rootBound(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB)
+{
+    const MeshBvh::Node &ra = a.nodes()[0], &rb = b.nodes()[0];
+    const Eigen::Isometry3d bMa = poseB.inverse(Eigen::Isometry) * poseA;
+    const Eigen::Vector3d centreA = bMa * nodeCentre(ra);
+    const double slack = kNodeRounding * (bMa.translation().norm() + ra.radius + nodeCentre(ra).norm() + rb.radius +
+                                          nodeCentre(rb).norm());
+    const double bound = nodeDistanceLowerBound(rb, bMa.linear() * nodeAxes(ra), ra, centreA - nodeCentre(rb));
+    return std::max(0.0, bound - slack);
+}
+}  // namespace
+
+DistanceQueries::DistanceQueries(CollisionModelConstPtr model) : model_(std::move(model)) {}
+
+DistanceQueries::~DistanceQueries() = default;
+
+std::unique_ptr<DistanceWorkspace> DistanceQueries::borrow() const
+{
+    {
+        const std::lock_guard<std::mutex> lock(poolMutex_);
+        if (!pool_.empty())
+        {
+            std::unique_ptr<DistanceWorkspace> ws = std::move(pool_.back());
+            pool_.pop_back();
+            return ws;
+        }
+    }
+    return std::make_unique<DistanceWorkspace>(*model_->robot);
+}
+
+void DistanceQueries::giveBack(std::unique_ptr<DistanceWorkspace> workspace) const
+{
+    const std::lock_guard<std::mutex> lock(poolMutex_);
+    pool_.push_back(std::move(workspace));
+}
+
+void DistanceQueries::distance(const double *q, const DistanceRequest &request, DistanceResult &result) const
+{
+    distance(q, 1, &result, request, 1);
+}
+
+void DistanceQueries::distance(const double *q, std::size_t n, DistanceResult *results, const DistanceRequest &request,
+                               int threads) const
+{
+    validate(request);
+    const std::size_t dof = model_->robot->numCoordinates();
+    const int workers = batchWorkers(n, threads);
+    if (workers == 1 || n < 2)  // no thread team for a single query (OMPL's clearance())
+    {
+        std::unique_ptr<DistanceWorkspace> ws = borrow();
+        for (std::size_t i = 0; i < n; ++i)
+            measure(q + i * dof, request, *ws, results[i]);
+        giveBack(std::move(ws));
+        return;
+    }
+#pragma omp parallel num_threads(workers)
+    {
+        std::unique_ptr<DistanceWorkspace> ws = borrow();
+#pragma omp for schedule(dynamic, 4)
+        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
+            measure(q + static_cast<std::size_t>(i) * dof, request, *ws, results[i]);
+        giveBack(std::move(ws));
+    }
+}
+
+void DistanceQueries::measure(const double *q, const DistanceRequest &request, DistanceWorkspace &ws,
+                              DistanceResult &result) const
+{
+    const CollisionModel &model = *model_;
+    result = DistanceResult{};
+    if (!model.configurationAdmissible(q))
+    {
+        result.distance = 0.0;
+        result.kind = Contact::Kind::OutOfBounds;
+        result.coordinate = model.firstInadmissibleCoordinate(q);
+        return;
+    }
+    forwardKinematics(*model.robot, ws.data, q);
+    ws.hints.resize(model.numPairs());
+    const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
+    const std::size_t m = model.numComponents();
+    const std::size_t environmentPairs = model.numObjects() * m;
+    // A pair's two solids: its component (A) and the object or other component (B).
+    struct Sides
+    {
+        const MeshBvh *a, *b;
+        const Eigen::Isometry3d *poseA, *poseB;
+        bool closedA, closedB;
+    };
+    const auto sides = [&](std::uint32_t pair)
+    {
+        Contact parties;
+        model.nameParties(pair, parties);
+        const std::size_t c = static_cast<std::size_t>(parties.component);
+        const Eigen::Isometry3d *poseA = &ws.data.oMl[model.componentLink[c]];
+        if (parties.kind == Contact::Kind::Environment)
+        {
+            const std::size_t o = static_cast<std::size_t>(parties.object);
+            return Sides{model.componentBvhs[c].get(), model.objectBvhs[o].get(), poseA, &identity,
+                         model.components[c].closed,   model.objects[o].closed};
+        }
+        const std::size_t other = static_cast<std::size_t>(parties.otherComponent);
+        return Sides{model.componentBvhs[c].get(),
+                     model.componentBvhs[other].get(),
+                     poseA,
+                     &ws.data.oMl[model.componentLink[other]],
+                     model.components[c].closed,
+                     model.components[other].closed};
+    };
+
+    // Every pair's root bound, nearest first: the best distance shrinks early, and the pairs whose
+    // bound reaches it are never walked.
+    ws.candidates.clear();
+    for (std::uint32_t pair = 0; pair < model.numPairs(); ++pair)
+    {
+        const bool environment = pair < environmentPairs;
+        if (environment ? !request.checkEnvironment : !request.checkSelfCollision)
+            continue;
+        const Sides s = sides(pair);
+        if (s.a->empty() || s.b->empty())
+            continue;
+        ws.candidates.push_back({rootBound(*s.a, *s.poseA, *s.b, *s.poseB), pair});
+    }
+    std::sort(ws.candidates.begin(), ws.candidates.end(),
+              [](const DistanceWorkspace::Candidate &x, const DistanceWorkspace::Candidate &y)
+              { return x.bound < y.bound || (x.bound == y.bound && x.pair < y.pair); });
+
+    double best = request.upperBound;
+    bool found = false;
+    std::uint32_t bestPair = 0;
+    SurfaceDistance nearest;
+    const auto keep = [&](std::uint32_t pair, const SurfaceDistance &measured)
+    {
+        found = true;
+        best = measured.distance;
+        bestPair = pair;
+        nearest = measured;
+    };
+    // Every candidate's triangle pair of its last query first, one triangle distance each: their
+    // smallest is a real distance of this state, at or near the answer where the state is near the
+    // workspace's last (a planner's next state) or the pair's relative pose depends on a few joints
+    // only (a wrist), so the walks below prune against it from their first node pair. A single
+    // pair (a rigid body among meshes) has no other pair to bound: its own walk reads its hint, and
+    // widens its reach from below when the request gives no bound (surfaceDistance).
+    for (std::size_t k = 0; ws.candidates.size() > 1 && k < ws.candidates.size(); ++k)
+    {
+        const DistanceWorkspace::Candidate &candidate = ws.candidates[k];
+        if (candidate.bound >= best)
+            break;
+        const Sides s = sides(candidate.pair);
+        SurfaceDistance measured;
+        if (!model.curved.refines(candidate.pair) &&
+            hintedDistance(*s.a, *s.poseA, *s.b, *s.poseB, ws.hints[candidate.pair], best, measured) &&
+            measured.distance > 0.0)  // a contact is left to the walks, which name the first pair in order
+            keep(candidate.pair, measured);
+    }
+    for (const DistanceWorkspace::Candidate &candidate : ws.candidates)
+    {
+        if (candidate.bound >= best)
+            break;
+        const Sides s = sides(candidate.pair);
+        SurfaceDistance measured;
+        bool nearer = false;
+        if (model.curved.refines(candidate.pair))
+            nearer = model.curved.distance(model, candidate.pair, toDevicePose(*s.poseA), toDevicePose(*s.poseB), best,
+                                           measured);
+        else
+        {
+            nearer =
+                surfaceDistance(*s.a, *s.poseA, *s.b, *s.poseB, best, measured, &ws.exact, &ws.hints[candidate.pair]);
+            // Surfaces apart but the root boxes overlapping: one solid may hold the other, which is a
+            // collision however far apart the surfaces are.
+            Eigen::Vector3d inside;
+            if (!(nearer && measured.distance <= 0.0) && candidate.bound <= 0.0 &&
+                ((s.closedB && solidInside(*s.a, *s.poseA, *s.b, *s.poseB, &inside)) ||
+                 (s.closedA && solidInside(*s.b, *s.poseB, *s.a, *s.poseA, &inside))))
+            {
+                nearer = true;
+                measured = SurfaceDistance{};
+                measured.distance = 0.0;
+                measured.pointA = measured.pointB = inside;
+            }
+        }
+        if (!nearer)
+            continue;
+        keep(candidate.pair, measured);
+        if (best <= 0.0)
+            break;  // colliding: nothing is nearer
+    }
+
+    if (!found)
+    {
+        result.distance = request.upperBound;
+        result.capped = std::isfinite(request.upperBound);
+        return;
+    }
+    Contact parties;
+    model.nameParties(bestPair, parties);
+    result.distance = std::max(0.0, nearest.distance);
+    result.kind = parties.kind;
+    result.component = parties.component;
+    result.object = parties.object;
+    result.otherComponent = parties.otherComponent;
+    result.triangle = nearest.triangleA;
+    result.otherTriangle = nearest.triangleB;
+    result.pointOnComponent = nearest.pointA;
+    result.pointOnOther = nearest.pointB;
+}
+}  // namespace rastercheck

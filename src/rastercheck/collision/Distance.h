@@ -1,0 +1,99 @@
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/collision/CollisionRequest.h"
+
+namespace rastercheck
+{
+/** \brief What a distance query measures (Coal/FCL style). */
+struct DistanceRequest
+{
+    /** \brief Measure the components against the scene's objects. */
+    bool checkEnvironment = true;
+    /** \brief Measure the self pairs the allowed-collision matrix does not exempt. */
+    bool checkSelfCollision = true;
+    /** \brief The query stops as soon as it knows the distance is at least this (metres, > 0):
+        the answer is then DistanceResult::capped with distance equal to this bound, no pair named.
+        For callers that need only a threshold ("is the clearance at least d?"): pairs and node pairs
+        whose lower bounds reach it are never measured. Infinity (the default): the exact minimum. */
+    double upperBound = std::numeric_limits<double>::infinity();
+};
+
+/** \brief Throws ConfigurationError unless upperBound is > 0 (NaN is not). */
+void validate(const DistanceRequest &request);
+
+/** \brief The smallest distance between the robot and the scene, and between the robot's non-exempt
+    self pairs, at one state, with the pair and a closest pair of points. */
+struct DistanceResult
+{
+    /** \brief Metres (the scene's units). 0 when the state collides (surfaces crossing or touching,
+        or one solid inside another): then the pair and the points are a contact. The upper bound
+        when capped; infinity when there was nothing to measure (no object and no self pair). */
+    double distance = std::numeric_limits<double>::infinity();
+    /** \brief The distance is at least DistanceRequest::upperBound: distance = that bound and no
+        pair is named. */
+    bool capped = false;
+    /** \brief Environment or SelfCollision for the pair measured; OutOfBounds for a state outside
+        the bounds or not finite (distance 0, \a coordinate named, nothing measured); None when
+        capped or nothing was measured. */
+    Contact::Kind kind = Contact::Kind::None;
+    int component = -1;       ///< the pair's component
+    int object = -1;          ///< Environment: the scene object
+    int otherComponent = -1;  ///< SelfCollision: the second component
+    /** \brief Triangle of the component's mesh the closest point lies on; -1 when measured on a
+        primitive shape (curved primitives are measured on their exact shapes, CurvedSolids) or
+        when the state collides by containment (one solid inside the other). */
+    int triangle = -1;
+    /** \brief The same for the object (or the other component). */
+    int otherTriangle = -1;
+    /** \brief OutOfBounds: the first coordinate outside its bounds or not finite; -1 otherwise. */
+    int coordinate = -1;
+    Eigen::Vector3d pointOnComponent = Eigen::Vector3d::Zero();  ///< world frame
+    Eigen::Vector3d pointOnOther = Eigen::Vector3d::Zero();      ///< world frame; equal when colliding
+
+    bool colliding() const { return kind != Contact::Kind::None && distance <= 0.0; }
+};
+
+struct DistanceWorkspace;
+
+/** \brief Exact distance queries over one collision model: the minimum over the pairs of solids
+    a validity check decides (components against objects, non-exempt self pairs), each pair measured
+    on its meshes' triangle trees (surfaceDistance(): node lower bounds, pruning by the best distance
+    so far) or, where a side is made of primitives and one is curved, on the exact shapes (GJK,
+    CurvedSolids::distance). Pairs are taken nearest root bound first and the best distance so far
+    is every pair's bound, so far pairs cost one box test. A pair whose surfaces are apart but whose
+    root boxes overlap is tested for containment (closed meshes), which is a collision: distance 0.
+    Solids, not padded: CollisionRequest::padding plays no part. Immutable; every method is
+    thread-safe (each call borrows pooled scratch). */
+class DistanceQueries
+{
+public:
+    explicit DistanceQueries(CollisionModelConstPtr model);
+    ~DistanceQueries();
+
+    /** \brief Measures state \a q (dof values). Never throws for a bad state: one outside the
+        bounds or not finite is OutOfBounds. */
+    void distance(const double *q, const DistanceRequest &request, DistanceResult &result) const;
+    /** \brief \a n states (n x dof, row-major) into \a results (n entries), over \a threads worker
+        threads (0 = all cores). */
+    void distance(const double *q, std::size_t n, DistanceResult *results, const DistanceRequest &request,
+                  int threads) const;
+
+private:
+    void measure(const double *q, const DistanceRequest &request, DistanceWorkspace &ws, DistanceResult &result) const;
+    std::unique_ptr<DistanceWorkspace> borrow() const;
+    void giveBack(std::unique_ptr<DistanceWorkspace> workspace) const;
+
+    CollisionModelConstPtr model_;
+    mutable std::mutex poolMutex_;
+    mutable std::vector<std::unique_ptr<DistanceWorkspace>> pool_;
+};
+}  // namespace rastercheck

@@ -1,0 +1,473 @@
+// Distance queries (Checker::distance, surfaceDistance, CurvedSolids::distance): against a
+// brute-force minimum over every triangle pair, against FCL's fcl::distance on the same meshes, and
+// against the exact validity oracle (distance 0 exactly when the state collides; padding just below
+// the distance valid, just above it invalid).
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "BackendSuites.h"
+#include "NonConvex.h"
+#include "Reference.h"
+#include "TestSupport.h"
+#include "rastercheck/collision/Checker.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/geometry/MeshDistance.h"
+#include "rastercheck/geometry/Primitives.h"
+#include "rastercheck/geometry/TriangleTests.h"
+#include "rastercheck/io/MeshLoader.h"
+#include "rastercheck/model/Kinematics.h"
+
+namespace rc = rastercheck;
+using Eigen::Isometry3d;
+using Eigen::Vector3d;
+
+namespace
+{
+Isometry3d randomPose(std::mt19937_64 &rng, double spread)
+{
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::Quaterniond rotation(u(rng), u(rng), u(rng), u(rng));
+    rotation.normalize();
+    Isometry3d pose = Isometry3d::Identity();
+    pose.linear() = rotation.toRotationMatrix();
+    pose.translation() = spread * Vector3d(u(rng), u(rng), u(rng));
+    return pose;
+}
+
+/** \brief The minimum of triangleDistance over every pair of triangles, with both placed in the world. */
+double bruteForceDistance(const rc::Mesh &a, const Isometry3d &poseA, const rc::Mesh &b, const Isometry3d &poseB)
+{
+    std::vector<Vector3d> wa, wb;
+    for (const Vector3d &v : a.vertices)
+        wa.push_back(poseA * v);
+    for (const Vector3d &v : b.vertices)
+        wb.push_back(poseB * v);
+    double best = std::numeric_limits<double>::infinity();
+    for (const rc::Mesh::Triangle &ta : a.triangles)
+        for (const rc::Mesh::Triangle &tb : b.triangles)
+            best =
+                std::min(best, rc::triangleDistance(wa[ta[0]], wa[ta[1]], wa[ta[2]], wb[tb[0]], wb[tb[1]], wb[tb[2]]));
+    return best;
+}
+
+/** \brief Distance from \a p to triangle \a t of \a mesh placed by \a pose. */
+double pointToTriangle(const Vector3d &p, const rc::Mesh &mesh, int t, const Isometry3d &pose)
+{
+    const rc::Mesh::Triangle &tri = mesh.triangles.at(static_cast<std::size_t>(t));
+    return rc::triangleDistance(p, p, p, pose * mesh.vertices[tri[0]], pose * mesh.vertices[tri[1]],
+                                pose * mesh.vertices[tri[2]]);
+}
+
+double extentOf(const rc::Mesh &a, const rc::Mesh &b)
+{
+    return (a.bounds().max - a.bounds().min).norm() + (b.bounds().max - b.bounds().min).norm();
+}
+
+/** \brief surfaceDistance against the brute-force minimum and against FCL at \a poses random
+    placements of \a b about \a a; the witnesses lie on the triangles named, as far apart as the
+    distance says. Returns how many placements were apart (so the caller can ask for enough). */
+int compareMeshes(const rc::Mesh &a, const rc::Mesh &b, int poses, double spread, unsigned seed)
+{
+    const rc::MeshBvh bvhA(a), bvhB(b);
+    std::mt19937_64 rng(seed);
+    const double extent = extentOf(a, b);
+    int apart = 0;
+    for (int i = 0; i < poses; ++i)
+    {
+        const Isometry3d poseA = randomPose(rng, 0.1 * spread), poseB = randomPose(rng, spread);
+        rc::SurfaceDistance d;
+        EXPECT_TRUE(rc::surfaceDistance(bvhA, poseA, bvhB, poseB, std::numeric_limits<double>::infinity(), d));
+        const double brute = bruteForceDistance(a, poseA, b, poseB);
+        EXPECT_NEAR(d.distance, brute, 1e-12 * extent) << "pose " << i;
+        if (brute > 0.0)
+        {
+            ++apart;
+            EXPECT_NEAR(d.distance, rc::test::fclMeshDistance(a, poseA, b, poseB), 1e-9 * extent) << "pose " << i;
+        }
+        EXPECT_NEAR((d.pointA - d.pointB).norm(), d.distance, 1e-9 * extent);
+        EXPECT_LT(pointToTriangle(d.pointA, a, d.triangleA, poseA), 1e-9 * extent);
+        EXPECT_LT(pointToTriangle(d.pointB, b, d.triangleB, poseB), 1e-9 * extent);
+        // The bounded form: below the distance nothing is found, above it the same distance.
+        if (d.distance > 0.0)
+        {
+            rc::SurfaceDistance capped;
+            EXPECT_FALSE(rc::surfaceDistance(bvhA, poseA, bvhB, poseB, 0.999 * d.distance, capped));
+            EXPECT_TRUE(rc::surfaceDistance(bvhA, poseA, bvhB, poseB, 1.001 * d.distance, capped));
+            EXPECT_EQ(capped.distance, d.distance);
+        }
+    }
+    return apart;
+}
+
+double sceneExtent(const rc::Checker &checker)
+{
+    const rc::Aabb bounds = checker.scene().bounds();
+    return (bounds.max - bounds.min).norm();
+}
+
+/** \brief Checker::distance at \a n random states of \a checker's robot: against FCL (the same pairs,
+    \a exactPrimitives: primitives as FCL shapes) where both call the state apart, against the exact
+    oracle everywhere (0 exactly when the state collides; padding just under the distance valid,
+    just over it invalid), and the witnesses as far apart as the distance. */
+void compareChecker(const rc::Checker &checker, std::size_t n, unsigned seed, bool exactPrimitives, double tolerance,
+                    int &apartStates)
+{
+    const std::vector<double> q = rc::test::randomStates(checker.robot(), n, seed);
+    rc::test::FclDistance fcl(checker.collisionModel(), exactPrimitives);
+    const double extent = sceneExtent(checker);
+    const std::size_t dof = checker.dof();
+    std::vector<rc::DistanceResult> results(n);
+    checker.distance(q.data(), n, rc::DistanceRequest{}, results.data());
+    rc::CollisionRequest exact;
+    exact.mode = rc::CollisionMode::Exact;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const double *state = q.data() + i * dof;
+        const rc::DistanceResult &r = results[i];
+        ASSERT_NE(r.kind, rc::Contact::Kind::None) << "state " << i;
+        const bool collides = !checker.isValid(state, exact);
+        EXPECT_EQ(r.distance <= 0.0, collides) << "state " << i << ": " << checker.describe(r);
+        EXPECT_NEAR((r.pointOnComponent - r.pointOnOther).norm(), r.distance, 1e-9 * extent) << "state " << i;
+        if (collides)
+            continue;
+        ++apartStates;
+        const double theirs = fcl.distance(state);
+        if (theirs > 0.0)
+        {
+            EXPECT_NEAR(r.distance, theirs, tolerance * extent) << "state " << i << ": " << checker.describe(r);
+        }
+        rc::CollisionRequest padded = exact;
+        padded.padding = r.distance * (1.0 - 1e-6);
+        EXPECT_TRUE(checker.isValid(state, padded)) << "state " << i << ": " << checker.describe(r);
+        padded.padding = r.distance * (1.0 + 1e-6) + 1e-12 * extent;
+        EXPECT_FALSE(checker.isValid(state, padded)) << "state " << i << ": " << checker.describe(r);
+    }
+}
+}  // namespace
+
+TEST(SurfaceDistance, MatchesBruteForceAndFclOnNonConvexMeshes)
+{
+    // An L bar against a U and against a room with a doorway: their concave corners are where a
+    // loose node bound would skip the nearest triangles.
+    const rc::Mesh bar = rc::test::lBar(1.0), u = rc::test::uShape(0.2), room = rc::test::roomWithDoorway(0.5);
+    EXPECT_GT(compareMeshes(bar, u, 60, 1.5, 1), 20);
+    EXPECT_GT(compareMeshes(bar, room, 30, 2.5, 2), 10);
+}
+
+TEST(SurfaceDistance, MatchesBruteForceAndFclOnPrimitives)
+{
+    const rc::Mesh sphere = rc::makeSphere(0.3, 0.01), cylinder = rc::makeCylinder(0.2, 0.8, 0.01);
+    EXPECT_GT(compareMeshes(sphere, cylinder, 60, 0.8, 3), 20);
+}
+
+TEST(SurfaceDistance, MatchesFclOnFclsEnvAndRob)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Mesh env = rc::loadMesh(root + "/meshes/fcl/env.obj"), rob = rc::loadMesh(root + "/meshes/fcl/rob.obj");
+    const rc::MeshBvh bvhEnv(env), bvhRob(rob);
+    const rc::Aabb bounds = env.bounds();
+    const double extent = (bounds.max - bounds.min).norm();
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    int apart = 0;
+    for (int i = 0; i < 60; ++i)
+    {
+        Isometry3d pose = randomPose(rng, 0.0);
+        pose.translation() = bounds.min + Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(bounds.max - bounds.min);
+        rc::SurfaceDistance d;
+        ASSERT_TRUE(rc::surfaceDistance(bvhRob, pose, bvhEnv, Isometry3d::Identity(),
+                                        std::numeric_limits<double>::infinity(), d));
+        const double theirs = rc::test::fclMeshDistance(rob, pose, env, Isometry3d::Identity());
+        if (d.distance > 0.0 && theirs > 0.0)
+        {
+            ++apart;
+            EXPECT_NEAR(d.distance, theirs, 1e-9 * extent) << "pose " << i;
+        }
+        EXPECT_LT(pointToTriangle(d.pointA, rob, d.triangleA, pose), 1e-9 * extent);
+        EXPECT_LT(pointToTriangle(d.pointB, env, d.triangleB, Isometry3d::Identity()), 1e-9 * extent);
+    }
+    EXPECT_GT(apart, 20);
+}
+
+TEST(SurfaceDistance, SolidInsideAnotherIsFound)
+{
+    const rc::Mesh box = rc::test::blockSolid({rc::test::box(Vector3d(-1, -1, -1), Vector3d(1, 1, 1))});
+    const rc::Mesh bar = rc::test::lBar(0.5);
+    const rc::MeshBvh outer(box, 1, true), inner(bar);
+    Vector3d point;
+    EXPECT_TRUE(rc::solidInside(inner, Isometry3d::Identity(), outer, Isometry3d::Identity(), &point));
+    EXPECT_LT(point.cwiseAbs().maxCoeff(), 1.0);
+    Isometry3d away = Isometry3d::Identity();
+    away.translation().x() = 3.0;
+    EXPECT_FALSE(rc::solidInside(inner, away, outer, Isometry3d::Identity()));
+}
+
+TEST(CheckerDistance, PandaScenesMatchFclAndTheOracle)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const std::size_t n = static_cast<std::size_t>(rc::test::scaledCount(60, "RASTERCHECK_TEST_SCALE"));
+    int apart = 0;
+    for (const char *scenario : {"bookshelf_small", "box", "cage", "table_pick"})
+    {
+        SCOPED_TRACE(scenario);
+        const rc::Problem problem = rc::test::pandaProblem(root, scenario);
+        rc::CheckerOptions options;
+        options.backend = rc::BackendChoice::Cpu;
+        const rc::Checker checker(problem.robot, problem.scene, options);
+        // FCL's GJK measures the scenes' cylinders (libccd, tolerance 1e-6) less exactly than its
+        // mesh traversal: 1e-6 of the extent, the agreement target.
+        compareChecker(checker, n, 11, true, 1e-6, apart);
+    }
+    EXPECT_GT(apart, 40);
+}
+
+TEST(CheckerDistance, CraneInThePlantMatchesTheOracle)
+{
+    const rc::Problem &plant = rc::test::plant();
+    rc::CheckerOptions options;
+    options.backend = rc::BackendChoice::Cpu;
+    const rc::Checker checker(plant.robot, plant.scene, options);
+    int apart = 0;
+    // The crane's components of several shapes stay meshes in FCL (one shape per FCL object), whose
+    // cylinders' tessellation lies up to kDefaultPrimitiveError outside the exact shapes we measure:
+    // FCL's distance may be that much shorter. The oracle's padding checks stay exact.
+    const double tolerance = rc::kDefaultPrimitiveError / sceneExtent(checker);
+    compareChecker(checker, static_cast<std::size_t>(rc::test::scaledCount(40, "RASTERCHECK_TEST_SCALE")), 5, true,
+                   tolerance, apart);
+    EXPECT_GT(apart, 5);
+}
+
+TEST(CheckerDistance, BoundedQueryStopsAtTheBound)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
+    const rc::Checker checker(problem.robot, problem.scene);
+    const std::vector<double> q = rc::test::randomStates(checker.robot(), 40, 3);
+    int apart = 0;
+    for (std::size_t i = 0; i < 40; ++i)
+    {
+        const double *state = q.data() + i * checker.dof();
+        rc::DistanceResult exact;
+        checker.distance(state, rc::DistanceRequest{}, &exact);
+        if (exact.distance <= 0.0)
+            continue;
+        ++apart;
+        rc::DistanceRequest below;
+        below.upperBound = 0.5 * exact.distance;
+        rc::DistanceResult capped;
+        checker.distance(state, below, &capped);
+        EXPECT_TRUE(capped.capped);
+        EXPECT_EQ(capped.distance, below.upperBound);
+        EXPECT_EQ(capped.kind, rc::Contact::Kind::None);
+        rc::DistanceRequest above;
+        above.upperBound = 2.0 * exact.distance;
+        rc::DistanceResult found;
+        checker.distance(state, above, &found);
+        EXPECT_FALSE(found.capped);
+        EXPECT_EQ(found.distance, exact.distance);
+        EXPECT_EQ(found.component, exact.component);
+    }
+    EXPECT_GT(apart, 5);
+}
+
+TEST(CheckerDistance, EnvironmentAndSelfApart)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rc::test::pandaProblem(root, "cage");
+    const rc::Checker checker(problem.robot, problem.scene);
+    rc::test::FclDistance fcl(checker.collisionModel(), true);
+    const std::vector<double> q = rc::test::randomStates(checker.robot(), 30, 9);
+    const double extent = sceneExtent(checker);
+    for (std::size_t i = 0; i < 30; ++i)
+    {
+        const double *state = q.data() + i * checker.dof();
+        for (const bool environment : {true, false})
+        {
+            rc::DistanceRequest request;
+            request.checkEnvironment = environment;
+            request.checkSelfCollision = !environment;
+            rc::DistanceResult r;
+            checker.distance(state, request, &r);
+            EXPECT_EQ(r.kind, environment ? rc::Contact::Kind::Environment : rc::Contact::Kind::SelfCollision);
+            const double theirs = fcl.distance(state, environment, !environment);
+            if (r.distance > 0.0 && theirs > 0.0)
+            {
+                EXPECT_NEAR(r.distance, theirs, 1e-6 * extent) << "state " << i;
+            }
+        }
+    }
+}
+
+TEST(CheckerDistance, BadInput)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rc::test::pandaProblem(root, "box");
+    const rc::Checker checker(problem.robot, problem.scene);
+    std::vector<double> q(checker.dof(), 0.0);
+    q[2] = std::nan("");
+    rc::test::LogCapture log;
+    rc::DistanceResult r;
+    checker.distance(q.data(), rc::DistanceRequest{}, &r);
+    EXPECT_EQ(r.kind, rc::Contact::Kind::OutOfBounds);
+    EXPECT_EQ(r.coordinate, 2);
+    EXPECT_EQ(r.distance, 0.0);
+    EXPECT_TRUE(log.warned("not finite"));
+    for (const double bad : {0.0, -1.0, std::nan("")})
+    {
+        rc::DistanceRequest request;
+        request.upperBound = bad;
+        EXPECT_THROW(checker.distance(q.data(), request, &r), rc::ConfigurationError);
+    }
+}
+
+TEST(CheckerDistance, BatchOverThreadsEqualsOneAtATime)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rc::test::pandaProblem(root, "table_pick");
+    rc::CheckerOptions options;
+    options.threads = 4;
+    const rc::Checker checker(problem.robot, problem.scene, options);
+    const std::size_t n = 200;
+    const std::vector<double> q = rc::test::randomStates(checker.robot(), n, 21);
+    std::vector<rc::DistanceResult> batch(n);
+    checker.distance(q.data(), n, rc::DistanceRequest{}, batch.data());
+    // Four threads calling the single-state form at once, each on a quarter.
+    std::vector<rc::DistanceResult> single(n);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+        threads.emplace_back(
+            [&, t]
+            {
+                for (std::size_t i = static_cast<std::size_t>(t); i < n; i += 4)
+                    checker.distance(q.data() + i * checker.dof(), rc::DistanceRequest{}, &single[i]);
+            });
+    for (std::thread &thread : threads)
+        thread.join();
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        EXPECT_EQ(batch[i].distance, single[i].distance) << "state " << i;
+        EXPECT_EQ(batch[i].component, single[i].component) << "state " << i;
+    }
+}
+
+TEST(CheckerDistance, CheckCommandWritesTheDistanceColumns)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const std::string folder = rc::test::makeTempDir("distance_cli");
+    const std::string urdf = root + "/mbm/panda/panda.urdf", srdf = root + "/mbm/panda/panda.srdf";
+    const std::string scene = root + "/mbm/panda/problems/box_panda/scene0001.yaml";
+    const rc::Problem problem = rc::test::pandaProblem(root, "box");
+    const rc::Checker checker(problem.robot, problem.scene);
+    const std::size_t n = 12;
+    const std::vector<double> q = rc::test::randomStates(checker.robot(), n, 31);
+    std::ostringstream csv;
+    csv << std::setprecision(17);
+    for (std::size_t k = 0; k < checker.dof(); ++k)
+        csv << (k ? "," : "") << checker.robot().coordinateNames[k];
+    csv << '\n';
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = 0; k < checker.dof(); ++k)
+            csv << q[i * checker.dof() + k] << (k + 1 < checker.dof() ? "," : "\n");
+    const std::string states = rc::test::writeFile(folder + "/states.csv", csv.str());
+    const rc::test::CommandRun run =
+        rc::test::runCli("check --robot " + urdf + " --srdf " + srdf + " --scene " + scene + " --states " + states +
+                         " --out " + folder + "/out.csv --distance");
+    ASSERT_EQ(run.status, 0) << run.output;
+    EXPECT_NE(run.output.find(" min_distance="), std::string::npos) << run.output;
+    std::ifstream out(folder + "/out.csv");
+    std::string header;
+    std::getline(out, header);
+    EXPECT_EQ(header,
+              "valid,component,object,triangle,x,y,z,reason,distance,distance_component,distance_other,ax,ay,az,bx,by,"
+              "bz");
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        std::string line;
+        ASSERT_TRUE(std::getline(out, line)) << "row " << i;
+        std::vector<std::string> fields;
+        std::stringstream row(line);
+        for (std::string field; std::getline(row, field, ',');)
+            fields.push_back(field);
+        ASSERT_EQ(fields.size(), 17u) << line;
+        rc::DistanceResult expected;
+        checker.distance(q.data() + i * checker.dof(), rc::DistanceRequest{}, &expected);
+        EXPECT_NEAR(std::stod(fields[8]), expected.distance, 1e-8 * std::max(1.0, expected.distance)) << line;
+        EXPECT_EQ(fields[9], checker.robot().components[expected.component].name) << line;
+        const Vector3d a(std::stod(fields[11]), std::stod(fields[12]), std::stod(fields[13]));
+        const Vector3d b(std::stod(fields[14]), std::stod(fields[15]), std::stod(fields[16]));
+        EXPECT_NEAR((a - b).norm(), expected.distance, 1e-7) << line;
+        // A colliding row has distance 0, a free one more.
+        EXPECT_EQ(fields[0] == "1", expected.distance > 0.0) << line;
+    }
+}
+
+// A ball (a URDF sphere, measured on its exact shape: CurvedSolids::distance) moved about a U-shaped
+// solid: its distance is its centre's distance to the U's surface less its radius, which a scan of
+// every triangle gives independently of the tree's node bounds.
+TEST(CheckerDistance, BallAgainstAMeshIsItsCentresDistanceLessItsRadius)
+{
+    const std::string folder = rc::test::makeTempDir("distance_ball");
+    const rc::Mesh u = rc::test::uShape(0.2);
+    std::ostringstream obj;
+    obj << std::setprecision(17);
+    for (const Vector3d &v : u.vertices)
+        obj << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+    for (const rc::Mesh::Triangle &t : u.triangles)
+        obj << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+    rc::ProblemSource source;
+    source.scenePath = rc::test::writeFile(folder + "/u.obj", obj.str());
+    const std::string limit = "<axis xyz=\"%\"/><limit lower=\"-1\" upper=\"3\" effort=\"1\" velocity=\"1\"/>";
+    const auto axis = [&](const char *xyz)
+    {
+        std::string text = limit;
+        return text.replace(text.find('%'), 1, xyz);
+    };
+    source.urdfPath = rc::test::writeFile(
+        folder + "/ball.urdf",
+        rc::test::urdfRobot(rc::test::urdfLink("base") + rc::test::urdfLink("lx") + rc::test::urdfLink("ly") +
+                            rc::test::urdfLink("ball",
+                                               "<collision><geometry><sphere radius=\"0.15\"/></geometry>"
+                                               "</collision>") +
+                            rc::test::urdfJoint("x", "prismatic", "base", "lx", axis("1 0 0")) +
+                            rc::test::urdfJoint("y", "prismatic", "lx", "ly", axis("0 1 0")) +
+                            rc::test::urdfJoint("z", "prismatic", "ly", "ball", axis("0 0 1"))));
+    const rc::Problem problem = rc::loadProblem(source);
+    ASSERT_EQ(problem.robot->components.size(), 1u);
+    ASSERT_EQ(problem.robot->components[0].shapes.size(), 1u);
+    const rc::Checker checker(problem.robot, problem.scene);
+    ASSERT_TRUE(checker.collisionModel().curved.refines(0));
+    const rc::Mesh &scene = problem.scene->objects.at(0).mesh;  // as loaded (the file's float precision)
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> coordinate(-0.5, 2.5);
+    int apart = 0;
+    for (int i = 0; i < 200; ++i)
+    {
+        const Vector3d centre(coordinate(rng), coordinate(rng), coordinate(rng));
+        rc::DistanceResult r;
+        checker.distance(centre.data(), rc::DistanceRequest{}, &r);
+        double toSurface = std::numeric_limits<double>::infinity();
+        for (const rc::Mesh::Triangle &t : scene.triangles)
+            toSurface = std::min(toSurface, rc::triangleDistance(centre, centre, centre, scene.vertices[t[0]],
+                                                                 scene.vertices[t[1]], scene.vertices[t[2]]));
+        rc::CollisionRequest exact;
+        exact.mode = rc::CollisionMode::Exact;
+        if (!checker.isValid(centre.data(), exact))
+        {
+            EXPECT_EQ(r.distance, 0.0) << centre.transpose();
+            continue;
+        }
+        ++apart;
+        EXPECT_NEAR(r.distance, toSurface - 0.15, 1e-9) << centre.transpose() << ": " << checker.describe(r);
+        EXPECT_EQ(r.triangle, -1);  // the ball's side is its exact shape
+        EXPECT_LT(pointToTriangle(r.pointOnOther, scene, r.otherTriangle, Isometry3d::Identity()), 1e-9);
+        EXPECT_NEAR((r.pointOnComponent - centre).norm(), 0.15, 1e-9);
+    }
+    EXPECT_GT(apart, 100);
+}
