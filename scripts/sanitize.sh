@@ -8,7 +8,7 @@
 #         libgomp is not instrumented and TSan would report races in every parallel region.
 # Both: -O1 -g1, assertions on (ours, Eigen's, and libstdc++'s bounds checks), no benchmarks,
 # examples or CUDA (sanitizers check host code). -g1 (line tables, no variables) gives the reports'
-# stack traces the same functions, files, lines and inlined frames as -g, at 60 % of the compile time. Both run tests/test_concurrency.cpp at a tenth of
+# stack traces the same functions, files, lines and inlined frames as -g, in less compile time. Both run tests/test_concurrency.cpp at a tenth of
 # its size (RASTERCHECK_CONCURRENCY_STATES), and asan tests/test_nonconvex.cpp at a quarter
 # (RASTERCHECK_NONCONVEX_SCALE), the viewer's load tests at a twentieth (RASTERCHECK_VIEW_LOAD_SCALE)
 # and the long-running tests at a fiftieth (RASTERCHECK_SOAK_SCALE): the sanitizers slow the
