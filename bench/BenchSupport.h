@@ -1,6 +1,7 @@
 #pragma once
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <random>
 #include <sstream>
@@ -75,6 +76,30 @@ inline std::string mbmProblemPath(const std::string &root, const std::string &ro
     char name[32];
     std::snprintf(name, sizeof name, "%s%04d.yaml", kind.c_str(), index);
     return root + "/mbm/" + robot + "/problems/" + scenario + "_" + robot + "/" + name;
+}
+
+/** \brief \a n uniform poses of a free-flying body (x y z qx qy qz qw): positions within the
+    robot's position bounds, orientations uniform (normalised Gaussian quaternions). */
+inline std::vector<double> uniformPoses(const RobotModel &robot, std::size_t n, unsigned seed)
+{
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> normal;
+    std::vector<double> q(7 * n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        double *s = &q[7 * i];
+        for (int k = 0; k < 3; ++k)
+            s[k] = std::uniform_real_distribution<double>(robot.lowerBounds[k], robot.upperBounds[k])(rng);
+        double norm = 0;
+        for (int k = 3; k < 7; ++k)
+        {
+            s[k] = normal(rng);
+            norm += s[k] * s[k];
+        }
+        for (int k = 3; k < 7; ++k)
+            s[k] /= std::sqrt(norm);
+    }
+    return q;
 }
 
 /** \brief \a n states drawn uniformly within the robot's bounds (fixed seed: every run and every

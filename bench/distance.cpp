@@ -37,28 +37,6 @@ struct Row
     double meanDistance = 0;                        // of the states apart
 };
 
-std::vector<double> uniformPoses(const RobotModel &robot, std::size_t n, unsigned seed)
-{
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<double> normal;
-    std::vector<double> q(7 * n);
-    for (std::size_t i = 0; i < n; ++i)
-    {
-        double *s = &q[7 * i];
-        for (int k = 0; k < 3; ++k)
-            s[k] = std::uniform_real_distribution<double>(robot.lowerBounds[k], robot.upperBounds[k])(rng);
-        double norm = 0;
-        for (int k = 3; k < 7; ++k)
-        {
-            s[k] = normal(rng);
-            norm += s[k] * s[k];
-        }
-        for (int k = 3; k < 7; ++k)
-            s[k] /= std::sqrt(norm);
-    }
-    return q;
-}
-
 // Best of three rounds, in this thread's CPU time (the build machine is shared).
 template <class Query>
 double microsecondsPerQuery(std::size_t n, Query &&query)
@@ -172,7 +150,7 @@ int main(int argc, char **argv)
         if (!wanted(name))
             continue;
         const OmplAppProblem problem = loadOmplAppProblem(cfg);
-        rows.push_back(measure(name, problem.robot, problem.scene, uniformPoses(*problem.robot, states, 17)));
+        rows.push_back(measure(name, problem.robot, problem.scene, bench::uniformPoses(*problem.robot, states, 17)));
     }
 
     std::printf(

@@ -93,29 +93,6 @@ std::string writeCfg(const std::string &name, const std::string &robot, const st
     return path;
 }
 
-/** \brief \a n uniform states (x y z qx qy qz qw) within the robot's position bounds. */
-std::vector<double> uniformPoses(const RobotModel &robot, std::size_t n, unsigned seed)
-{
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<double> normal;
-    std::vector<double> q(7 * n);
-    for (std::size_t i = 0; i < n; ++i)
-    {
-        double *s = &q[7 * i];
-        for (int k = 0; k < 3; ++k)
-            s[k] = std::uniform_real_distribution<double>(robot.lowerBounds[k], robot.upperBounds[k])(rng);
-        double norm = 0;
-        for (int k = 3; k < 7; ++k)
-        {
-            s[k] = normal(rng);
-            norm += s[k] * s[k];
-        }
-        for (int k = 3; k < 7; ++k)
-            s[k] /= std::sqrt(norm);
-    }
-    return q;
-}
-
 /** \brief States near contact: pairs of a free and a colliding uniform state, bisected 12 times by
     \a exact (positions linearly, quaternions normalised linearly), both final ends. */
 std::vector<double> nearContact(const Checker &checker, const std::vector<double> &uniform,
@@ -338,7 +315,7 @@ int main(int argc, char **argv)
                 checker =
                     std::make_unique<Checker>(problem.robot, problem.scene, CheckerOptions{BackendChoice::Cpu, 1});
             });
-        const std::vector<double> uniform = uniformPoses(*problem.robot, states, 17);
+        const std::vector<double> uniform = bench::uniformPoses(*problem.robot, states, 17);
         uniformRows.push_back(measure(name, *checker, uniform));
         std::vector<std::uint8_t> valid(states);
         CollisionRequest exact;
@@ -355,7 +332,7 @@ int main(int argc, char **argv)
     {
         const OmplAppProblem problem = loadOmplAppProblem(cfg);
         const Checker checker(problem.robot, problem.scene, CheckerOptions{BackendChoice::Cpu, 1});
-        stagesRows.push_back(measureStages(name, checker, uniformPoses(*problem.robot, states, 17)));
+        stagesRows.push_back(measureStages(name, checker, bench::uniformPoses(*problem.robot, states, 17)));
     }
     std::printf(
         "\nOne thread, CPU backend, best of %d rounds in CPU time; FCL 0.7 BVHModel<OBBRSS> (OMPL.app's "

@@ -119,16 +119,18 @@ std::shared_ptr<fcl::CollisionGeometryd> toFcl(const PrimitiveShape &shape)
     return nullptr;
 }
 
-struct FclReference::Impl
+/** \brief FCL's objects for a model: its components (each with its geometry's frame in the link
+    frame) and its scene objects, placed. With \a exactPrimitives a part made of one primitive is
+    that primitive, else its mesh. */
+struct FclObjects
 {
     const CollisionModel &model;
     RobotData data;
     std::vector<std::unique_ptr<fcl::CollisionObjectd>> components;
     std::vector<Eigen::Isometry3d> componentOffsets;  // the FCL geometry's frame in the link frame
     std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
-    fcl::DynamicAABBTreeCollisionManagerd manager;
 
-    Impl(const CollisionModel &m, bool exactPrimitives) : model(m), data(*m.robot)
+    FclObjects(const CollisionModel &m, bool exactPrimitives) : model(m), data(*m.robot)
     {
         for (const Component &component : m.robot->components)
         {
@@ -144,8 +146,20 @@ struct FclReference::Impl
                 std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(object.shapes[0]) : toFcl(object.mesh)));
             if (primitive)
                 objects.back()->setTransform(object.shapes[0].pose);
-            objects.back()->computeAABB();
-            manager.registerObject(objects.back().get());
+        }
+    }
+};
+
+struct FclReference::Impl : FclObjects
+{
+    fcl::DynamicAABBTreeCollisionManagerd manager;
+
+    Impl(const CollisionModel &m, bool exactPrimitives) : FclObjects(m, exactPrimitives)
+    {
+        for (const std::unique_ptr<fcl::CollisionObjectd> &object : objects)
+        {
+            object->computeAABB();
+            manager.registerObject(object.get());
         }
         manager.setup();
     }
@@ -209,32 +223,9 @@ bool FclReference::collides(const double *q, double padding)
     return false;
 }
 
-struct FclDistance::Impl
+struct FclDistance::Impl : FclObjects
 {
-    const CollisionModel &model;
-    RobotData data;
-    std::vector<std::unique_ptr<fcl::CollisionObjectd>> components;
-    std::vector<Eigen::Isometry3d> componentOffsets;
-    std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects;
-
-    Impl(const CollisionModel &m, bool exactPrimitives) : model(m), data(*m.robot)
-    {
-        for (const Component &component : m.robot->components)
-        {
-            const bool primitive = exactPrimitives && component.shapes.size() == 1;
-            components.push_back(std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(component.shapes[0])
-                                                                                   : toFcl(component.mesh)));
-            componentOffsets.push_back(primitive ? component.shapes[0].pose : Eigen::Isometry3d::Identity());
-        }
-        for (const SceneObject &object : m.scene->objects)
-        {
-            const bool primitive = exactPrimitives && object.shapes.size() == 1;
-            objects.push_back(
-                std::make_unique<fcl::CollisionObjectd>(primitive ? toFcl(object.shapes[0]) : toFcl(object.mesh)));
-            if (primitive)
-                objects.back()->setTransform(object.shapes[0].pose);
-        }
-    }
+    using FclObjects::FclObjects;
 };
 
 FclDistance::FclDistance(const CollisionModel &model, bool exactPrimitives)

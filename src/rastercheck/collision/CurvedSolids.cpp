@@ -250,18 +250,39 @@ CurvedSolids::CurvedSolids(const CollisionModel &model)
         refines_.clear();
 }
 
+namespace
+{
+/** \brief A pair's two parties: component \a a, and \a b, a scene object (\a environment) or a
+    component, with their primitives. */
+struct PairParties
+{
+    std::size_t a, b;
+    bool environment;
+    const std::vector<PrimitiveShape> *shapesA, *shapesB;
+};
+
+PairParties partiesOf(const CollisionModel &model, std::uint32_t pair)
+{
+    Contact named;
+    model.nameParties(pair, named);
+    PairParties parties;
+    parties.a = static_cast<std::size_t>(named.component);
+    parties.environment = named.kind == Contact::Kind::Environment;
+    parties.b = static_cast<std::size_t>(parties.environment ? named.object : named.otherComponent);
+    parties.shapesA = &model.robot->components[parties.a].shapes;
+    parties.shapesB = parties.environment ? &model.scene->objects[parties.b].shapes
+                                          : &model.robot->components[parties.b].shapes;
+    return parties;
+}
+}  // namespace
+
 bool CurvedSolids::collide(const CollisionModel &model, std::uint32_t pair, const Pose<double> &poseA,
                            const Pose<double> &poseB, double padding) const
 {
-    Contact parties;
-    model.nameParties(pair, parties);
-    const RobotModel &robot = *model.robot;
-    const std::size_t a = static_cast<std::size_t>(parties.component);
-    const bool environment = parties.kind == Contact::Kind::Environment;
-    const std::size_t b = static_cast<std::size_t>(environment ? parties.object : parties.otherComponent);
-    const std::vector<PrimitiveShape> &shapesA = robot.components[a].shapes;
-    const std::vector<PrimitiveShape> &shapesB =
-        environment ? model.scene->objects[b].shapes : robot.components[b].shapes;
+    const PairParties parties = partiesOf(model, pair);
+    const std::size_t a = parties.a, b = parties.b;
+    const bool environment = parties.environment;
+    const std::vector<PrimitiveShape> &shapesA = *parties.shapesA, &shapesB = *parties.shapesB;
     padding = std::max(0.0, padding);
     if (!shapesA.empty() && !shapesB.empty())
         return shapesWithin(shapesA, poseA, shapesB, poseB, padding);
@@ -275,15 +296,10 @@ bool CurvedSolids::collide(const CollisionModel &model, std::uint32_t pair, cons
 bool CurvedSolids::distance(const CollisionModel &model, std::uint32_t pair, const Pose<double> &poseA,
                             const Pose<double> &poseB, double bound, SurfaceDistance &result) const
 {
-    Contact parties;
-    model.nameParties(pair, parties);
-    const RobotModel &robot = *model.robot;
-    const std::size_t a = static_cast<std::size_t>(parties.component);
-    const bool environment = parties.kind == Contact::Kind::Environment;
-    const std::size_t b = static_cast<std::size_t>(environment ? parties.object : parties.otherComponent);
-    const std::vector<PrimitiveShape> &shapesA = robot.components[a].shapes;
-    const std::vector<PrimitiveShape> &shapesB =
-        environment ? model.scene->objects[b].shapes : robot.components[b].shapes;
+    const PairParties parties = partiesOf(model, pair);
+    const std::size_t a = parties.a, b = parties.b;
+    const bool environment = parties.environment;
+    const std::vector<PrimitiveShape> &shapesA = *parties.shapesA, &shapesB = *parties.shapesB;
     SurfaceDistance best;
     best.distance = bound;
     if (!shapesA.empty() && !shapesB.empty())
