@@ -89,7 +89,7 @@ run() {
             sanitize)
                 # Every kernel on small batches (the million-state test would take too long).
                 step memcheck 240 compute-sanitizer --tool memcheck --error-exitcode 3 .gpu/bin/test_gpu_backend \
-                    --gtest_filter='*AccuracySuites*:*To1000States*:*PairPaddings*:*EightThreads*'
+                    --gtest_filter='*AccuracySuites*:*To1000States*:*PairPaddings*:*EightThreads*:*MeshObstacle*'
                 # initcheck: reads of device memory no one wrote (what HostScratch::Poisoned mimics).
                 step initcheck 240 compute-sanitizer --tool initcheck --error-exitcode 3 .gpu/bin/test_gpu_backend \
                     --gtest_filter='*To1000States*:*DeviceMemoryLimit*' ;;

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <ompl/base/PlannerTerminationCondition.h>
 #include <ompl/base/ScopedState.h>
 #include <ompl/base/objectives/MaximizeMinClearanceObjective.h>
 #include <ompl/geometric/PathGeometric.h>
@@ -40,7 +41,14 @@ void planForClearance(og::SimpleSetup &setup, double seconds, double range = 0.0
     if (goalBias > 0.0)
         planner->setGoalBias(goalBias);
     setup.setPlanner(planner);
-    ASSERT_EQ(setup.solve(seconds), ob::PlannerStatus::EXACT_SOLUTION);
+    ob::PlannerStatus status = setup.solve(seconds);
+    // A slow machine (the sanitizers' builds run 10-50x slower) may not reach the goal in that time:
+    // the same planner goes on, up to a minute, until it has an exact solution.
+    if (status != ob::PlannerStatus::EXACT_SOLUTION)
+        status = setup.solve(ob::plannerOrTerminationCondition(
+            ob::timedPlannerTerminationCondition(60.0),
+            ob::exactSolnPlannerTerminationCondition(setup.getProblemDefinition())));
+    ASSERT_EQ(status, ob::PlannerStatus::EXACT_SOLUTION);
     og::PathGeometric &path = setup.getSolutionPath();
     const rco::StateValidityChecker &checker = *rco::getStateValidityChecker(setup);
     double smallest = std::numeric_limits<double>::infinity();
