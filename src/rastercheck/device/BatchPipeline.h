@@ -150,8 +150,8 @@ struct StageSettings
         it is settled as apart unless padding asks for distances. */
     bool confirmMisses;
     /** \brief Pairs with a non-convex mesh obstacle (an object split into patches) skip the hull
-        proof and stay open (raster or the host's exact phase), as the CPU backend decides them
-        (every mode but raster). */
+        proof and stay open (raster or the exact phase), as the CPU backend decides them (every
+        mode but raster). */
     bool meshObstaclesUnproven;
     /** \brief A pair no test settles collides, placed by the host (conservative mode, but for mesh
         obstacles): the stages leave those pairs open. Every other open pair is decided by the exact
