@@ -78,6 +78,17 @@ bool shapesWithin(const std::vector<PrimitiveShape> &a, const Pose<double> &pose
     return false;
 }
 
+/** \brief The triangle in slot \a slot of \a bvh (its frame) as a convex shape. */
+ConvexShape slotTriangle(const MeshBvh &bvh, std::uint32_t slot)
+{
+    ConvexShape triangle{};
+    triangle.kind = ConvexKind::Triangle;
+    const double *corners = bvh.slotCorners(slot);
+    for (int k = 0; k < 3; ++k)
+        triangle.corner[k] = {corners[3 * k], corners[3 * k + 1], corners[3 * k + 2]};
+    return triangle;
+}
+
 /** \brief Do the primitives \a shapes (placed by \a poseShapes) come within \a padding of the
     solid of \a bvh's mesh (placed by \a poseMesh; \a closed: it has an inside)? The test runs in
     the mesh's frame, so its triangles are read as stored; its tree's bounding spheres rule out the
@@ -114,11 +125,7 @@ bool shapesMeetMesh(const std::vector<PrimitiveShape> &shapes, const Pose<double
             }
             for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
             {
-                ConvexShape triangle{};
-                triangle.kind = ConvexKind::Triangle;
-                const double *corners = bvh.slotCorners(slot);
-                for (int k = 0; k < 3; ++k)
-                    triangle.corner[k] = {corners[3 * k], corners[3 * k + 1], corners[3 * k + 2]};
+                const ConvexShape triangle = slotTriangle(bvh, slot);
                 if (device::convexWithin(convex, triangle, padding))
                     return true;
             }
@@ -191,11 +198,7 @@ bool shapesToMeshDistance(const std::vector<PrimitiveShape> &shapes, const Pose<
         {
             for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
             {
-                ConvexShape triangle{};
-                triangle.kind = ConvexKind::Triangle;
-                const double *corners = bvh.slotCorners(slot);
-                for (int k = 0; k < 3; ++k)
-                    triangle.corner[k] = {corners[3 * k], corners[3 * k + 1], corners[3 * k + 2]};
+                const ConvexShape triangle = slotTriangle(bvh, slot);
                 Vec3<double> onShape, onTriangle;
                 const double d = device::convexClosest(convex, triangle, onShape, onTriangle);
                 if (d < result.distance)
