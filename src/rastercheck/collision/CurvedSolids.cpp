@@ -107,29 +107,24 @@ bool shapesMeetMesh(const std::vector<PrimitiveShape> &shapes, const Pose<double
         const double radius = reach(shape) + padding;
         // Tree nodes are in float: grow their spheres by a rounding allowance.
         const double slack = 1e-5 * (std::abs(centre.x) + std::abs(centre.y) + std::abs(centre.z) + nodes[0].radius);
-        std::uint32_t stack[2 * device::kMaxTreeDepth + 2];
-        int top = 0;
-        stack[top++] = 0;
-        while (top > 0)
-        {
-            const MeshBvh::Node &node = nodes[stack[--top]];
-            const Vec3<double> offset{centre.x - node.centre[0], centre.y - node.centre[1], centre.z - node.centre[2]};
-            const double within = node.radius + radius + slack;
-            if (device::dot(offset, offset) > within * within)
-                continue;
-            if (!node.isLeaf())
+        const device::WalkEnd end = device::walkTree(
+            nodes, static_cast<std::uint32_t>(bvh.numNodes()),
+            [&](const MeshBvh::Node &node)
             {
-                stack[top++] = static_cast<std::uint32_t>(node.first);
-                stack[top++] = static_cast<std::uint32_t>(node.first) + 1;
-                continue;
-            }
-            for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
+                const Vec3<double> offset{centre.x - node.centre[0], centre.y - node.centre[1],
+                                          centre.z - node.centre[2]};
+                const double within = node.radius + radius + slack;
+                return device::dot(offset, offset) <= within * within;
+            },
+            [&](const MeshBvh::Node &leaf)
             {
-                const ConvexShape triangle = slotTriangle(bvh, slot);
-                if (device::convexWithin(convex, triangle, padding))
-                    return true;
-            }
-        }
+                for (std::uint32_t slot = leaf.firstSlot(); slot < leaf.firstSlot() + leaf.count; ++slot)
+                    if (device::convexWithin(convex, slotTriangle(bvh, slot), padding))
+                        return false;  // within padding: stop
+                return true;
+            });
+        if (end != device::WalkEnd::Finished)  // a triangle within padding, or (never built) a tree too deep: colliding
+            return true;
         // No surface within reach: the primitive is inside the mesh's solid or wholly outside it.
         if (closed && pointInsideClosedMesh(bvh, Eigen::Vector3d(centre.x, centre.y, centre.z)))
             return true;
@@ -137,7 +132,10 @@ bool shapesMeetMesh(const std::vector<PrimitiveShape> &shapes, const Pose<double
     return false;
 }
 
-Eigen::Vector3d toEigen(const Vec3<double> &v) { return Eigen::Vector3d(v.x, v.y, v.z); }
+Eigen::Vector3d toEigen(const Vec3<double> &v)
+{
+    return Eigen::Vector3d(v.x, v.y, v.z);
+}
 
 /** \brief The nearest pair of \a a's and \a b's shapes when nearer than result.distance (the best so
     far, initially the caller's bound): result updated, true. */
@@ -170,8 +168,8 @@ bool shapesDistance(const std::vector<PrimitiveShape> &a, const Pose<double> &po
     shapes, triangleB the mesh's), true. The search runs in the mesh's frame; a node is skipped when
     the ball about the primitive's origin that holds it is no nearer to the node's box or sphere
     than the best so far (less the nodes' float rounding). */
-bool shapesToMeshDistance(const std::vector<PrimitiveShape> &shapes, const Pose<double> &poseShapes,
-                          const MeshBvh &bvh, bool closed, const Pose<double> &poseMesh, SurfaceDistance &result)
+bool shapesToMeshDistance(const std::vector<PrimitiveShape> &shapes, const Pose<double> &poseShapes, const MeshBvh &bvh,
+                          bool closed, const Pose<double> &poseMesh, SurfaceDistance &result)
 {
     if (bvh.empty())
         return false;
@@ -273,8 +271,8 @@ PairParties partiesOf(const CollisionModel &model, std::uint32_t pair)
     parties.environment = named.kind == Contact::Kind::Environment;
     parties.b = static_cast<std::size_t>(parties.environment ? named.object : named.otherComponent);
     parties.shapesA = &model.robot->components[parties.a].shapes;
-    parties.shapesB = parties.environment ? &model.scene->objects[parties.b].shapes
-                                          : &model.robot->components[parties.b].shapes;
+    parties.shapesB =
+        parties.environment ? &model.scene->objects[parties.b].shapes : &model.robot->components[parties.b].shapes;
     return parties;
 }
 }  // namespace
