@@ -57,7 +57,6 @@ void shareTrees(const std::vector<std::unique_ptr<MeshBvh>> &trees, std::vector<
     arrays.triangleOrder.reserve(numTriangles);
     arrays.corners.reserve(9 * numTriangles);
     arrays.gridCells.reserve(numCells);
-    arrays.firstGridCell.assign(1, 0);
     for (std::size_t k = 0; k < trees.size(); ++k)
     {
         const MeshBvh &tree = *trees[k];
@@ -72,14 +71,12 @@ void shareTrees(const std::vector<std::unique_ptr<MeshBvh>> &trees, std::vector<
         arrays.corners.insert(arrays.corners.end(), own.corners, own.corners + 9 * triangles);
         device::ExactMeshInfo info{};
         info.grid = tree.exactTree().grid;
-        info.hasGrid = tree.numGridCells() > 0 ? 1 : 0;
         info.firstGridCell = arrays.gridCells.size();
         info.firstProbe = static_cast<std::uint32_t>(arrays.probePoints.size() / 3);
         info.firstShell = static_cast<std::uint32_t>(arrays.shellProbeStart.size());
         info.numShells = static_cast<std::uint32_t>(tree.numShells());
         arrays.meshes.push_back(info);
         arrays.gridCells.insert(arrays.gridCells.end(), own.gridCells, own.gridCells + tree.numGridCells());
-        arrays.firstGridCell.push_back(arrays.gridCells.size());
         arrays.probePoints.insert(arrays.probePoints.end(), tree.shellProbePoints().begin(),
                                   tree.shellProbePoints().end());
         arrays.shellProbeStart.insert(arrays.shellProbeStart.end(), tree.shellProbeStart().begin(),
@@ -89,7 +86,7 @@ void shareTrees(const std::vector<std::unique_ptr<MeshBvh>> &trees, std::vector<
         trees[k]->useSharedArrays(MeshBvh::Arrays{
             arrays.nodes.data() + slices[k].firstNode, arrays.triangleOrder.data() + slices[k].firstTriangle,
             arrays.corners.data() + 9 * static_cast<std::size_t>(slices[k].firstTriangle),
-            trees[k]->numGridCells() > 0 ? arrays.gridCells.data() + arrays.firstGridCell[k] : nullptr});
+            trees[k]->numGridCells() > 0 ? arrays.gridCells.data() + arrays.meshes[k].firstGridCell : nullptr});
 }
 
 /** \brief Largest vertices x triangles product a piece's convexity is measured over: a finer

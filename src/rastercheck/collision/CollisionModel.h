@@ -153,12 +153,11 @@ public:
         reads its slice) as flat arrays that the batched stages and the GPU read too. */
     struct TreeArrays
     {
-        std::vector<device::TreeNode> nodes;       // per mesh at MeshSlice::firstNode
-        std::vector<std::uint32_t> triangleOrder;  // n_triangles; per mesh at MeshSlice::firstTriangle
-        std::vector<double> corners;               // n_triangles x 9, slot order (MeshBvh::slotCorners)
-        std::vector<std::uint8_t> gridCells;       // inside grids (MeshBvh::insideGridAnswer)
-        std::vector<std::size_t> firstGridCell;    // n_meshes + 1: mesh k's cells start there
-        std::vector<double> probePoints;           // every mesh's shell probes, 3 doubles each
+        std::vector<device::TreeNode> nodes;         // per mesh at MeshSlice::firstNode
+        std::vector<std::uint32_t> triangleOrder;    // n_triangles; per mesh at MeshSlice::firstTriangle
+        std::vector<double> corners;                 // n_triangles x 9, slot order (MeshBvh::slotCorners)
+        std::vector<std::uint8_t> gridCells;         // inside grids (MeshBvh::insideGridAnswer)
+        std::vector<double> probePoints;             // every mesh's shell probes, 3 doubles each
         std::vector<std::uint32_t> shellProbeStart;  // per mesh its n_shells + 1 starts (its own probe numbers)
         std::vector<device::ExactMeshInfo> meshes;   // n_meshes: where each mesh's part lies
         /** \brief The arrays as the exact phase reads them. */

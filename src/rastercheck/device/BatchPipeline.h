@@ -332,6 +332,20 @@ struct StageSolid
     Pose<float> treePlacement;  // the tree's frame -> the stages' float frame
 };
 
+/** \brief Component \a c's and object \a o's triangle trees in the flat arrays. */
+RC_HD TreeView componentTreeView(const ModelArrays &model, int c)
+{
+    const MeshSlice &slice = model.components[c];
+    return TreeView{model.componentTreeNodes + slice.firstNode, model.componentTriangleOrder + slice.firstTriangle,
+                    slice.numNodes};
+}
+RC_HD TreeView objectTreeView(const ModelArrays &model, int o)
+{
+    const MeshSlice &slice = model.objects[o];
+    return TreeView{model.objectTreeNodes + slice.firstNode, model.objectTriangleOrder + slice.firstTriangle,
+                    slice.numNodes};
+}
+
 RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<float> *poses, const Box *bounds,
                       StageSolid &a, StageSolid &b)
 {
@@ -341,9 +355,7 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
         const MeshSlice &slice = model.components[c];
         return StageSolid{slice, model.componentVertices + 3 * slice.firstVertex,
                           model.componentTriangles + 3 * slice.firstTriangle, poses + c, bounds[c],
-                          TreeView{model.componentTreeNodes + slice.firstNode,
-                                   model.componentTriangleOrder + slice.firstTriangle, slice.numNodes},
-                          poses[c]};
+                          componentTreeView(model, c), poses[c]};
     };
     if (pair < environmentPairs)
     {
@@ -352,9 +364,7 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
         const MeshSlice &slice = model.objects[o];
         b = StageSolid{slice, model.objectVertices + 3 * slice.firstVertex,
                        model.objectTriangles + 3 * slice.firstTriangle, nullptr, model.objectBoxes[o],
-                       TreeView{model.objectTreeNodes + slice.firstNode, model.objectTriangleOrder + slice.firstTriangle,
-                                slice.numNodes},
-                       model.objectTreePlacement};
+                       objectTreeView(model, o), model.objectTreePlacement};
         return;
     }
     const int *self = model.selfPairs + 2 * (pair - environmentPairs);
@@ -413,10 +423,8 @@ RC_HD void exactSolids(const ModelArrays &model, std::uint32_t pair, const Pose<
     const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
     auto component = [&](std::uint32_t c, ExactTree &tree, Pose<double> &pose, bool &closed) {
         const MeshSlice &slice = model.components[c];
-        tree = exactTreeOf(model.componentExact, c,
-                           TreeView{model.componentTreeNodes + slice.firstNode,
-                                    model.componentTriangleOrder + slice.firstTriangle, slice.numNodes},
-                           slice.firstTriangle, slice.numTriangles);
+        tree = exactTreeOf(model.componentExact, c, componentTreeView(model, static_cast<int>(c)), slice.firstTriangle,
+                           slice.numTriangles);
         pose = links[model.componentLink[c]];
         closed = slice.closed;
     };
@@ -425,10 +433,8 @@ RC_HD void exactSolids(const ModelArrays &model, std::uint32_t pair, const Pose<
         component(pair % m, a, poseA, closedA);
         const std::uint32_t o = pair / m;
         const MeshSlice &slice = model.objects[o];
-        b = exactTreeOf(model.objectExact, o,
-                        TreeView{model.objectTreeNodes + slice.firstNode, model.objectTriangleOrder + slice.firstTriangle,
-                                 slice.numNodes},
-                        slice.firstTriangle, slice.numTriangles);
+        b = exactTreeOf(model.objectExact, o, objectTreeView(model, static_cast<int>(o)), slice.firstTriangle,
+                        slice.numTriangles);
         poseB = Pose<double>::identity();
         closedB = slice.closed;
         return;
@@ -513,6 +519,25 @@ void reduceOutcomes(Exec &ex, const ModelArrays &md, const StageSettings &st, st
     ex.forEach(numKept, [=] RC_LAMBDA(std::size_t k) { compact[k] = decided[kept[k]]; });
     outcomes = compact;
     numOutcomes = numKept;
+}
+
+/** \brief A chunk's last stages, with or without a raster before them: the exact phase on the
+    pairs still open (decideOpenPairs), the reduction's compaction (reduceOutcomes), and the counts
+    every chunk adds. */
+template <class Exec>
+void finishChunk(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
+                 std::uint32_t numStates, std::uint32_t numCandidates, const std::uint32_t *order, PairOutcome *decided,
+                 const PairOutcome *&outcomes, std::uint32_t &numOutcomes, StageCounts *counts)
+{
+    std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, numCandidates + 1);
+    decideOpenPairs(ex, md, st, links, numCandidates, order, decided, exactFlags);
+    reduceOutcomes(ex, md, st, numStates, numCandidates, decided, outcomes, numOutcomes);
+    if (!counts)
+        return;
+    counts->states += numStates;
+    counts->survivingPairs += numCandidates;
+    std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, numCandidates + 1);
+    counts->exactPairs += ex.selectFlagged(exactFlags, numCandidates, list);
 }
 
 /** \brief Runs the stages for \a numStates states (host arrays: \a hostStates row-major,
@@ -683,16 +708,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
             decided[c] = PairOutcome{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs,
                                      status[c], -1, {0.0, 0.0, 0.0}};
         });
-        std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, numCandidates + 1);
-        decideOpenPairs(ex, md, st, links, numCandidates, proofOrder, decided, exactFlags);
-        reduceOutcomes(ex, md, st, numStates, numCandidates, decided, outcomes, numOutcomes);
-        if (counts)
-        {
-            counts->states += numStates;
-            counts->survivingPairs += numCandidates;
-            std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, numCandidates + 1);
-            counts->exactPairs += ex.selectFlagged(exactFlags, numCandidates, list);
-        }
+        finishChunk(ex, md, st, links, numStates, numCandidates, proofOrder, decided, outcomes, numOutcomes, counts);
         return true;
     }
     unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, numCandidates + 1);
@@ -813,16 +829,11 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         }
         decided[c] = out;
     });
-    std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, numCandidates + 1);
-    decideOpenPairs(ex, md, st, links, numCandidates, proofOrder, decided, exactFlags);
-    reduceOutcomes(ex, md, st, numStates, numCandidates, decided, outcomes, numOutcomes);
+    finishChunk(ex, md, st, links, numStates, numCandidates, proofOrder, decided, outcomes, numOutcomes, counts);
     if (counts)
     {
-        counts->states += numStates;
-        counts->survivingPairs += numCandidates;
         std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, numCandidates + 1);
         counts->rasterizedPairs += ex.selectFlagged(rasterized, numCandidates, list);
-        counts->exactPairs += ex.selectFlagged(exactFlags, numCandidates, list);
         counts->candidateTriangles += numItems;
         counts->fragments += numFragments;
     }

@@ -31,7 +31,7 @@ struct InsideGrid
 {
     double lower[3];
     double inverseCell[3];
-    std::int32_t size[3];  // 0 x 0 x 0: no grid
+    std::int32_t size[3];  // 0 x 0 x 0: no grid (a built grid has at least one cell a side)
 };
 
 /** \brief One mesh as the exact phase reads it (mesh frame): its tree, its triangles' corners in
@@ -66,7 +66,6 @@ struct ExactMeshInfo
     std::uint32_t firstProbe;  // probe number (3 doubles each) of its first probe
     std::uint32_t firstShell;  // its numShells + 1 shell starts (its own probe numbers) begin here
     std::uint32_t numShells;
-    std::uint32_t hasGrid;
 };
 
 /** \brief The exact-phase arrays of one party (components or objects), every mesh's concatenated:
@@ -90,7 +89,7 @@ RC_HD ExactTree exactTreeOf(const ExactArrays &arrays, std::uint32_t mesh, const
     t.numTriangles = numTriangles;
     t.corners = arrays.corners + 9 * static_cast<std::size_t>(firstTriangle);
     t.grid = info.grid;
-    t.gridCells = info.hasGrid ? arrays.gridCells + info.firstGridCell : nullptr;
+    t.gridCells = info.grid.size[0] > 0 ? arrays.gridCells + info.firstGridCell : nullptr;
     t.probePoints = arrays.probePoints + 3 * static_cast<std::size_t>(info.firstProbe);
     t.shellProbeStart = arrays.shellProbeStart + info.firstShell;
     t.numShells = info.numShells;
@@ -198,6 +197,39 @@ struct ExactScratch
     std::size_t numHints = 0;
 };
 
+/** \brief Starts a query that places a moving tree of \a numNodes nodes: true when \a scratch caches
+    them, its stamp then advanced (stamps that wrapped are cleared). */
+RC_HD bool beginPlacing(ExactScratch *scratch, std::uint32_t numNodes)
+{
+    if (!scratch || !scratch->placed || numNodes > scratch->capacity)
+        return false;
+    if (++*scratch->query == 0)  // the stamps wrapped: forget them all
+    {
+        for (std::size_t k = 0; k < scratch->capacity; ++k)
+            scratch->stamps[k] = 0;
+        *scratch->query = 1;
+    }
+    return true;
+}
+
+/** \brief Node \a index of \a nodes placed by \a place: from the scratch's cache when \a cached
+    (placed there on first use in this query), else into \a visit. */
+RC_HD const PlacedNode &placedNode(const TreeNode *nodes, std::int32_t index, const Pose<double> &place,
+                                   ExactScratch *scratch, bool cached, PlacedNode &visit)
+{
+    PlacedNode &slot = cached ? scratch->placed[index] : visit;
+    if (!cached || scratch->stamps[index] != *scratch->query)
+    {
+        const TreeNode &node = nodes[index];
+        for (int j = 0; j < 3; ++j)
+            slot.axis[j] = rotateVector(place, nodeAxisOf(node, j));
+        slot.centre = transformPoint(place, nodeCentreOf(node));
+        if (cached)
+            scratch->stamps[index] = *scratch->query;
+    }
+    return slot;
+}
+
 /** \brief Separating-axis test (Gottschalk's 15 axes) of a fixed-tree node's box against a
     moving-tree node's box placed in the fixed frame (\a pm; its centre at \a between from the fixed
     box's centre): false when some axis shows a gap wider than \a reach. Lazy: the fixed box's face
@@ -206,7 +238,7 @@ struct ExactScratch
     without further test. The cross-product axes are not normalised; their length is at most 1, so
     comparing their projected gap against the full reach only keeps more pairs. */
 RC_HD_CALL bool boxesMayMeet(const TreeNode &nf, const PlacedNode &pm, const TreeNode &nm, const Vec3<double> &between,
-                        double reach)
+                             double reach)
 {
     const float *f = nf.axes;  // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
     const double ea[3] = {nf.halfExtents[0], nf.halfExtents[1], nf.halfExtents[2]};
@@ -266,29 +298,9 @@ struct SurfaceQuery
     double nearestGap = HUGE_VAL;
     std::uint32_t slotFixed = 0, slotMoving = 0;
 
-    RC_HD PlacedNode placeNode(std::int32_t index) const
-    {
-        const TreeNode &node = moving.tree.nodes[index];
-        PlacedNode placed;
-        for (int j = 0; j < 3; ++j)
-            placed.axis[j] = rotateVector(place, nodeAxisOf(node, j));
-        placed.centre = transformPoint(place, nodeCentreOf(node));
-        return placed;
-    }
-
     RC_HD const PlacedNode &placed(std::int32_t index)
     {
-        if (!cached)
-        {
-            visit = placeNode(index);
-            return visit;
-        }
-        if (scratch->stamps[index] != *scratch->query)
-        {
-            scratch->placed[index] = placeNode(index);
-            scratch->stamps[index] = *scratch->query;
-        }
-        return scratch->placed[index];
+        return placedNode(moving.tree.nodes, index, place, scratch, cached, visit);
     }
 
     RC_HD Vec3<double> corner(const double *c, int k) const { return {c[3 * k], c[3 * k + 1], c[3 * k + 2]}; }
@@ -406,8 +418,9 @@ struct ExactContact
     change which contact is found first, never the answer, so a query with \a contact skips it and
     its first contact does not depend on earlier queries. A tree too deep for the walk's stack
     (which MeshBvh's builder rules out) answers true, with no triangles named. */
-RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b, const Pose<double> &poseB,
-                          double padding, ExactContact *contact = nullptr, ExactScratch *scratch = nullptr)
+RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b,
+                               const Pose<double> &poseB, double padding, ExactContact *contact = nullptr,
+                               ExactScratch *scratch = nullptr)
 {
     if (a.empty() || b.empty())
         return false;
@@ -423,13 +436,7 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
     // The node tests must never drop a pair the triangle test would accept: the slack covers the
     // nodes' float storage (kNodeRounding) and the rounding of the transform and the projections.
     const double reach = padding + kNodeRounding * (std::sqrt(dot(shift, shift)) + treeScale(a) + treeScale(b));
-    const bool cached = scratch && scratch->placed && moving.tree.numNodes <= scratch->capacity;
-    if (cached && ++*scratch->query == 0)  // the stamps wrapped: forget them all
-    {
-        for (std::size_t k = 0; k < scratch->capacity; ++k)
-            scratch->stamps[k] = 0;
-        *scratch->query = 1;
-    }
+    const bool cached = beginPlacing(scratch, moving.tree.numNodes);
     LeafHint *hint = nullptr;
     if (scratch && scratch->hints && scratch->numHints > 0)
     {
@@ -476,7 +483,7 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
     answers, and a ray is cast only when it knows none (near-contact states of OMPL.app's Home: 80 %
     of the free states needed a ray from the first vertex alone, 9 % with the probes). */
 RC_HD_CALL bool shellInside(const ExactTree &inner, const Pose<double> &innerPose, const ExactTree &outer,
-                       const Pose<double> &outerPose, ExactContact *contact)
+                            const Pose<double> &outerPose, ExactContact *contact)
 {
     const Pose<double> innerToOuter = relativePose(outerPose, innerPose);
     for (std::uint32_t shell = 0; shell < inner.numShells; ++shell)

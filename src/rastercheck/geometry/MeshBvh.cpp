@@ -40,20 +40,10 @@ device::Vec3<double> toDevice(const Vec &v)
     return {v.x(), v.y(), v.z()};
 }
 
-// The caller's workspace lent to the exact phase: the placed-node cache sized for the smaller tree
-// (the one a query moves), and the leaf hints.
+// The caller's workspace for a query of a and b: the tree with fewer nodes is the one moved.
 device::ExactScratch lend(ExactWorkspace *workspace, const MeshBvh &a, const MeshBvh &b)
 {
-    if (!workspace)
-        return {};
-    const std::size_t moving = std::min(a.numNodes(), b.numNodes());
-    if (moving <= ExactWorkspace::kMaxPlacedNodes && workspace->stamps.size() < moving)
-    {
-        workspace->placed.resize(moving);
-        workspace->stamps.resize(moving, 0);
-    }
-    return device::ExactScratch{workspace->placed.data(), workspace->stamps.data(), workspace->stamps.size(),
-                                &workspace->query,        workspace->hints.data(),  workspace->hints.size()};
+    return workspace ? workspace->lend(std::min(a.numNodes(), b.numNodes())) : device::ExactScratch{};
 }
 
 MeshContact fromDevice(const device::ExactContact &c)
@@ -462,6 +452,16 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
     return 1 + std::max(left, right);
 }
 
+device::ExactScratch ExactWorkspace::lend(std::size_t movingNodes)
+{
+    if (movingNodes <= kMaxPlacedNodes && stamps.size() < movingNodes)
+    {
+        placed.resize(movingNodes);
+        stamps.resize(movingNodes, 0);
+    }
+    return device::ExactScratch{placed.data(), stamps.data(), stamps.size(), &query, hints.data(), hints.size()};
+}
+
 device::ExactTree MeshBvh::exactTree() const
 {
     device::ExactTree t{};
@@ -486,8 +486,8 @@ bool surfacesWithin(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mesh
 {
     device::ExactScratch scratch = lend(workspace, a, b);
     device::ExactContact found;
-    const bool within = device::surfacesWithin(a.exactTree(), toDevicePose(poseA), b.exactTree(), toDevicePose(poseB), padding,
-                                               contact ? &found : nullptr, &scratch);
+    const bool within = device::surfacesWithin(a.exactTree(), toDevicePose(poseA), b.exactTree(), toDevicePose(poseB),
+                                               padding, contact ? &found : nullptr, &scratch);
     if (within && contact)
         *contact = fromDevice(found);
     return within;
@@ -504,8 +504,9 @@ bool solidsOverlap(const MeshBvh &a, const Eigen::Isometry3d &poseA, bool closed
 {
     device::ExactScratch scratch = lend(workspace, a, b);
     device::ExactContact found;
-    const bool overlap = device::solidsOverlap(a.exactTree(), toDevicePose(poseA), closedA, b.exactTree(), toDevicePose(poseB),
-                                               closedB, padding, contact ? &found : nullptr, &scratch);
+    const bool overlap =
+        device::solidsOverlap(a.exactTree(), toDevicePose(poseA), closedA, b.exactTree(), toDevicePose(poseB), closedB,
+                              padding, contact ? &found : nullptr, &scratch);
     if (overlap && contact)
         *contact = fromDevice(found);
     return overlap;

@@ -172,6 +172,11 @@ struct ExactWorkspace
     using LeafHint = device::LeafHint;
     static constexpr std::size_t kLeafHints = 64;
     std::array<LeafHint, kLeafHints> hints{};
+
+    /** \brief This workspace lent to the exact phase or the distance walk (device::ExactScratch) for
+        a query that moves a tree of \a movingNodes nodes: its placed-node cache grown to hold them
+        (up to kMaxPlacedNodes), and the leaf hints. */
+    device::ExactScratch lend(std::size_t movingNodes);
 };
 
 /** \brief Where two meshes touch: a point (world frame) and the triangle of each mesh. */

@@ -50,30 +50,19 @@ struct DistanceQuery
     const MeshBvh::Node *nodesF, *nodesM;
     Eigen::Matrix3d R;
     Vec T;
+    device::Pose<double> nodePlacement;  // R, T as the exact phase places nodes
     double slack;
-    ExactWorkspace *workspace;  // null: nodes placed per visit
+    device::ExactScratch *scratch;  // the workspace's placed-node cache (shared with the exact phase)
     bool cached;
     double best;
     bool found = false;
     std::uint32_t slotFixed = 0, slotMoving = 0;
     Vec pointFixed = Vec::Zero(), pointMoving = Vec::Zero();  // fixed frame
-    ExactWorkspace::PlacedNode scratch{};
+    device::PlacedNode visit{};
 
-    // The workspace's placed-node cache (shared with the exact phase, stamped per query).
-    const ExactWorkspace::PlacedNode &placed(std::int32_t index)
+    const device::PlacedNode &placed(std::int32_t index)
     {
-        ExactWorkspace::PlacedNode &slot = cached ? workspace->placed[index] : scratch;
-        if (!cached || workspace->stamps[index] != workspace->query)
-        {
-            const Eigen::Matrix3d axes = R * nodeAxes(nodesM[index]);
-            const Vec centre = R * nodeCentre(nodesM[index]) + T;
-            for (int j = 0; j < 3; ++j)
-                slot.axis[j] = {axes(0, j), axes(1, j), axes(2, j)};
-            slot.centre = {centre.x(), centre.y(), centre.z()};
-            if (cached)
-                workspace->stamps[index] = workspace->query;
-        }
-        return slot;
+        return device::placedNode(nodesM, index, nodePlacement, scratch, cached, visit);
     }
 
     // The pair's lower bound, or the best distance when the bounding spheres already show that
@@ -81,7 +70,7 @@ struct DistanceQuery
     double bound(device::NodePair pair)
     {
         const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
-        const ExactWorkspace::PlacedNode &pm = placed(pair.b);
+        const device::PlacedNode &pm = placed(pair.b);
         const Vec between = Vec(pm.centre.x, pm.centre.y, pm.centre.z) - nodeCentre(nf);
         // Bounding spheres first: one dot product settles most pairs far from the best.
         const double spheres = static_cast<double>(nf.radius) + nm.radius + best + slack;
@@ -297,28 +286,18 @@ bool measureSurfaces(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mes
     const MeshBvh &fixed = movingIsA ? b : a, &moving = movingIsA ? a : b;
     const Eigen::Isometry3d &fixedPose = movingIsA ? poseB : poseA, &movingPose = movingIsA ? poseA : poseB;
     const Eigen::Isometry3d fMm = fixedPose.inverse(Eigen::Isometry) * movingPose;
-    const bool cached = workspace && moving.numNodes() <= ExactWorkspace::kMaxPlacedNodes;
-    if (cached)
-    {
-        if (workspace->stamps.size() < moving.numNodes())
-        {
-            workspace->placed.resize(moving.numNodes());
-            workspace->stamps.resize(moving.numNodes(), 0);
-        }
-        if (++workspace->query == 0)  // the stamps wrapped: forget them all
-        {
-            std::fill(workspace->stamps.begin(), workspace->stamps.end(), 0);
-            workspace->query = 1;
-        }
-    }
+    device::ExactScratch scratch =
+        workspace ? workspace->lend(static_cast<std::size_t>(moving.numNodes())) : device::ExactScratch{};
+    const bool cached = device::beginPlacing(&scratch, static_cast<std::uint32_t>(moving.numNodes()));
     DistanceQuery query{fixed,
                         moving,
                         fixed.nodes(),
                         moving.nodes(),
                         fMm.linear(),
                         fMm.translation(),
+                        toDevicePose(fMm),
                         kNodeRounding * (fMm.translation().norm() + treeScale(a) + treeScale(b)),
-                        workspace,
+                        &scratch,
                         cached,
                         bound};
     // The hint's triangle pair first: at a state near the last one it is at or near the nearest
