@@ -7,7 +7,10 @@
 // edges and states, and the verdict digest must not change when only speed does.
 // Prints per scenario and in all: edges accepted, states the checker decided, time per edge, per
 // certified state and per free state (the thread's CPU time, the fastest of the repeats: the
-// machine may be shared), and a digest of every verdict.
+// machine may be shared), and a digest of every verdict. The edges are decided twice, side by side
+// in one run: with intervals sized by the midpoints' clearance (the default) and by bisection alone
+// (CertifiedMotionOptions::sizeByClearance = false); "clearances per edge" counts the
+// Checker::freeRadius queries, which are not among the states.
 //
 // usage: rastercheck_bench_edges [robot=panda] [problems_per_scenario=3] [edges_per_problem=400]
 //                                [batch_size=8] [repeats=3]
@@ -36,9 +39,17 @@ namespace
 struct Totals
 {
     std::size_t edges = 0, accepted = 0, freeStates = 0;
-    std::uint64_t states = 0;
+    std::uint64_t states = 0, clearances = 0;
     double edgeSeconds = 0.0, freeSeconds = 0.0;
 };
+
+/** \brief How a mode's certified edges size their intervals. */
+struct Sizing
+{
+    const char *name;
+    bool byClearance;
+};
+constexpr Sizing kSizings[] = {{"clearance", true}, {"bisection", false}};
 
 std::uint64_t mix(std::uint64_t digest, std::uint64_t value)
 {
@@ -57,9 +68,9 @@ int main(int argc, char **argv)
     const std::string root = bench::sharedDataOrExit();
     const RobotModelConstPtr robot = bench::loadMbmRobot(root, robotName);
 
-    std::map<std::string, Totals> perScenario;
-    Totals all;
-    std::uint64_t digest = 1469598103934665603ull;
+    std::map<std::string, Totals> perScenario[2];
+    Totals all[2];
+    std::uint64_t digest[2] = {1469598103934665603ull, 1469598103934665603ull};
     for (const std::string &scenario : bench::mbmScenarios())
         for (int index = 1; index <= problemsPerScenario; ++index)
         {
@@ -73,12 +84,17 @@ int main(int argc, char **argv)
             setup->getSpaceInformation()->setup();
             const ob::SpaceInformationPtr &si = setup->getSpaceInformation();
             const auto validity = rastercheck::ompl::getStateValidityChecker(*setup);
-            const auto edges =
-                std::dynamic_pointer_cast<rastercheck::ompl::CertifiedMotionValidator>(si->getMotionValidator());
-            if (!edges)
+            if (!std::dynamic_pointer_cast<rastercheck::ompl::CertifiedMotionValidator>(si->getMotionValidator()))
             {
                 std::fprintf(stderr, "the setup's motion validator is not certified\n");
                 return 1;
+            }
+            std::shared_ptr<rastercheck::ompl::CertifiedMotionValidator> validators[2];
+            for (int m = 0; m < 2; ++m)
+            {
+                rastercheck::ompl::CertifiedMotionOptions sizing;
+                sizing.sizeByClearance = kSizings[m].byClearance;
+                validators[m] = std::make_shared<rastercheck::ompl::CertifiedMotionValidator>(si, *validity, sizing);
             }
             const Checker &checker = validity->getChecker();
             const rastercheck::ompl::StateMapping &mapping = validity->getStateMapping();
@@ -117,41 +133,47 @@ int main(int argc, char **argv)
             for (std::size_t i = 0; i < edgesPerProblem; ++i)
                 batch[i] = {from[i], to[i]};
 
-            Totals &t = perScenario[scenario];
-            std::vector<std::uint8_t> verdicts(edgesPerProblem), free(edgesPerProblem);
-            // The fastest of the repeats: the least disturbed by whatever else the machine runs.
-            double edgeSeconds = 0.0, freeSeconds = 0.0;
-            for (int repeat = 0; repeat < repeats; ++repeat)
+            std::vector<std::uint8_t> free(edgesPerProblem);
+            for (int m = 0; m < 2; ++m)
             {
-                edges->resetStateCounter();
-                const double edgeTime = bench::threadSeconds(
-                    [&]
-                    {
-                        for (std::size_t i = 0; i < edgesPerProblem; i += batchSize)
-                            edges->checkMotions(batch.data() + i, std::min(batchSize, edgesPerProblem - i),
-                                                verdicts.data() + i);
-                    });
-                const double freeTime = bench::threadSeconds(
-                    [&]
-                    {
-                        for (std::size_t i = 0; i < edgesPerProblem; ++i)
-                            checker.check(starts.data() + i * dof, 1, free.data() + i, validity->getRequest());
-                    });
-                edgeSeconds = repeat == 0 ? edgeTime : std::min(edgeSeconds, edgeTime);
-                freeSeconds = repeat == 0 ? freeTime : std::min(freeSeconds, freeTime);
+                rastercheck::ompl::CertifiedMotionValidator &edges = *validators[m];
+                Totals &t = perScenario[m][scenario];
+                std::vector<std::uint8_t> verdicts(edgesPerProblem);
+                // The fastest of the repeats: the least disturbed by whatever else the machine runs.
+                double edgeSeconds = 0.0, freeSeconds = 0.0;
+                for (int repeat = 0; repeat < repeats; ++repeat)
+                {
+                    edges.resetStateCounter();
+                    const double edgeTime = bench::threadSeconds(
+                        [&]
+                        {
+                            for (std::size_t i = 0; i < edgesPerProblem; i += batchSize)
+                                edges.checkMotions(batch.data() + i, std::min(batchSize, edgesPerProblem - i),
+                                                   verdicts.data() + i);
+                        });
+                    const double freeTime = bench::threadSeconds(
+                        [&]
+                        {
+                            for (std::size_t i = 0; i < edgesPerProblem; ++i)
+                                checker.check(starts.data() + i * dof, 1, free.data() + i, validity->getRequest());
+                        });
+                    edgeSeconds = repeat == 0 ? edgeTime : std::min(edgeSeconds, edgeTime);
+                    freeSeconds = repeat == 0 ? freeTime : std::min(freeSeconds, freeTime);
+                }
+                for (Totals *sum : {&t, &all[m]})
+                {
+                    sum->edges += edgesPerProblem;
+                    sum->accepted += static_cast<std::size_t>(std::count(verdicts.begin(), verdicts.end(), 1));
+                    sum->states += edges.getCheckedStateCount();
+                    sum->clearances += edges.getClearanceCount();
+                    sum->edgeSeconds += edgeSeconds;
+                    sum->freeStates += edgesPerProblem;
+                    sum->freeSeconds += freeSeconds;
+                }
+                for (std::size_t i = 0; i < edgesPerProblem; ++i)
+                    digest[m] = mix(digest[m], static_cast<std::uint64_t>(verdicts[i]) * 2 + free[i]);
+                digest[m] = mix(digest[m], edges.getCheckedStateCount());
             }
-            for (Totals *sum : {&t, &all})
-            {
-                sum->edges += edgesPerProblem;
-                sum->accepted += static_cast<std::size_t>(std::count(verdicts.begin(), verdicts.end(), 1));
-                sum->states += edges->getCheckedStateCount();
-                sum->edgeSeconds += edgeSeconds;
-                sum->freeStates += edgesPerProblem;
-                sum->freeSeconds += freeSeconds;
-            }
-            for (std::size_t i = 0; i < edgesPerProblem; ++i)
-                digest = mix(digest, static_cast<std::uint64_t>(verdicts[i]) * 2 + free[i]);
-            digest = mix(digest, edges->getCheckedStateCount());
             for (std::size_t i = 0; i < edgesPerProblem; ++i)
             {
                 si->freeState(from[i]);
@@ -161,19 +183,24 @@ int main(int argc, char **argv)
 
     std::printf("%s, %d problems per scenario, %zu edges each (batches of %zu), %d repeats, one core\n\n",
                 robotName.c_str(), problemsPerScenario, edgesPerProblem, batchSize, repeats);
-    std::printf(
-        "| scenario | edges accepted | states per edge | us per edge | us per certified state | us per free state |\n");
-    std::printf("|---|---:|---:|---:|---:|---:|\n");
-    auto row = [](const std::string &name, const Totals &t)
+    std::printf("| scenario | sizing | edges accepted | states per edge | clearances per edge | us per edge | us per "
+                "certified state | us per free state |\n");
+    std::printf("|---|---|---:|---:|---:|---:|---:|---:|\n");
+    auto row = [](const std::string &name, const char *sizing, const Totals &t)
     {
-        std::printf("| %s | %.1f %% | %.1f | %.1f | %.2f | %.2f |\n", name.c_str(),
+        std::printf("| %s | %s | %.1f %% | %.1f | %.2f | %.1f | %.2f | %.2f |\n", name.c_str(), sizing,
                     100.0 * static_cast<double>(t.accepted) / static_cast<double>(t.edges),
-                    static_cast<double>(t.states) / static_cast<double>(t.edges), 1e6 * t.edgeSeconds / t.edges,
+                    static_cast<double>(t.states) / static_cast<double>(t.edges),
+                    static_cast<double>(t.clearances) / static_cast<double>(t.edges), 1e6 * t.edgeSeconds / t.edges,
                     1e6 * t.edgeSeconds / static_cast<double>(t.states), 1e6 * t.freeSeconds / t.freeStates);
     };
     for (const std::string &scenario : bench::mbmScenarios())
-        row(scenario, perScenario[scenario]);
-    row("all", all);
-    std::printf("\nverdict digest %016llx\n", static_cast<unsigned long long>(digest));
+        for (int m = 0; m < 2; ++m)
+            row(scenario, kSizings[m].name, perScenario[m][scenario]);
+    for (int m = 0; m < 2; ++m)
+        row("all", kSizings[m].name, all[m]);
+    for (int m = 0; m < 2; ++m)
+        std::printf("\nverdict digest (%s) %016llx", kSizings[m].name, static_cast<unsigned long long>(digest[m]));
+    std::printf("\n");
     return 0;
 }

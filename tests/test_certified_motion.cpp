@@ -85,9 +85,10 @@ bool denselyFree(const Context &context, const rco::CertifiedMotionValidator &ce
 /** \brief Random edges of at most \a range (OMPL's distance) from valid states; each accepted one,
     and each valid prefix, must be densely free. Returns {accepted, rejected, rejected by the
     certified validator but accepted by the discrete one}. */
-std::array<int, 3> checkRandomEdges(const Context &context, int edges, double range, unsigned int seed)
+std::array<int, 3> checkRandomEdges(const Context &context, int edges, double range, unsigned int seed,
+                                    const rco::CertifiedMotionOptions &options = {})
 {
-    const rco::CertifiedMotionValidator certified(context.si, *context.validity);
+    const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
     const rco::MotionValidator discrete(context.si, *context.validity);
     rc::test::seedOmpl(seed);  // before the sampler exists: the same edges on every run
     ob::StateSamplerPtr sampler = context.si->allocStateSampler();
@@ -197,6 +198,59 @@ TEST(CertifiedMotion, ASlideCloserThanTheFinestMarginIsRejectedWithinItsBudget)
     EXPECT_LT(lastValid.second, 1.0);
 }
 
+TEST(CertifiedMotion, APassNearAnEdgeSizedByClearanceNeedsFewerChecks)
+{
+    // The cube flies 2 m along x past the plate's edge (y = 0.5), 5 mm beside it: free. Bisection
+    // refines the intervals near x = 0 until their margin is under 5 mm; the midpoints' clearance
+    // certifies most of each failing interval at once. Both accept the edge, and it is free.
+    const Context context = makeContext(cubeAndPlate());
+    ob::ScopedState<> from(context.si), to(context.si);
+    setPosition(context, from.get(), -1.0, 0.5 + 0.05 + 0.005, 0.0);
+    setPosition(context, to.get(), 1.0, 0.5 + 0.05 + 0.005, 0.0);
+    std::uint64_t states[2], clearances[2];
+    for (const bool byClearance : {false, true})
+    {
+        rco::CertifiedMotionOptions options;
+        options.margin = 0.1;
+        options.sizeByClearance = byClearance;
+        const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
+        EXPECT_TRUE(certified.checkMotion(from.get(), to.get())) << byClearance;
+        EXPECT_TRUE(denselyFree(context, certified, from.get(), to.get(), 1.0, 0.002));
+        states[byClearance] = certified.getCheckedStateCount();
+        clearances[byClearance] = certified.getClearanceCount();
+    }
+    EXPECT_EQ(clearances[0], 0u);
+    EXPECT_GT(clearances[1], 0u);
+    EXPECT_LT(states[1] + clearances[1], states[0]);
+    std::printf("bisection: %llu states; by clearance: %llu states and %llu clearances\n",
+                static_cast<unsigned long long>(states[0]), static_cast<unsigned long long>(states[1]),
+                static_cast<unsigned long long>(clearances[1]));
+}
+
+TEST(CertifiedMotion, ASlideSizedByClearanceIsRejectedWithinItsBudget)
+{
+    // The slide of the test above, its intervals sized by the clearance of 1 um: it ends, rejected.
+    const Context context = makeContext(cubeAndPlate());
+    rco::CertifiedMotionOptions options;
+    options.margin = 0.1;
+    options.sizeByClearance = true;
+    const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
+    ob::ScopedState<> from(context.si), to(context.si), last(context.si);
+    const double x = -0.051 - 1e-6;
+    setPosition(context, from.get(), x, -0.4, 0.0);
+    setPosition(context, to.get(), x, 0.4, 0.0);
+    EXPECT_FALSE(certified.checkMotion(from.get(), to.get()));
+    EXPECT_LE(certified.getCheckedStateCount() + certified.getClearanceCount(), 2u * (4 + 16 * 4 + 64 * 12));
+    std::pair<ob::State *, double> lastValid(last.get(), -1.0);
+    EXPECT_FALSE(certified.checkMotion(from.get(), to.get(), lastValid));
+    EXPECT_GE(lastValid.second, 0.0);
+    EXPECT_LT(lastValid.second, 1.0);
+    if (lastValid.second > 0)
+    {
+        EXPECT_TRUE(denselyFree(context, certified, from.get(), to.get(), lastValid.second, 0.002));
+    }
+}
+
 TEST(CertifiedMotion, RejectsRasterModeAndBadOptions)
 {
     rc::Problem problem = cubeAndPlate();
@@ -221,12 +275,18 @@ TEST(CertifiedMotion, EveryAcceptedPandaEdgeIsCollisionFreeAtEveryPoint)
     for (const char *scenario : {"cage", "bookshelf_thin"})
     {
         const Context context = makeContext(rc::test::pandaProblem(root, scenario));
-        // RRT-Connect's default range: a fifth of the space's extent.
-        const std::array<int, 3> counts = checkRandomEdges(context, 60, 0.2 * context.si->getMaximumExtent(), 3);
-        EXPECT_GT(counts[0], 5) << scenario;  // both answers occur
-        EXPECT_GT(counts[1], 5) << scenario;
-        std::printf("%s: %d edges certified, %d not (%d of them accepted by the discrete validator)\n", scenario,
-                    counts[0], counts[1], counts[2]);
+        for (const bool byClearance : {false, true})
+        {
+            rco::CertifiedMotionOptions options;
+            options.sizeByClearance = byClearance;
+            // RRT-Connect's default range: a fifth of the space's extent.
+            const std::array<int, 3> counts =
+                checkRandomEdges(context, 60, 0.2 * context.si->getMaximumExtent(), 3, options);
+            EXPECT_GT(counts[0], 5) << scenario;  // both answers occur
+            EXPECT_GT(counts[1], 5) << scenario;
+            std::printf("%s, %s: %d edges certified, %d not (%d of them accepted by the discrete validator)\n",
+                        scenario, byClearance ? "sized by clearance" : "bisection", counts[0], counts[1], counts[2]);
+        }
     }
 }
 
@@ -234,10 +294,16 @@ TEST(CertifiedMotion, EveryAcceptedCraneEdgeIsCollisionFreeAtEveryPoint)
 {
     const rc::Problem &plant = rc::test::plant();
     const Context context = makeContext(plant);
-    const std::array<int, 3> counts = checkRandomEdges(context, 20, 0.1 * context.si->getMaximumExtent(), 5);
-    EXPECT_GT(counts[0], 2);
-    std::printf("crane: %d edges certified, %d not (%d of them accepted by the discrete validator)\n", counts[0],
-                counts[1], counts[2]);
+    for (const bool byClearance : {false, true})
+    {
+        rco::CertifiedMotionOptions options;
+        options.sizeByClearance = byClearance;
+        const std::array<int, 3> counts =
+            checkRandomEdges(context, 20, 0.1 * context.si->getMaximumExtent(), 5, options);
+        EXPECT_GT(counts[0], 2);
+        std::printf("crane, %s: %d edges certified, %d not (%d of them accepted by the discrete validator)\n",
+                    byClearance ? "sized by clearance" : "bisection", counts[0], counts[1], counts[2]);
+    }
 }
 
 TEST(CertifiedMotion, EdgesCheckedTogetherGetTheVerdictsTheyGetAlone)

@@ -471,3 +471,122 @@ TEST(CheckerDistance, BallAgainstAMeshIsItsCentresDistanceLessItsRadius)
     }
     EXPECT_GT(apart, 100);
 }
+
+namespace
+{
+/** \brief \a request with every pair padded by its padding there plus its rate (row 0 of \a rates)
+    times \a t. */
+rc::CollisionRequest advanced(const rc::CollisionRequest &request, const rc::PairPadding &rates, double t)
+{
+    auto padding = std::make_shared<rc::PairPadding>(*request.pairPadding);
+    for (std::size_t k = 0; k < padding->environment.size(); ++k)
+        padding->environment[k] += rates.environment[k] * t;
+    for (std::size_t k = 0; k < padding->self.size(); ++k)
+        padding->self[k] += rates.self[k] * t;
+    rc::CollisionRequest grown = request;
+    grown.pairPadding = padding;
+    return grown;
+}
+}  // namespace
+
+TEST(CheckerFreeRadius, IsTheLongestStepThePairsRatesAllow)
+{
+    // Per state, random rates and paddings per pair (some self pairs with rate 0): the state is
+    // valid with every pair padded by its padding plus its rate x (radius x (1 - 1e-6)) and invalid
+    // at (1 + 1e-4), unless the radius is the cap; radius 0 exactly when the state is not valid at
+    // its paddings. Exact mode is the oracle.
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rc::test::pandaProblem(root, "cage");
+    rc::CheckerOptions options;
+    options.backend = rc::BackendChoice::Cpu;
+    const rc::Checker checker(problem.robot, problem.scene, options);
+    const rc::CollisionModel &model = checker.collisionModel();
+    const std::size_t n = 40;
+    const std::vector<double> q = rc::test::randomStates(checker.robot(), n, 21);
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    int limited = 0, zero = 0, capped = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const double *state = q.data() + i * checker.dof();
+        rc::PairPadding rates, pads;
+        for (std::size_t c = 0; c < model.numComponents(); ++c)
+        {
+            rates.environment.push_back(0.2 + 2.0 * unit(rng));
+            pads.environment.push_back(0.01 * unit(rng));
+        }
+        for (std::size_t p = 0; p < model.selfPairs.size(); ++p)
+        {
+            rates.self.push_back(p % 3 == 0 ? 0.0 : unit(rng));
+            pads.self.push_back(0.01 * unit(rng));
+        }
+        rc::CollisionRequest request;
+        request.mode = rc::CollisionMode::Exact;
+        request.padding = 0.002;
+        request.pairPadding = std::make_shared<rc::PairPadding>(pads);
+        const double cap = i % 4 == 0 ? 0.004 : 1e3;
+        double radius = -1.0;
+        checker.freeRadius(state, 1, request, rates, &cap, &radius);
+        ASSERT_GE(radius, 0.0);
+        ASSERT_LE(radius, cap);
+        if (radius == 0.0)
+        {
+            ++zero;
+            EXPECT_FALSE(checker.isValid(state, request)) << "state " << i;
+            continue;
+        }
+        EXPECT_TRUE(checker.isValid(state, advanced(request, rates, radius * (1.0 - 1e-6)))) << "state " << i;
+        if (radius == cap)
+        {
+            ++capped;
+            continue;
+        }
+        ++limited;
+        EXPECT_FALSE(checker.isValid(state, advanced(request, rates, radius * (1.0 + 1e-4)))) << "state " << i;
+    }
+    EXPECT_GT(limited, 5);  // every case occurs
+    EXPECT_GT(zero, 2);
+    EXPECT_GT(capped, 0);
+}
+
+TEST(CheckerFreeRadius, WithUnitRatesIsTheDistanceAndAcceptsOnlyGoodRates)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rc::test::pandaProblem(root, "box");
+    const rc::Checker checker(problem.robot, problem.scene);
+    const rc::CollisionModel &model = checker.collisionModel();
+    const std::size_t n = 20;
+    const std::vector<double> q = rc::test::randomStates(checker.robot(), n, 4);
+    rc::PairPadding unitRates;
+    unitRates.environment.assign(model.numComponents(), 1.0);
+    unitRates.self.assign(model.selfPairs.size(), 1.0);
+    const std::vector<double> caps(n, 1e3);
+    std::vector<double> radii(n);
+    checker.freeRadius(q.data(), n, rc::CollisionRequest{}, unitRates, caps.data(), radii.data());
+    std::vector<rc::DistanceResult> distances(n);
+    checker.distance(q.data(), n, rc::DistanceRequest{}, distances.data());
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        EXPECT_LE(radii[i], distances[i].distance) << "state " << i;
+        EXPECT_NEAR(radii[i], distances[i].distance, 1e-8 * (1.0 + distances[i].distance)) << "state " << i;
+    }
+
+    double radius = 0.0;
+    rc::PairPadding bad = unitRates;
+    bad.environment[0] = -1.0;
+    EXPECT_THROW(checker.freeRadius(q.data(), 1, rc::CollisionRequest{}, bad, caps.data(), &radius),
+                 rc::ConfigurationError);
+    bad = unitRates;
+    bad.self[0] = std::nan("");
+    EXPECT_THROW(checker.freeRadius(q.data(), 1, rc::CollisionRequest{}, bad, caps.data(), &radius),
+                 rc::ConfigurationError);
+    bad = unitRates;
+    bad.rows = 2;  // two rows announced, one given
+    EXPECT_THROW(checker.freeRadius(q.data(), 3, rc::CollisionRequest{}, bad, caps.data(), radii.data()),
+                 rc::ConfigurationError);
+    // A state outside the bounds has no step.
+    std::vector<double> outside(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(checker.dof()));
+    outside[0] = 1e3;
+    checker.freeRadius(outside.data(), 1, rc::CollisionRequest{}, unitRates, caps.data(), &radius);
+    EXPECT_EQ(radius, 0.0);
+}

@@ -116,17 +116,20 @@ void Checker::warnOnceIfNotFinite(const double *q, std::size_t n) const
 void Checker::validateRequest(const CollisionRequest &request, std::size_t states) const
 {
     validate(request);
-    const PairPadding *extra = request.pairPadding.get();
-    if (!extra)
-        return;
-    if (extra->rows != 1 && extra->rows != states)
-        throw ConfigurationError("CollisionRequest::pairPadding has " + std::to_string(extra->rows) + " rows for " +
-                                 std::to_string(states) + " state(s); give one row for all states or one per state");
-    if (extra->environment.size() != extra->rows * model_->numComponents() ||
-        extra->self.size() != extra->rows * model_->selfPairs.size())
-        throw ConfigurationError("CollisionRequest::pairPadding has " + std::to_string(extra->environment.size()) +
-                                 " component and " + std::to_string(extra->self.size()) + " self-pair entries in " +
-                                 std::to_string(extra->rows) + " row(s); robot '" + robot().name + "' has " +
+    if (request.pairPadding)
+        validateRows(*request.pairPadding, "CollisionRequest::pairPadding", states);
+}
+
+void Checker::validateRows(const PairPadding &rows, const std::string &name, std::size_t states) const
+{
+    if (rows.rows != 1 && rows.rows != states)
+        throw ConfigurationError(name + " has " + std::to_string(rows.rows) + " rows for " + std::to_string(states) +
+                                 " state(s); give one row for all states or one per state");
+    if (rows.environment.size() != rows.rows * model_->numComponents() ||
+        rows.self.size() != rows.rows * model_->selfPairs.size())
+        throw ConfigurationError(name + " has " + std::to_string(rows.environment.size()) + " component and " +
+                                 std::to_string(rows.self.size()) + " self-pair entries in " +
+                                 std::to_string(rows.rows) + " row(s); robot '" + robot().name + "' has " +
                                  std::to_string(model_->numComponents()) + " components and " +
                                  std::to_string(model_->selfPairs.size()) + " self pairs per row");
 }
@@ -200,6 +203,16 @@ std::vector<Contact> Checker::contacts(const double *q, const CollisionRequest &
     }
     reference_.giveBack(std::move(workspace));
     return found;
+}
+
+void Checker::freeRadius(const double *q, std::size_t n, const CollisionRequest &request, const PairPadding &rates,
+                         const double *caps, double *radii) const
+{
+    validateRequest(request, n);
+    validateEntries(rates, "Checker::freeRadius: the rates");
+    validateRows(rates, "Checker::freeRadius: the rates", n);
+    warnOnceIfNotFinite(q, n);
+    distances_.freeRadius(q, n, request, rates, caps, radii, n > 1 ? threads_ : 1);
 }
 
 void Checker::distance(const double *q, const DistanceRequest &request, DistanceResult *result) const

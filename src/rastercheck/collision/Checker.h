@@ -112,6 +112,15 @@ public:
         threads (CheckerOptions::threads). */
     void distance(const double *q, std::size_t n, const DistanceRequest &request, DistanceResult *results) const;
 
+    /** \brief Conservative advancement's step at \a n states (DistanceQueries::freeRadius): per
+        state the largest t up to caps[i] for which every pair the request checks, closing in at its
+        rate (\a rates, laid out as a PairPadding: one row or one per state) for t, stays farther
+        apart than its padding; 0 for a state within its padding or outside the bounds. Exact, over
+        the checker's CPU threads. Throws ConfigurationError for a bad request or rates (negative,
+        not finite, or not one row or n rows of the model's components and self pairs). */
+    void freeRadius(const double *q, std::size_t n, const CollisionRequest &request, const PairPadding &rates,
+                    const double *caps, double *radii) const;
+
     /** \brief "panda_link5 vs object 'box_3' at 0.0421 (0.41, 0.02, 0.33) - (0.43, 0.05, 0.33)". */
     std::string describe(const DistanceResult &result) const;
 
@@ -127,6 +136,9 @@ public:
 private:
     /** \brief validate(), and a pairPadding that fits this checker's model and a batch of \a states. */
     void validateRequest(const CollisionRequest &request, std::size_t states) const;
+    /** \brief Throws ConfigurationError, naming \a name, unless \a rows has one row or \a states rows
+        of this model's components and self pairs. */
+    void validateRows(const PairPadding &rows, const std::string &name, std::size_t states) const;
     void warnOnceIfNotFinite(const double *q, std::size_t n) const;
     void nameCoordinatesOutOfBounds(const double *q, std::size_t n, Contact *contacts) const;
 

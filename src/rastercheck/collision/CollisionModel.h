@@ -217,14 +217,18 @@ class PairPaddings
 {
 public:
     PairPaddings(const CollisionModel &model, const CollisionRequest &request, std::size_t row)
-        : base_(request.padding),
-          numComponents_(model.numComponents()),
-          numEnvironmentPairs_(model.numObjects() * model.numComponents())
+        : PairPaddings(model, request.padding, request.pairPadding.get(), row)
     {
-        if (const PairPadding *extra = request.pairPadding.get())
+    }
+    /** \brief \a base plus, when \a extra is not null, its row \a row (0 for one row) per pair. */
+    PairPaddings(const CollisionModel &model, double base, const PairPadding *extra, std::size_t row)
+        : base_(base), numComponents_(model.numComponents()), numEnvironmentPairs_(model.numObjects() * model.numComponents())
+    {
+        if (extra)
         {
-            environment_ = extra->environment.data() + row * model.numComponents();
-            self_ = extra->self.data() + row * model.selfPairs.size();
+            const std::size_t r = extra->rows == 1 ? 0 : row;
+            environment_ = extra->environment.data() + r * model.numComponents();
+            self_ = extra->self.data() + r * model.selfPairs.size();
         }
     }
     /** \brief No entry per pair: every pair has the request's padding. */

@@ -51,6 +51,14 @@ CollisionMode parseCollisionMode(const std::string &text)
     throw ConfigurationError("unknown collision mode '" + text + "' (expected safe, raster, exact or conservative)");
 }
 
+void validateEntries(const PairPadding &rows, const std::string &name)
+{
+    for (const std::vector<double> *entries : {&rows.environment, &rows.self})
+        for (const double entry : *entries)
+            if (!std::isfinite(entry) || entry < 0)
+                throw ConfigurationError(name + " entries must be finite and >= 0, got " + std::to_string(entry));
+}
+
 void validate(const CollisionRequest &request)
 {
     if (!std::isfinite(request.padding) || request.padding < 0)
@@ -60,11 +68,7 @@ void validate(const CollisionRequest &request)
         throw ConfigurationError("CollisionRequest::pixelSize must be finite and >= 0 (0 = automatic), got " +
                                  std::to_string(request.pixelSize));
     if (request.pairPadding)
-        for (const std::vector<double> *entries : {&request.pairPadding->environment, &request.pairPadding->self})
-            for (const double extra : *entries)
-                if (!std::isfinite(extra) || extra < 0)
-                    throw ConfigurationError("CollisionRequest::pairPadding entries must be finite and >= 0, got " +
-                                             std::to_string(extra));
+        validateEntries(*request.pairPadding, "CollisionRequest::pairPadding");
     if (request.maxImageSide < 1 || request.maxImageSide > 4096)
         throw ConfigurationError("CollisionRequest::maxImageSide must be in [1, 4096], got " +
                                  std::to_string(request.maxImageSide));

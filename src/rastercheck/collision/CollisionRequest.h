@@ -68,6 +68,9 @@ struct PairPadding
     std::size_t rows = 1;
 };
 
+/** \brief Throws ConfigurationError, naming \a name, unless every entry of \a rows is finite and >= 0. */
+void validateEntries(const PairPadding &rows, const std::string &name);
+
 /** \brief What to check and how (Coal/FCL style). */
 struct CollisionRequest
 {

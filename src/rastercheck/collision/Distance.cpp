@@ -26,8 +26,9 @@ struct DistanceWorkspace
 
     struct Candidate
     {
-        double bound;  // lower bound on the pair's distance (its root boxes)
+        double bound;  // lower bound on the pair's measure (its root boxes' distance, through the metric)
         std::uint32_t pair;
+        bool rootsMeet;  // the root boxes may overlap: one solid may hold the other
     };
     RobotData data;
     ExactWorkspace exact;
@@ -52,7 +53,44 @@ double rootBound(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh
     const double bound = nodeDistanceLowerBound(rb, bMa.linear() * nodeAxes(ra), ra, centreA - nodeCentre(rb));
     return std::max(0.0, bound - slack);
 }
+
+/** \brief Relative slack freeRadius takes off a measured distance, of the coordinates' size: the
+    triangle distances are computed in double after one rigid transform (rounding about 1e-16 of the
+    coordinates), and a step must never be longer than the exact distance allows. */
+constexpr double kRadiusSlack = 1e-9;
 }  // namespace
+
+/** \brief What measure() minimises over the pairs: (distance - offset) / rate. The plain distance is
+    offset 0 and rate 1 (no rates, no slack); freeRadius gives each pair its padding and its rate. */
+struct DistanceQueries::PairMetric
+{
+    PairPaddings offset;
+    const PairPaddings *rate = nullptr;  // null: 1 for every pair
+    bool slack = false;                  // take kRadiusSlack off each measured distance
+
+    /** \brief The pair's measure for a distance \a d between points at \a size from the world's
+        origin (their norms): infinity for a pair with rate 0 that is apart by more than its offset. */
+    double value(std::uint32_t pair, double d, double size) const
+    {
+        const double o = offset.pair(pair);
+        const double excess = d - o - (slack ? kRadiusSlack * (size + d + o) : 0.0);
+        if (!rate)
+            return excess;
+        const double r = rate->pair(pair);
+        if (r > 0.0)
+            return excess / r;
+        return excess > 0.0 ? std::numeric_limits<double>::infinity() : excess;
+    }
+    /** \brief The distance below which the pair's measure is below \a best: the bound of its walk. */
+    double reach(std::uint32_t pair, double best) const
+    {
+        const double o = offset.pair(pair);
+        if (!rate)
+            return o + best;
+        const double r = rate->pair(pair);
+        return r > 0.0 ? o + r * best : o;
+    }
+};
 
 DistanceQueries::DistanceQueries(CollisionModelConstPtr model) : model_(std::move(model)) {}
 
@@ -83,17 +121,15 @@ void DistanceQueries::distance(const double *q, const DistanceRequest &request, 
     distance(q, 1, &result, request, 1);
 }
 
-void DistanceQueries::distance(const double *q, std::size_t n, DistanceResult *results, const DistanceRequest &request,
-                               int threads) const
+template <class PerState>
+void DistanceQueries::forEachState(std::size_t n, int threads, const PerState &fn) const
 {
-    validate(request);
-    const std::size_t dof = model_->robot->numCoordinates();
     const int workers = batchWorkers(n, threads);
     if (workers == 1 || n < 2)  // no thread team for a single query (OMPL's clearance())
     {
         std::unique_ptr<DistanceWorkspace> ws = borrow();
         for (std::size_t i = 0; i < n; ++i)
-            measure(q + i * dof, request, *ws, results[i]);
+            fn(i, *ws);
         giveBack(std::move(ws));
         return;
     }
@@ -102,13 +138,47 @@ void DistanceQueries::distance(const double *q, std::size_t n, DistanceResult *r
         std::unique_ptr<DistanceWorkspace> ws = borrow();
 #pragma omp for schedule(dynamic, 4)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
-            measure(q + static_cast<std::size_t>(i) * dof, request, *ws, results[i]);
+            fn(static_cast<std::size_t>(i), *ws);
         giveBack(std::move(ws));
     }
 }
 
-void DistanceQueries::measure(const double *q, const DistanceRequest &request, DistanceWorkspace &ws,
-                              DistanceResult &result) const
+void DistanceQueries::distance(const double *q, std::size_t n, DistanceResult *results, const DistanceRequest &request,
+                               int threads) const
+{
+    validate(request);
+    const std::size_t dof = model_->robot->numCoordinates();
+    const PairMetric metric{PairPaddings(*model_, 0.0, nullptr, 0)};
+    forEachState(n, threads,
+                 [&](std::size_t i, DistanceWorkspace &ws) { measure(q + i * dof, request, metric, ws, results[i]); });
+}
+
+void DistanceQueries::freeRadius(const double *q, std::size_t n, const CollisionRequest &request,
+                                 const PairPadding &rates, const double *caps, double *radii, int threads) const
+{
+    const std::size_t dof = model_->robot->numCoordinates();
+    forEachState(n, threads,
+                 [&](std::size_t i, DistanceWorkspace &ws)
+                 {
+                     if (!(caps[i] > 0.0))
+                     {
+                         radii[i] = 0.0;
+                         return;
+                     }
+                     const PairPaddings rate(*model_, 0.0, &rates, i);
+                     const PairMetric metric{PairPaddings(*model_, request, i), &rate, true};
+                     DistanceRequest bounded;
+                     bounded.checkEnvironment = request.checkEnvironment;
+                     bounded.checkSelfCollision = request.checkSelfCollision;
+                     bounded.upperBound = caps[i];
+                     DistanceResult result;
+                     measure(q + i * dof, bounded, metric, ws, result);
+                     radii[i] = result.kind == Contact::Kind::OutOfBounds ? 0.0 : std::min(result.distance, caps[i]);
+                 });
+}
+
+void DistanceQueries::measure(const double *q, const DistanceRequest &request, const PairMetric &metric,
+                              DistanceWorkspace &ws, DistanceResult &result) const
 {
     const CollisionModel &model = *model_;
     result = DistanceResult{};
@@ -163,7 +233,10 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
         const Sides s = sides(pair);
         if (s.a->empty() || s.b->empty())
             continue;
-        ws.candidates.push_back({rootBound(*s.a, *s.poseA, *s.b, *s.poseB), pair});
+        const double bound = rootBound(*s.a, *s.poseA, *s.b, *s.poseB);
+        const double measureBound = metric.value(pair, bound, 0.0);
+        if (measureBound < request.upperBound)  // a pair that cannot come below the bound is never walked
+            ws.candidates.push_back({measureBound, pair, bound <= 0.0});
     }
     std::sort(ws.candidates.begin(), ws.candidates.end(),
               [](const DistanceWorkspace::Candidate &x, const DistanceWorkspace::Candidate &y)
@@ -173,10 +246,15 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
     bool found = false;
     std::uint32_t bestPair = 0;
     SurfaceDistance nearest;
+    // The measure of a pair found nearer than its reach: below the best so far, save for the slack.
     const auto keep = [&](std::uint32_t pair, const SurfaceDistance &measured)
     {
+        const double value =
+            metric.value(pair, measured.distance, std::max(measured.pointA.norm(), measured.pointB.norm()));
+        if (value >= best)
+            return;
         found = true;
-        best = measured.distance;
+        best = value;
         bestPair = pair;
         nearest = measured;
     };
@@ -194,7 +272,8 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
         const Sides s = sides(candidate.pair);
         SurfaceDistance measured;
         if (!model.curved.refines(candidate.pair) &&
-            hintedDistance(*s.a, *s.poseA, *s.b, *s.poseB, ws.hints[candidate.pair], best, measured) &&
+            hintedDistance(*s.a, *s.poseA, *s.b, *s.poseB, ws.hints[candidate.pair], metric.reach(candidate.pair, best),
+                           measured) &&
             measured.distance > 0.0)  // a contact is left to the walks, which name the first pair in order
             keep(candidate.pair, measured);
     }
@@ -206,16 +285,16 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
         SurfaceDistance measured;
         bool nearer = false;
         if (model.curved.refines(candidate.pair))
-            nearer = model.curved.distance(model, candidate.pair, toDevicePose(*s.poseA), toDevicePose(*s.poseB), best,
-                                           measured);
+            nearer = model.curved.distance(model, candidate.pair, toDevicePose(*s.poseA), toDevicePose(*s.poseB),
+                                           metric.reach(candidate.pair, best), measured);
         else
         {
-            nearer =
-                surfaceDistance(*s.a, *s.poseA, *s.b, *s.poseB, best, measured, &ws.exact, &ws.hints[candidate.pair]);
+            nearer = surfaceDistance(*s.a, *s.poseA, *s.b, *s.poseB, metric.reach(candidate.pair, best), measured,
+                                     &ws.exact, &ws.hints[candidate.pair]);
             // Surfaces apart but the root boxes overlapping: one solid may hold the other, which is a
             // collision however far apart the surfaces are.
             Eigen::Vector3d inside;
-            if (!(nearer && measured.distance <= 0.0) && candidate.bound <= 0.0 &&
+            if (!(nearer && measured.distance <= 0.0) && candidate.rootsMeet &&
                 ((s.closedB && solidInside(*s.a, *s.poseA, *s.b, *s.poseB, &inside)) ||
                  (s.closedA && solidInside(*s.b, *s.poseB, *s.a, *s.poseA, &inside))))
             {
@@ -240,7 +319,7 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, D
     }
     Contact parties;
     model.nameParties(bestPair, parties);
-    result.distance = std::max(0.0, nearest.distance);
+    result.distance = std::max(0.0, best);
     result.kind = parties.kind;
     result.component = parties.component;
     result.object = parties.object;

@@ -87,8 +87,28 @@ public:
     void distance(const double *q, std::size_t n, DistanceResult *results, const DistanceRequest &request,
                   int threads) const;
 
+    /** \brief Conservative advancement's step at \a n states \a q (n x dof, row-major): for state i,
+        the largest t in [0, caps[i]] such that every pair \a request checks stays farther apart than
+        its padding (request.padding plus its pairPadding entry) while it closes in by up to its rate
+        times t: the minimum over the pairs of (distance - padding) / rate, less a rounding slack.
+        \a rates is laid out as a pairPadding (per component, for its pairs with every object; per
+        self pair; one row or one per state) with finite entries >= 0; a pair whose rate is 0 limits
+        nothing unless it is within its padding now. 0 for a state within a pair's padding (or
+        touching, or one solid inside another) and for a state outside the bounds. Exact as
+        distance() is (the same walks, each pair's bound padding + rate x the smallest step so
+        far), so a step is never longer than the motion allows. CertifiedMotionValidator sizes its
+        intervals with it. */
+    void freeRadius(const double *q, std::size_t n, const CollisionRequest &request, const PairPadding &rates,
+                    const double *caps, double *radii, int threads) const;
+
 private:
-    void measure(const double *q, const DistanceRequest &request, DistanceWorkspace &ws, DistanceResult &result) const;
+    struct PairMetric;
+    void measure(const double *q, const DistanceRequest &request, const PairMetric &metric, DistanceWorkspace &ws,
+                 DistanceResult &result) const;
+    /** \brief fn(state, workspace) for the \a n states, over \a threads workers, each with a pooled
+        workspace. */
+    template <class PerState>
+    void forEachState(std::size_t n, int threads, const PerState &fn) const;
     std::unique_ptr<DistanceWorkspace> borrow() const;
     void giveBack(std::unique_ptr<DistanceWorkspace> workspace) const;
 

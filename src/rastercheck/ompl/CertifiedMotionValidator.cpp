@@ -18,16 +18,23 @@ namespace rastercheck::ompl
     current size still to certify, the ones whose midpoints missed the margin, the batch in flight. */
 struct CertifiedMotionValidator::EdgeSearch
 {
+    /** \brief The fractions [start, start + length) of the edge. */
+    struct Interval
+    {
+        double start;
+        double length;
+        double middle() const { return start + 0.5 * length; }
+    };
     Edge edge;
     std::vector<double> componentSweeps, pairSweeps;  ///< MotionBound::sweeps of the edge
-    double length = 1.0;                              ///< of the current level's intervals
-    unsigned int level = 0;
-    std::vector<double> pending;  ///< starts of the intervals of the current size still to certify
-    std::size_t next = 0;         ///< next pending interval to batch
-    std::size_t width = 0;        ///< size of the next batch of this level
-    std::vector<double> failed;   ///< starts whose midpoints missed the margin (refined next level)
-    std::vector<double> batch;    ///< starts whose midpoints are checked in this round
-    std::vector<double> close;    ///< starts of batch whose midpoints missed the margin
+    double finest = 0.0;  ///< intervals this short are not split: past them the edge is not certifiable
+    unsigned int level = 0;  ///< 0: the coarse intervals, in rake order; then one round per refinement
+    std::vector<Interval> pending;  ///< the current level's intervals still to certify
+    std::size_t next = 0;           ///< next pending interval to batch
+    std::size_t width = 0;          ///< size of the next batch of this level
+    std::vector<Interval> refined;  ///< what is left of intervals whose midpoints missed the margin (next level)
+    std::vector<Interval> batch;    ///< intervals whose midpoints are checked in this round
+    std::vector<Interval> close;    ///< intervals of batch whose midpoints missed the margin
     double stop = std::numeric_limits<double>::infinity();  ///< earliest start known not certifiable
     double budget = 0.0;                                    ///< refined midpoints the edge may use
     double spent = 0.0;
@@ -42,6 +49,27 @@ struct CertifiedMotionValidator::EdgeSearch
         prefix = certified ? 1.0 : std::min(stop, 1.0);
         batch.clear();
     }
+    /** \brief \a interval cannot be certified: the search ends, or, when the first uncertifiable
+        fraction is wanted, goes on before it. */
+    void reject(const Interval &interval, bool wantFirst)
+    {
+        stop = std::min(stop, interval.start);
+        if (!wantFirst && !finished)
+            finish(false);
+    }
+    /** \brief \a interval is clear at its midpoint but not by its margin: its parts outside
+        [middle - radius, middle + radius], which the midpoint's clearance certifies, are checked at
+        the next level; an interval already at the finest length cannot be split. */
+    void refine(const Interval &interval, double radius, bool wantFirst)
+    {
+        if (interval.length <= finest)
+            return reject(interval, wantFirst);
+        const double side = 0.5 * interval.length - radius;
+        if (side <= 0.0)
+            return;
+        refined.push_back({interval.start, side});
+        refined.push_back({interval.start + interval.length - side, side});
+    }
 };
 
 namespace
@@ -54,6 +82,7 @@ struct Scratch
     std::vector<std::pair<unsigned int, unsigned int>> intervals;
     std::vector<double> rows;
     std::vector<std::uint8_t> verdicts;
+    std::vector<double> caps, radii;
 };
 
 Scratch &scratch()
@@ -82,6 +111,7 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
       margin_(options.margin > 0.0 ? options.margin : 0.1 * bound_.size()),
       levels_(options.levels),
       rakeWidth_(options.rakeWidth),
+      sizeByClearance_(options.sizeByClearance),
       space_(si->getStateSpace().get())
 {
     detail::requireMatchingParts(si, mapping_, checker_, "CertifiedMotionValidator");
@@ -105,7 +135,7 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
     w.edge = edge;
     w.level = 0;
     w.pending.clear();
-    w.failed.clear();
+    w.refined.clear();
     w.batch.clear();
     w.close.clear();
     w.next = 0;
@@ -148,59 +178,49 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
         return;
     }
     const double coarse = std::clamp(std::ceil(0.5 * fastest / margin_), 1.0, kMaxIntervals);
-    w.length = 1.0 / coarse;
+    const double length = 1.0 / coarse;
+    w.finest = std::ldexp(length, -static_cast<int>(levels_));
     detail::rakeOrder(static_cast<unsigned int>(coarse), scratchBuffers.order, scratchBuffers.intervals);
     for (const unsigned int j : scratchBuffers.order)
-        w.pending.push_back(static_cast<double>(j - 1) * w.length);
+        w.pending.push_back({static_cast<double>(j - 1) * length, length});
     // An edge sliding along an obstacle nearer than the margins resolve doubles its failing
     // intervals at every level; past this many midpoints it is given up as not certifiable.
     w.budget = kChecksPerInterval * coarse + kChecksPerLevel * levels_;
 }
 
-void CertifiedMotionValidator::endLevel(EdgeSearch &w, bool wantFirst) const
+void CertifiedMotionValidator::endLevel(EdgeSearch &w) const
 {
     w.pending.clear();
-    for (const double start : w.failed)
-    {
-        if (start >= w.stop)
-            continue;
-        if (w.level == levels_)
-        {
-            if (!wantFirst)
-                return w.finish(false);
-            w.stop = std::min(w.stop, start);
-            continue;
-        }
-        w.pending.push_back(start);
-        w.pending.push_back(start + 0.5 * w.length);
-    }
-    w.failed.clear();
+    for (const EdgeSearch::Interval &interval : w.refined)
+        if (interval.start < w.stop)
+            w.pending.push_back(interval);
+    w.refined.clear();
     if (w.pending.empty())
         return w.finish(w.stop > 1.0);
     w.spent += static_cast<double>(w.pending.size());
     if (w.spent > w.budget)
     {
-        w.stop = std::min(w.stop, *std::min_element(w.pending.begin(), w.pending.end()));
+        for (const EdgeSearch::Interval &interval : w.pending)
+            w.stop = std::min(w.stop, interval.start);
         return w.finish(false);
     }
-    w.length *= 0.5;
     ++w.level;
     w.next = 0;
     w.width = w.pending.size();  // the refined intervals of a level go in one batch
 }
 
-void CertifiedMotionValidator::nextBatch(EdgeSearch &w, bool wantFirst) const
+void CertifiedMotionValidator::nextBatch(EdgeSearch &w) const
 {
     w.batch.clear();
     while (!w.finished && w.batch.empty())
     {
         if (w.next >= w.pending.size())
         {
-            endLevel(w, wantFirst);
+            endLevel(w);
             continue;
         }
         for (; w.next < w.pending.size() && w.batch.size() < w.width; ++w.next)
-            if (w.pending[w.next] < w.stop)
+            if (w.pending[w.next].start < w.stop)
                 w.batch.push_back(w.pending[w.next]);
         if (w.level == 0)
             w.width *= 2;  // the rake: a collision anywhere on the edge is met after few checks
@@ -214,9 +234,9 @@ void CertifiedMotionValidator::midpointRows(const std::vector<EdgeSearch *> &sea
     ob::State *state = si_->allocState();
     rows.clear();
     for (const EdgeSearch *w : searches)
-        for (const double start : closeOnly ? w->close : w->batch)
+        for (const EdgeSearch::Interval &interval : closeOnly ? w->close : w->batch)
         {
-            space_->interpolate(w->edge.from, w->edge.to, start + 0.5 * w->length, state);
+            space_->interpolate(w->edge.from, w->edge.to, interval.middle(), state);
             rows.resize(rows.size() + dof);
             mapping_->toConfiguration(state, rows.data() + rows.size() - dof);
         }
@@ -245,7 +265,7 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         open.clear();
         for (std::size_t i = 0; i < n; ++i)
         {
-            nextBatch(*pool[i], wantFirst);
+            nextBatch(*pool[i]);
             if (!pool[i]->batch.empty())
                 open.push_back(pool[i].get());
         }
@@ -264,14 +284,15 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         extra->self.resize(count * selfPairs);
         std::size_t row = 0;
         for (const EdgeSearch *search : open)
-            for (std::size_t k = 0; k < search->batch.size(); ++k, ++row)
+            for (const EdgeSearch::Interval &interval : search->batch)
             {
                 for (std::size_t c = 0; c < components; ++c)
                     extra->environment[row * components + c] =
-                        (base ? base->environment[c] : 0.0) + 0.5 * search->componentSweeps[c] * search->length;
+                        (base ? base->environment[c] : 0.0) + 0.5 * search->componentSweeps[c] * interval.length;
                 for (std::size_t p = 0; p < selfPairs; ++p)
                     extra->self[row * selfPairs + p] =
-                        (base ? base->self[p] : 0.0) + 0.5 * search->pairSweeps[p] * search->length;
+                        (base ? base->self[p] : 0.0) + 0.5 * search->pairSweeps[p] * interval.length;
+                ++row;
             }
         CollisionRequest margin = request_;
         margin.pairPadding = std::move(extra);
@@ -280,35 +301,76 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         checker_->check(w.rows.data(), count, w.verdicts.data(), margin);
         states_.fetch_add(count, std::memory_order_relaxed);
 
-        // Nearer than the margin: checked at the padding itself, where a collision ends the search.
         std::size_t closeCount = 0;
         row = 0;
         for (EdgeSearch *search : open)
         {
             search->close.clear();
-            for (const double start : search->batch)
+            for (const EdgeSearch::Interval &interval : search->batch)
                 if (!w.verdicts[row++])
-                    search->close.push_back(start);
+                    search->close.push_back(interval);
             closeCount += search->close.size();
         }
         if (closeCount == 0)
             continue;
         midpointRows(open, true, w.rows);
-        w.verdicts.resize(closeCount);
-        checker_->check(w.rows.data(), closeCount, w.verdicts.data(), request_);
-        states_.fetch_add(closeCount, std::memory_order_relaxed);
-        row = 0;
-        for (EdgeSearch *search : open)
-            for (const double start : search->close)
-            {
-                if (w.verdicts[row++])
-                    search->failed.push_back(start);
-                else if (!search->finished)
+
+        // Nearer than the margin: the midpoint's clearance, measured against what each pair can
+        // close in per unit of the edge, certifies the middle of the interval (conservative
+        // advancement) and leaves two shorter sides; without it, or where it is 0, the interval is
+        // halved.
+        w.radii.assign(closeCount, 0.0);
+        if (sizeByClearance_)
+        {
+            auto rates = std::make_shared<PairPadding>();
+            rates->rows = closeCount;
+            rates->environment.resize(closeCount * components);
+            rates->self.resize(closeCount * selfPairs);
+            w.caps.resize(closeCount);
+            row = 0;
+            for (const EdgeSearch *search : open)
+                for (const EdgeSearch::Interval &interval : search->close)
                 {
-                    search->stop = std::min(search->stop, start);
-                    if (!wantFirst)
-                        search->finish(false);
+                    std::copy(search->componentSweeps.begin(), search->componentSweeps.end(),
+                              rates->environment.begin() + static_cast<std::ptrdiff_t>(row * components));
+                    std::copy(search->pairSweeps.begin(), search->pairSweeps.end(),
+                              rates->self.begin() + static_cast<std::ptrdiff_t>(row * selfPairs));
+                    w.caps[row++] = 0.5 * interval.length;
                 }
+            checker_->freeRadius(w.rows.data(), closeCount, request_, *rates, w.caps.data(), w.radii.data());
+            clearances_.fetch_add(closeCount, std::memory_order_relaxed);
+        }
+
+        // A midpoint without clearance is checked at the padding itself, where a collision ends the
+        // search (the request's mode decides, as for every state).
+        const std::size_t dof = mapping_->numCoordinates();
+        std::size_t confirmCount = 0;
+        for (std::size_t k = 0; k < closeCount; ++k)
+            if (w.radii[k] <= 0.0)
+            {
+                if (confirmCount != k)
+                    std::copy_n(w.rows.begin() + static_cast<std::ptrdiff_t>(k * dof), dof,
+                                w.rows.begin() + static_cast<std::ptrdiff_t>(confirmCount * dof));
+                ++confirmCount;
+            }
+        w.verdicts.resize(confirmCount);
+        if (confirmCount > 0)
+        {
+            checker_->check(w.rows.data(), confirmCount, w.verdicts.data(), request_);
+            states_.fetch_add(confirmCount, std::memory_order_relaxed);
+        }
+        row = 0;
+        std::size_t confirmed = 0;
+        for (EdgeSearch *search : open)
+            for (const EdgeSearch::Interval &interval : search->close)
+            {
+                const double radius = w.radii[row++];
+                if (radius > 0.0)
+                    search->refine(interval, radius, wantFirst);
+                else if (w.verdicts[confirmed++])
+                    search->refine(interval, 0.0, wantFirst);  // halved
+                else
+                    search->reject(interval, wantFirst);
             }
     }
     for (std::size_t i = 0; i < n; ++i)
@@ -322,10 +384,14 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
     if (pool.size() > detail::kKeptEdges)
         pool.resize(detail::kKeptEdges);
     for (const auto &search : pool)
-        for (std::vector<double> *buffer : {&search->componentSweeps, &search->pairSweeps, &search->pending,
-                                            &search->failed, &search->batch, &search->close})
+    {
+        for (std::vector<double> *buffer : {&search->componentSweeps, &search->pairSweeps})
             detail::releaseIfLarge(*buffer);
-    for (std::vector<double> *buffer : {&w.qa, &w.qb, &w.rows})
+        for (std::vector<EdgeSearch::Interval> *buffer :
+             {&search->pending, &search->refined, &search->batch, &search->close})
+            detail::releaseIfLarge(*buffer);
+    }
+    for (std::vector<double> *buffer : {&w.qa, &w.qb, &w.rows, &w.caps, &w.radii})
         detail::releaseIfLarge(*buffer);
     detail::releaseIfLarge(w.order);
     detail::releaseIfLarge(w.intervals);

@@ -28,6 +28,13 @@ struct CertifiedMotionOptions
     /** \brief Coarsest samples checked in the first batch (>= 1); later batches double (the rake
         order of MotionValidator, so a collision anywhere on the edge is met early). */
     unsigned int rakeWidth = 8;
+    /** \brief Where a midpoint misses its margin, size what it certifies by its clearance
+        (Checker::freeRadius: each pair's exact distance against what it can close in along the
+        edge) instead of halving the interval: conservative advancement. It checks fewer states
+        (Panda MotionBenchMaker edges, bench/edges: 24.7 -> 19.6 per edge, plus 3 clearances) but
+        a clearance costs about a hundred checks there, so it is off by default
+        (docs/benchmarks.md, "Edges sized by clearance"). */
+    bool sizeByClearance = false;
 };
 
 /** \brief A motion validator whose accepted edges are collision-free at every point, not only at
@@ -46,8 +53,11 @@ struct CertifiedMotionOptions
     a check at padding p and two finer midpoints (Panda MotionBenchMaker edges, bench/edges: 30 ->
     25 states and 1.3x less time per edge). Where a midpoint fails, it is checked at padding p in
     the request's own mode (a real collision ends the search) and otherwise its interval is
-    halved, each half needing half the margin, down to margin / 2^levels. Intervals of one size
-    are checked together in one batch (Checker::check: many states in one pass), the coarsest in
+    halved, each half needing half the margin, down to margin / 2^levels. With
+    CertifiedMotionOptions::sizeByClearance, a failed midpoint's clearance (Checker::freeRadius)
+    certifies the part of its interval the motion bound keeps clear instead, and only the two
+    sides left go on (conservative advancement). Intervals of one level are checked together in
+    one batch (Checker::check: many states in one pass), the coarsest in
     rake order. checkMotions runs the searches of many edges side by side: each round's midpoints
     of all of them go to the checker in one batch, each state with its own edge's pair paddings
     (PairPadding rows), so every edge gets the verdict it gets alone. The base of a robot that does not move is held to
@@ -79,7 +89,14 @@ public:
 
     /** \brief States decided since construction or resetStateCounter(). */
     std::uint64_t getCheckedStateCount() const { return states_.load(std::memory_order_relaxed); }
-    void resetStateCounter() { states_.store(0, std::memory_order_relaxed); }
+    /** \brief Clearances measured (Checker::freeRadius, one per midpoint that missed its margin)
+        since construction or resetStateCounter(); not among the checked states. */
+    std::uint64_t getClearanceCount() const { return clearances_.load(std::memory_order_relaxed); }
+    void resetStateCounter()
+    {
+        states_.store(0, std::memory_order_relaxed);
+        clearances_.store(0, std::memory_order_relaxed);
+    }
 
     /** \brief The coarsest margin in use (options.margin, or its default). */
     double getMargin() const { return margin_; }
@@ -92,10 +109,10 @@ private:
     void start(const Edge &edge, EdgeSearch &search) const;
     /** \brief Fills search.batch with the next midpoints to check (finishing levels on the way);
         leaves it empty when the search is finished. */
-    void nextBatch(EdgeSearch &search, bool wantFirst) const;
-    /** \brief Ends the search's current level: its failed intervals, halved, become the next
-        level's (or the search finishes). */
-    void endLevel(EdgeSearch &search, bool wantFirst) const;
+    void nextBatch(EdgeSearch &search) const;
+    /** \brief Ends the search's current level: what is left of its intervals whose midpoints missed
+        their margin becomes the next level's (or the search finishes). */
+    void endLevel(EdgeSearch &search) const;
 
     /** \brief The robot configurations of the midpoints of the batches of \a searches, in order. */
     void midpointRows(const std::vector<EdgeSearch *> &searches, bool closeOnly, std::vector<double> &rows) const;
@@ -107,8 +124,10 @@ private:
     double margin_;
     unsigned int levels_;
     unsigned int rakeWidth_;
+    bool sizeByClearance_;
     ::ompl::base::StateSpace *space_;
     mutable std::atomic<std::uint64_t> states_{0};
+    mutable std::atomic<std::uint64_t> clearances_{0};
 };
 
 using CertifiedMotionValidatorPtr = std::shared_ptr<CertifiedMotionValidator>;
