@@ -23,11 +23,11 @@ bool hasCurved(const std::vector<PrimitiveShape> &shapes)
     return std::any_of(shapes.begin(), shapes.end(), [](const PrimitiveShape &s) { return s.curved(); });
 }
 
-/** \brief \a shape placed by \a placement (its solid's frame -> the frame the test runs in). */
-ConvexShape placed(const PrimitiveShape &shape, const Pose<double> &placement)
+/** \brief \a shape as a convex shape in its solid's frame. */
+ConvexShape localShape(const PrimitiveShape &shape)
 {
     ConvexShape convex{};
-    convex.pose = device::compose(placement, toDevicePose(shape.pose));
+    convex.pose = toDevicePose(shape.pose);
     switch (shape.kind)
     {
         case PrimitiveShape::Kind::Box:
@@ -50,7 +50,7 @@ ConvexShape placed(const PrimitiveShape &shape, const Pose<double> &placement)
 }
 
 /** \brief Radius of a ball about the primitive's frame origin that holds it. */
-double reach(const PrimitiveShape &shape)
+double reachOf(const PrimitiveShape &shape)
 {
     switch (shape.kind)
     {
@@ -65,91 +65,24 @@ double reach(const PrimitiveShape &shape)
     return 0.0;
 }
 
-bool shapesWithin(const std::vector<PrimitiveShape> &a, const Pose<double> &poseA, const std::vector<PrimitiveShape> &b,
-                  const Pose<double> &poseB, double padding)
-{
-    for (const PrimitiveShape &sa : a)
-    {
-        const ConvexShape ca = placed(sa, poseA);
-        for (const PrimitiveShape &sb : b)
-            if (device::convexWithin(ca, placed(sb, poseB), padding))
-                return true;
-    }
-    return false;
-}
-
-/** \brief The triangle in slot \a slot of \a bvh (its frame) as a convex shape. */
-ConvexShape slotTriangle(const MeshBvh &bvh, std::uint32_t slot)
-{
-    ConvexShape triangle{};
-    triangle.kind = ConvexKind::Triangle;
-    const double *corners = bvh.slotCorners(slot);
-    for (int k = 0; k < 3; ++k)
-        triangle.corner[k] = {corners[3 * k], corners[3 * k + 1], corners[3 * k + 2]};
-    return triangle;
-}
-
-/** \brief Do the primitives \a shapes (placed by \a poseShapes) come within \a padding of the
-    solid of \a bvh's mesh (placed by \a poseMesh; \a closed: it has an inside)? The test runs in
-    the mesh's frame, so its triangles are read as stored; its tree's bounding spheres rule out the
-    triangles beyond the primitive's reach. */
-bool shapesMeetMesh(const std::vector<PrimitiveShape> &shapes, const Pose<double> &poseShapes, const MeshBvh &bvh,
-                    bool closed, const Pose<double> &poseMesh, double padding)
-{
-    if (bvh.empty())
-        return false;
-    const Pose<double> inMesh = device::relativePose(poseMesh, poseShapes);  // shapes' frame -> mesh frame
-    const MeshBvh::Node *nodes = bvh.nodes();
-    for (const PrimitiveShape &shape : shapes)
-    {
-        const ConvexShape convex = placed(shape, inMesh);
-        const Vec3<double> centre{convex.pose.m[3], convex.pose.m[7], convex.pose.m[11]};
-        const double radius = reach(shape) + padding;
-        // Tree nodes are in float: grow their spheres by a rounding allowance.
-        const double slack = 1e-5 * (std::abs(centre.x) + std::abs(centre.y) + std::abs(centre.z) + nodes[0].radius);
-        const device::WalkEnd end = device::walkTree(
-            nodes, static_cast<std::uint32_t>(bvh.numNodes()),
-            [&](const MeshBvh::Node &node)
-            {
-                const Vec3<double> offset{centre.x - node.centre[0], centre.y - node.centre[1],
-                                          centre.z - node.centre[2]};
-                const double within = node.radius + radius + slack;
-                return device::dot(offset, offset) <= within * within;
-            },
-            [&](const MeshBvh::Node &leaf)
-            {
-                for (std::uint32_t slot = leaf.firstSlot(); slot < leaf.firstSlot() + leaf.count; ++slot)
-                    if (device::convexWithin(convex, slotTriangle(bvh, slot), padding))
-                        return false;  // within padding: stop
-                return true;
-            });
-        if (end != device::WalkEnd::Finished)  // a triangle within padding, or (never built) a tree too deep: colliding
-            return true;
-        // No surface within reach: the primitive is inside the mesh's solid or wholly outside it.
-        if (closed && pointInsideClosedMesh(bvh, Eigen::Vector3d(centre.x, centre.y, centre.z)))
-            return true;
-    }
-    return false;
-}
-
 Eigen::Vector3d toEigen(const Vec3<double> &v)
 {
     return Eigen::Vector3d(v.x, v.y, v.z);
 }
 
-/** \brief The nearest pair of \a a's and \a b's shapes when nearer than result.distance (the best so
-    far, initially the caller's bound): result updated, true. */
-bool shapesDistance(const std::vector<PrimitiveShape> &a, const Pose<double> &poseA,
-                    const std::vector<PrimitiveShape> &b, const Pose<double> &poseB, SurfaceDistance &result)
+/** \brief The nearest pair of solid \a a's and solid \a b's shapes when nearer than result.distance
+    (the best so far, initially the caller's bound): result updated, true. */
+bool shapesDistance(const device::CurvedArrays &arrays, std::uint32_t a, const Pose<double> &poseA, std::uint32_t b,
+                    const Pose<double> &poseB, SurfaceDistance &result)
 {
     bool found = false;
-    for (const PrimitiveShape &sa : a)
+    for (std::uint32_t i = arrays.solidShapes[a]; i < arrays.solidShapes[a + 1]; ++i)
     {
-        const ConvexShape ca = placed(sa, poseA);
-        for (const PrimitiveShape &sb : b)
+        const ConvexShape ca = device::placedShape(arrays.shapes[i], poseA);
+        for (std::uint32_t j = arrays.solidShapes[b]; j < arrays.solidShapes[b + 1]; ++j)
         {
             Vec3<double> onA, onB;
-            const double d = device::convexClosest(ca, placed(sb, poseB), onA, onB);
+            const double d = device::convexClosest(ca, device::placedShape(arrays.shapes[j], poseB), onA, onB);
             if (d < result.distance)
             {
                 result.distance = d;
@@ -163,13 +96,13 @@ bool shapesDistance(const std::vector<PrimitiveShape> &a, const Pose<double> &po
     return found;
 }
 
-/** \brief The nearest point pair of \a shapes (placed by \a poseShapes) and the solid of \a bvh's
-    mesh (placed by \a poseMesh) when nearer than result.distance: result updated (pointA on the
-    shapes, triangleB the mesh's), true. The search runs in the mesh's frame; a node is skipped when
-    the ball about the primitive's origin that holds it is no nearer to the node's box or sphere
-    than the best so far (less the nodes' float rounding). */
-bool shapesToMeshDistance(const std::vector<PrimitiveShape> &shapes, const Pose<double> &poseShapes, const MeshBvh &bvh,
-                          bool closed, const Pose<double> &poseMesh, SurfaceDistance &result)
+/** \brief The nearest point pair of solid \a solid's shapes (placed by \a poseShapes) and the solid
+    of \a bvh's mesh (placed by \a poseMesh) when nearer than result.distance: result updated
+    (pointA on the shapes, triangleB the mesh's), true. The search runs in the mesh's frame; a node
+    is skipped when the ball about the primitive's origin that holds it is no nearer to the node's
+    box or sphere than the best so far (less the nodes' float rounding). */
+bool shapesToMeshDistance(const device::CurvedArrays &arrays, std::uint32_t solid, const Pose<double> &poseShapes,
+                          const MeshBvh &bvh, bool closed, const Pose<double> &poseMesh, SurfaceDistance &result)
 {
     if (bvh.empty())
         return false;
@@ -177,11 +110,12 @@ bool shapesToMeshDistance(const std::vector<PrimitiveShape> &shapes, const Pose<
     const Eigen::Isometry3d meshToWorld = fromDevicePose(poseMesh);
     const MeshBvh::Node *nodes = bvh.nodes();
     bool found = false;
-    for (const PrimitiveShape &shape : shapes)
+    const device::ExactTree mesh = bvh.exactTree();
+    for (std::uint32_t k = arrays.solidShapes[solid]; k < arrays.solidShapes[solid + 1]; ++k)
     {
-        const ConvexShape convex = placed(shape, inMesh);
+        const ConvexShape convex = device::placedShape(arrays.shapes[k], inMesh);
         const Eigen::Vector3d centre(convex.pose.m[3], convex.pose.m[7], convex.pose.m[11]);
-        const double radius = reach(shape);
+        const double radius = arrays.reach[k];
         const double slack = 1e-5 * (centre.cwiseAbs().sum() + nodes[0].radius);
         const auto nodeTest = [&](const MeshBvh::Node &node)
         {
@@ -196,7 +130,7 @@ bool shapesToMeshDistance(const std::vector<PrimitiveShape> &shapes, const Pose<
         {
             for (std::uint32_t slot = node.firstSlot(); slot < node.firstSlot() + node.count; ++slot)
             {
-                const ConvexShape triangle = slotTriangle(bvh, slot);
+                const ConvexShape triangle = device::slotTriangle(mesh, slot);
                 Vec3<double> onShape, onTriangle;
                 const double d = device::convexClosest(convex, triangle, onShape, onTriangle);
                 if (d < result.distance)
@@ -233,6 +167,22 @@ CurvedSolids::CurvedSolids(const CollisionModel &model)
 {
     const RobotModel &robot = *model.robot;
     const std::size_t m = model.numComponents();
+    // The solids' shapes, components then objects, as the per-element code reads them.
+    solidShapes_.push_back(0);
+    const auto addSolid = [&](const std::vector<PrimitiveShape> &shapes)
+    {
+        for (const PrimitiveShape &shape : shapes)
+        {
+            shapes_.push_back(localShape(shape));
+            reach_.push_back(reachOf(shape));
+        }
+        solidShapes_.push_back(static_cast<std::uint32_t>(shapes_.size()));
+    };
+    for (std::size_t c = 0; c < m; ++c)
+        addSolid(robot.components[c].shapes);
+    for (std::size_t o = 0; o < model.numObjects(); ++o)
+        addSolid(model.scene->objects[o].shapes);
+
     refines_.assign(model.numPairs(), 0);
     bool any = false;
     for (std::uint32_t pair = 0; pair < model.numPairs(); ++pair)
@@ -254,12 +204,14 @@ CurvedSolids::CurvedSolids(const CollisionModel &model)
 namespace
 {
 /** \brief A pair's two parties: component \a a, and \a b, a scene object (\a environment) or a
-    component, with their primitives. */
+    component, with their solid numbers in CurvedArrays (components, then objects). */
 struct PairParties
 {
     std::size_t a, b;
     bool environment;
-    const std::vector<PrimitiveShape> *shapesA, *shapesB;
+    std::uint32_t solidA, solidB;
+    const MeshBvh *bvhA, *bvhB;
+    bool closedA, closedB;
 };
 
 PairParties partiesOf(const CollisionModel &model, std::uint32_t pair)
@@ -270,9 +222,12 @@ PairParties partiesOf(const CollisionModel &model, std::uint32_t pair)
     parties.a = static_cast<std::size_t>(named.component);
     parties.environment = named.kind == Contact::Kind::Environment;
     parties.b = static_cast<std::size_t>(parties.environment ? named.object : named.otherComponent);
-    parties.shapesA = &model.robot->components[parties.a].shapes;
-    parties.shapesB =
-        parties.environment ? &model.scene->objects[parties.b].shapes : &model.robot->components[parties.b].shapes;
+    parties.solidA = static_cast<std::uint32_t>(parties.a);
+    parties.solidB = static_cast<std::uint32_t>(parties.environment ? model.numComponents() + parties.b : parties.b);
+    parties.bvhA = model.componentBvhs[parties.a].get();
+    parties.closedA = model.components[parties.a].closed;
+    parties.bvhB = parties.environment ? model.objectBvhs[parties.b].get() : model.componentBvhs[parties.b].get();
+    parties.closedB = parties.environment ? model.objects[parties.b].closed : model.components[parties.b].closed;
     return parties;
 }
 }  // namespace
@@ -280,45 +235,34 @@ PairParties partiesOf(const CollisionModel &model, std::uint32_t pair)
 bool CurvedSolids::collide(const CollisionModel &model, std::uint32_t pair, const Pose<double> &poseA,
                            const Pose<double> &poseB, double padding) const
 {
-    const PairParties parties = partiesOf(model, pair);
-    const std::size_t a = parties.a, b = parties.b;
-    const bool environment = parties.environment;
-    const std::vector<PrimitiveShape> &shapesA = *parties.shapesA, &shapesB = *parties.shapesB;
-    padding = std::max(0.0, padding);
-    if (!shapesA.empty() && !shapesB.empty())
-        return shapesWithin(shapesA, poseA, shapesB, poseB, padding);
-    const MeshBvh &bvhB = environment ? *model.objectBvhs[b] : *model.componentBvhs[b];
-    const bool closedB = environment ? model.objects[b].closed : model.components[b].closed;
-    if (!shapesA.empty())
-        return shapesMeetMesh(shapesA, poseA, bvhB, closedB, poseB, padding);
-    return shapesMeetMesh(shapesB, poseB, *model.componentBvhs[a], model.components[a].closed, poseA, padding);
+    const PairParties p = partiesOf(model, pair);
+    return device::curvedPairCollides(arrays(), p.solidA, poseA, p.bvhA->exactTree(), p.closedA, p.solidB, poseB,
+                                      p.bvhB->exactTree(), p.closedB, padding);
 }
 
 bool CurvedSolids::distance(const CollisionModel &model, std::uint32_t pair, const Pose<double> &poseA,
                             const Pose<double> &poseB, double bound, SurfaceDistance &result) const
 {
-    const PairParties parties = partiesOf(model, pair);
-    const std::size_t a = parties.a, b = parties.b;
-    const bool environment = parties.environment;
-    const std::vector<PrimitiveShape> &shapesA = *parties.shapesA, &shapesB = *parties.shapesB;
+    const PairParties p = partiesOf(model, pair);
+    const device::CurvedArrays shapes = arrays();
+    const bool shapesA = shapes.solidShapes[p.solidA + 1] > shapes.solidShapes[p.solidA];
+    const bool shapesB = shapes.solidShapes[p.solidB + 1] > shapes.solidShapes[p.solidB];
     SurfaceDistance best;
     best.distance = bound;
-    if (!shapesA.empty() && !shapesB.empty())
+    if (shapesA && shapesB)
     {
-        if (!shapesDistance(shapesA, poseA, shapesB, poseB, best))
+        if (!shapesDistance(shapes, p.solidA, poseA, p.solidB, poseB, best))
             return false;
     }
-    else if (!shapesA.empty())
+    else if (shapesA)
     {
-        const MeshBvh &bvhB = environment ? *model.objectBvhs[b] : *model.componentBvhs[b];
-        const bool closedB = environment ? model.objects[b].closed : model.components[b].closed;
-        if (!shapesToMeshDistance(shapesA, poseA, bvhB, closedB, poseB, best))
+        if (!shapesToMeshDistance(shapes, p.solidA, poseA, *p.bvhB, p.closedB, poseB, best))
             return false;
     }
     else
     {
         // The shapes are B's: measured the other way round, then A and B swapped back.
-        if (!shapesToMeshDistance(shapesB, poseB, *model.componentBvhs[a], model.components[a].closed, poseA, best))
+        if (!shapesToMeshDistance(shapes, p.solidB, poseB, *p.bvhA, p.closedA, poseA, best))
             return false;
         std::swap(best.pointA, best.pointB);
         std::swap(best.triangleA, best.triangleB);

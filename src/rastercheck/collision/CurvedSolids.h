@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "rastercheck/device/CurvedShapes.h"
 #include "rastercheck/device/Pose.h"
 #include "rastercheck/geometry/MeshDistance.h"
 
@@ -34,9 +35,18 @@ public:
     /** \brief refines() as flags, 1 per pair (shorter than the pair count when the last pairs have none). */
     const std::vector<std::uint8_t> &refinedPairs() const { return refines_; }
 
+    /** \brief Every solid's shapes as the per-element code reads them (device::CurvedArrays): the
+        components, then the scene objects. */
+    device::CurvedArrays arrays() const { return {shapes_.data(), reach_.data(), solidShapes_.data()}; }
+    /** \brief The flat arrays themselves, for uploading. */
+    const std::vector<device::ConvexShape> &shapes() const { return shapes_; }
+    const std::vector<double> &reach() const { return reach_; }
+    const std::vector<std::uint32_t> &solidShapes() const { return solidShapes_; }
+
     /** \brief Do the exact shapes of pair \a pair come within \a padding (>= 0)? \a poseA: the pair's
         component's link pose; \a poseB: the other component's link pose, or the identity for a
-        scene object (world frame). Only for pairs that refines(). Thread-safe, no allocation. */
+        scene object (world frame). Only for pairs that refines(). Thread-safe, no allocation.
+        device::curvedPairCollides, which the batched stages run too. */
     bool collide(const CollisionModel &model, std::uint32_t pair, const device::Pose<double> &poseA,
                  const device::Pose<double> &poseB, double padding) const;
 
@@ -53,5 +63,8 @@ public:
 
 private:
     std::vector<std::uint8_t> refines_;  // n_pairs
+    std::vector<device::ConvexShape> shapes_;  // every solid's, in its own frame
+    std::vector<double> reach_;                // per shape
+    std::vector<std::uint32_t> solidShapes_;   // n_components + n_objects + 1 starts
 };
 }  // namespace rastercheck
