@@ -195,8 +195,8 @@ public:
             order[next[keys[i]]++] = static_cast<std::uint32_t>(i);
     }
 
-    /** \brief out[i] = sum of in[0..i) (in and out may alias); the inputs end with a zero, so
-        *total = out[n - 1]. */
+    /** \brief out[i] = sum of in[0..i) (in and out may alias); the inputs end with a zero, so the
+        total, written to \a total, is out[n - 1]. */
     void exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n, unsigned long long *total)
     {
         ++counts_.launches;
