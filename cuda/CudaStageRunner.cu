@@ -64,27 +64,30 @@ __global__ void iotaKernel(std::uint32_t *out, std::size_t n)
         out[i] = static_cast<std::uint32_t>(i);
 }
 
-/** \brief One device allocation that only grows, freed with its owner. */
-class DeviceAllocation
+/** \brief One allocation that only grows, freed with its owner: device memory, or page-locked
+    host memory (\a PageLocked), which copies to and from the device reach asynchronously on a
+    stream (a copy from pageable memory makes the host wait). */
+template <bool PageLocked>
+class Allocation
 {
 public:
-    DeviceAllocation() = default;
-    DeviceAllocation(DeviceAllocation &&other) noexcept : pointer_(other.pointer_), bytes_(other.bytes_)
+    Allocation() = default;
+    Allocation(Allocation &&other) noexcept : pointer_(other.pointer_), bytes_(other.bytes_)
     {
         other.pointer_ = nullptr;
         other.bytes_ = 0;
     }
-    DeviceAllocation &operator=(DeviceAllocation &&) = delete;
-    DeviceAllocation(const DeviceAllocation &) = delete;
-    DeviceAllocation &operator=(const DeviceAllocation &) = delete;
-    ~DeviceAllocation() { release(); }
+    Allocation &operator=(Allocation &&) = delete;
+    Allocation(const Allocation &) = delete;
+    Allocation &operator=(const Allocation &) = delete;
+    ~Allocation() { release(); }
 
     void *pointer() const { return pointer_; }
     std::size_t bytes() const { return bytes_; }
 
     /** \brief Holds at least \a need bytes after it: a quarter more when \a most allows (fewer
-        regrowths as batches vary), else exactly \a need. False when the device has no room (the
-        old contents are gone either way); any other CUDA failure throws. */
+        regrowths as batches vary), else exactly \a need. False when there is no room (the old
+        contents are gone either way); any other CUDA failure throws. */
     bool grow(std::size_t need, std::size_t most, const char *what)
     {
         if (need <= bytes_)
@@ -93,7 +96,7 @@ public:
         const std::size_t roomy = std::max(need, std::min(need + need / 4, most));
         for (const std::size_t size : {roomy, need})
         {
-            const cudaError_t status = cudaMalloc(&pointer_, size);
+            const cudaError_t status = PageLocked ? cudaMallocHost(&pointer_, size) : cudaMalloc(&pointer_, size);
             if (status == cudaSuccess)
             {
                 bytes_ = size;
@@ -112,7 +115,7 @@ public:
     void release()
     {
         if (pointer_)
-            cudaFree(pointer_);
+            PageLocked ? cudaFreeHost(pointer_) : cudaFree(pointer_);
         pointer_ = nullptr;
         bytes_ = 0;
     }
@@ -121,43 +124,8 @@ private:
     void *pointer_ = nullptr;
     std::size_t bytes_ = 0;
 };
-
-/** \brief Page-locked host memory that only grows, so that copies to and from it run
-    asynchronously on a stream (a copy from pageable memory waits for the device). */
-class PinnedAllocation
-{
-public:
-    PinnedAllocation() = default;
-    PinnedAllocation(const PinnedAllocation &) = delete;
-    PinnedAllocation &operator=(const PinnedAllocation &) = delete;
-    ~PinnedAllocation() { release(); }
-
-    void *pointer() const { return pointer_; }
-    std::size_t bytes() const { return bytes_; }
-
-    /** \brief Holds at least \a need bytes (a quarter more when it grows; the old contents are gone). */
-    void grow(std::size_t need)
-    {
-        if (need <= bytes_)
-            return;
-        release();
-        const std::size_t roomy = need + need / 4;
-        check(cudaMallocHost(&pointer_, roomy), "cudaMallocHost (host mirror)");
-        bytes_ = roomy;
-    }
-
-    void release()
-    {
-        if (pointer_)
-            cudaFreeHost(pointer_);
-        pointer_ = nullptr;
-        bytes_ = 0;
-    }
-
-private:
-    void *pointer_ = nullptr;
-    std::size_t bytes_ = 0;
-};
+using DeviceAllocation = Allocation<false>;
+using PinnedAllocation = Allocation<true>;
 
 class CudaExecutor
 {
@@ -354,7 +322,9 @@ private:
             wait();
         if (grows)
         {
-            m.grow(bytes);
+            if (!m.grow(bytes, SIZE_MAX, "cudaMallocHost (host mirror)"))
+                throw std::runtime_error("CUDA: no page-locked host memory for a host mirror of " +
+                                         std::to_string(bytes) + " bytes");
             ++counts_.allocations;
         }
         mirrorInUse_[i] = true;
