@@ -228,18 +228,19 @@ struct StageBudget
         pass it, or whose allocator refuses, frees its scratch and throws StageMemoryExhausted,
         and the chunk is split. */
     std::size_t maxScratchBytes = 0;
-    /** Chunks with at least this many pairs past the box culls take the proofs in pair order
-        (stage 3). Measured on an H200 (2026-11-26, docs/benchmarks.md "GPU"): the order made the
-        proof stage 1.8-3.2x faster and a batch of 10^6 Panda states 1.3-1.4x, 10^5 states 1.0-1.2x,
-        but batches of 10^3-10^4 states (2 000 to 20 000 pairs, less than one wave of the device)
-        a third slower; there the unordered stage stays. */
+    /** Chunks that wait for their counts (waitForCountsFrom) with at least this many pairs past the
+        box culls take the proofs in pair order (stage 3). Measured on an H200 (2026-11-26,
+        docs/benchmarks.md "GPU"): the order made the proof stage 1.8-3.2x faster and a batch of
+        10^6 Panda states 1.3-1.4x, 10^5 states 1.0-1.2x, but batches of 10^3-10^4 states (2 000 to
+        20 000 pairs, less than one wave of the device) a third slower; there the unordered stage
+        stays. */
     std::size_t orderedProofsFrom = std::size_t(1) << 16;
     /** Chunks of fewer (state, pair) elements than this make one wait, for their outcomes: the counts
         only the executor knows (pairs past the culls, candidate triangles, fragments, outcomes) stay
         there (Extent), and the host sizes their buffers and launches by bounds: every pair may
         survive the culls; the triangles and fragments as the executor's earlier chunks needed
         (CountGuesses: its first rasterizing chunk waits for them, and a chunk that needs more runs
-        again, waiting). Larger chunks wait for each count (four waits), so that their buffers and
+        again, waiting). Larger chunks wait for each count (five waits), so that their buffers and
         launches have the counts' sizes; only they take the proofs in pair order (orderedProofsFrom),
         which needs the survivors' count. At 2^18, 1 000 Panda states make one wait. */
     std::size_t waitForCountsFrom = std::size_t(1) << 18;
