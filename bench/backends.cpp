@@ -166,15 +166,22 @@ int main(int argc, char **argv)
             const double gpuRate = haveGpu ? statesPerSecond(gpu.backend(), q, batch, request, repeats, &gpuSeconds) : 0;
             // The share of the calls spent in the stages' passes (kernels, copies, waits); the rest is
             // the host's: the bounds check, the per-state reduction and the open pairs' exact phase.
-            const double passShare =
-                staged ? (staged->executorCounts().seconds - before.seconds) / std::max(1e-12, gpuSeconds) : 0;
+            // And what a call costs its executor: waits for the device, launches, allocations (the
+            // first call allocates and measures; later ones of a small batch wait once).
+            const device::ExecutorCounts used =
+                staged ? staged->executorCounts().since(before) : device::ExecutorCounts{};
+            const double passShare = used.seconds / std::max(1e-12, gpuSeconds);
+            const double perCall = 1.0 / std::max<unsigned long long>(1, used.calls);
+            char costs[96];
+            std::snprintf(costs, sizeof costs, ", %.2f waits, %.1f launches, %.2f allocations per call",
+                          used.synchronizations * perCall, used.launches * perCall, used.allocations * perCall);
             std::printf("| %s | %zu / %zu | %zu | %s | %s | %s | %s | %s | %s |\n", c.name.c_str(),
                         c.robot->numTriangles(), sceneTriangles, batch, rate(fclRate).c_str(),
                         cpuRate > 0 ? rate(cpuRate).c_str() : "-", haveGpu ? rate(gpuRate).c_str() : "no device",
                         haveGpu ? (std::to_string(gpuRate / fclRate).substr(0, 6) + "x").c_str() : "-",
                         haveGpu && cpuRate > 0 ? (std::to_string(gpuRate / cpuRate).substr(0, 5) + "x").c_str() : "-",
                         haveGpu ? (std::to_string(static_cast<long>(1e6 * batch / gpuRate)) + " us, " +
-                                   std::to_string(static_cast<int>(100 * passShare)) + " % in the passes")
+                                   std::to_string(static_cast<int>(100 * passShare)) + " % in the passes" + costs)
                                       .c_str()
                                 : "-");
         }

@@ -1,13 +1,16 @@
 // The CUDA executor of the batched pipeline: each stage of device/BatchPipeline.h runs as one
 // kernel (forEachKernel instantiated with that stage's per-element function), compaction, scans
-// and the segmented sort are CUB calls. Buffers live for the runner's lifetime and only grow, so a
-// steady stream of batches does not allocate; the model is uploaded once.
+// and the segmented sort are CUB calls, all on the executor's stream. Device buffers and the
+// page-locked host mirrors that copies go through live as long as the executor and only grow, so
+// a steady stream of batches does not allocate; copies run asynchronously on the stream, and the
+// host waits only where the driver asks (a small chunk: once); the model is uploaded once.
 
 #include "CudaStageRunner.h"
 
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -43,6 +46,15 @@ __global__ void forEachKernel(std::size_t n, F f)
         f(i);
 }
 
+/** \brief f(i) for i below the extent's count, which an earlier kernel of the stream wrote. */
+template <class F>
+__global__ void forEachCountedKernel(device::Extent extent, F f)
+{
+    const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < extent.size())
+        f(i);
+}
+
 __global__ void probeKernel(int *out) { *out = 42; }
 
 __global__ void iotaKernel(std::uint32_t *out, std::size_t n)
@@ -52,27 +64,30 @@ __global__ void iotaKernel(std::uint32_t *out, std::size_t n)
         out[i] = static_cast<std::uint32_t>(i);
 }
 
-/** \brief One device allocation that only grows, freed with its owner. */
-class DeviceAllocation
+/** \brief One allocation that only grows, freed with its owner: device memory, or page-locked
+    host memory (\a PageLocked), which copies to and from the device reach asynchronously on a
+    stream (a copy from pageable memory makes the host wait). */
+template <bool PageLocked>
+class Allocation
 {
 public:
-    DeviceAllocation() = default;
-    DeviceAllocation(DeviceAllocation &&other) noexcept : pointer_(other.pointer_), bytes_(other.bytes_)
+    Allocation() = default;
+    Allocation(Allocation &&other) noexcept : pointer_(other.pointer_), bytes_(other.bytes_)
     {
         other.pointer_ = nullptr;
         other.bytes_ = 0;
     }
-    DeviceAllocation &operator=(DeviceAllocation &&) = delete;
-    DeviceAllocation(const DeviceAllocation &) = delete;
-    DeviceAllocation &operator=(const DeviceAllocation &) = delete;
-    ~DeviceAllocation() { release(); }
+    Allocation &operator=(Allocation &&) = delete;
+    Allocation(const Allocation &) = delete;
+    Allocation &operator=(const Allocation &) = delete;
+    ~Allocation() { release(); }
 
     void *pointer() const { return pointer_; }
     std::size_t bytes() const { return bytes_; }
 
     /** \brief Holds at least \a need bytes after it: a quarter more when \a most allows (fewer
-        regrowths as batches vary), else exactly \a need. False when the device has no room (the
-        old contents are gone either way); any other CUDA failure throws. */
+        regrowths as batches vary), else exactly \a need. False when there is no room (the old
+        contents are gone either way); any other CUDA failure throws. */
     bool grow(std::size_t need, std::size_t most, const char *what)
     {
         if (need <= bytes_)
@@ -81,7 +96,7 @@ public:
         const std::size_t roomy = std::max(need, std::min(need + need / 4, most));
         for (const std::size_t size : {roomy, need})
         {
-            const cudaError_t status = cudaMalloc(&pointer_, size);
+            const cudaError_t status = PageLocked ? cudaMallocHost(&pointer_, size) : cudaMalloc(&pointer_, size);
             if (status == cudaSuccess)
             {
                 bytes_ = size;
@@ -100,7 +115,7 @@ public:
     void release()
     {
         if (pointer_)
-            cudaFree(pointer_);
+            PageLocked ? cudaFreeHost(pointer_) : cudaFree(pointer_);
         pointer_ = nullptr;
         bytes_ = 0;
     }
@@ -109,6 +124,8 @@ private:
     void *pointer_ = nullptr;
     std::size_t bytes_ = 0;
 };
+using DeviceAllocation = Allocation<false>;
+using PinnedAllocation = Allocation<true>;
 
 class CudaExecutor
 {
@@ -116,6 +133,7 @@ public:
     CudaExecutor() { check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate"); }
     ~CudaExecutor()
     {
+        cudaStreamSynchronize(stream_);  // no copy may still use a mirror
         releaseScratch();
         cudaStreamDestroy(stream_);
     }
@@ -132,41 +150,76 @@ public:
                                          std::max<std::size_t>(1, count) * sizeof(T), "cudaMalloc (stage buffer)"));
     }
 
+    /** \brief Buffer \a slot holding a copy of \a count elements at \a source, copied through the
+        slot's host mirror: the copy runs on the stream, the host does not wait for it. */
     template <class T>
-    void upload(T *destination, const T *source, std::size_t count)
+    T *upload(int slot, const T *source, std::size_t count)
     {
-        if (count > 0)
-            check(cudaMemcpyAsync(destination, source, count * sizeof(T), cudaMemcpyHostToDevice, stream_),
-                  "cudaMemcpyAsync (upload)");
+        T *destination = buffer<T>(slot, count);
+        if (count == 0)
+            return destination;
+        T *staged = static_cast<T *>(mirror(slot, count * sizeof(T), true));
+        std::memcpy(staged, source, count * sizeof(T));
+        check(cudaMemcpyAsync(destination, staged, count * sizeof(T), cudaMemcpyHostToDevice, stream_),
+              "cudaMemcpyAsync (upload)");
+        return destination;
     }
 
+    /** \brief Queues a copy of \a count elements at \a source into the host mirror of \a slot and
+        returns the mirror, to be read after wait(). */
     template <class T>
-    void download(T *destination, const T *source, std::size_t count)
+    const T *download(int slot, const T *source, std::size_t count)
     {
-        if (count > 0)
-            check(cudaMemcpyAsync(destination, source, count * sizeof(T), cudaMemcpyDeviceToHost, stream_),
-                  "cudaMemcpyAsync (download)");
-        check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize (download)");
+        if (count == 0)
+            return static_cast<const T *>(mirrors_[static_cast<std::size_t>(slot)].pointer());
+        T *host = static_cast<T *>(mirror(slot, count * sizeof(T), false));
+        check(cudaMemcpyAsync(host, source, count * sizeof(T), cudaMemcpyDeviceToHost, stream_),
+              "cudaMemcpyAsync (download)");
+        return host;
+    }
+
+    /** \brief The host waits for everything queued on the stream. */
+    void wait()
+    {
+        check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
         ++counts_.synchronizations;
+        mirrorInUse_.fill(false);
     }
 
     device::ExecutorCounts &counts() { return counts_; }
+    device::CountGuesses &guesses() { return guesses_; }
 
     template <class F>
     void forEach(std::size_t n, F f)
     {
         if (n == 0)
             return;
-        constexpr unsigned threads = 256;
-        const std::size_t blocks = (n + threads - 1) / threads;
-        forEachKernel<<<static_cast<unsigned>(blocks), threads, 0, stream_>>>(n, f);
+        forEachKernel<<<blocksFor(n), kThreads, 0, stream_>>>(n, f);
         check(cudaGetLastError(), "kernel launch");
         ++counts_.launches;
     }
 
-    std::uint32_t selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected)
+    /** \brief f(i) for i below the extent's count, read on the device: a thread per element of its
+        bound, so that the host need not wait for the count. */
+    template <class F>
+    void forEach(device::Extent extent, F f)
     {
-        std::uint32_t *count = static_cast<std::uint32_t *>(reserve(count_, sizeof(std::uint32_t), "cudaMalloc (count)"));
+        if (extent.bound == 0)
+            return;
+        forEachCountedKernel<<<blocksFor(extent.bound), kThreads, 0, stream_>>>(extent, f);
+        check(cudaGetLastError(), "kernel launch");
+        ++counts_.launches;
+    }
+
+    /** \brief The indices i < n with flags[i] set into \a selected, their number into *count
+        (device memory, not waited for). */
+    void selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected, unsigned long long *count)
+    {
+        if (n == 0)
+        {
+            check(cudaMemsetAsync(count, 0, sizeof(*count), stream_), "cudaMemsetAsync (count)");
+            return;
+        }
         const thrust::counting_iterator<std::uint32_t> indices(0);
         std::size_t bytes = 0;
         check(cub::DeviceSelect::Flagged(nullptr, bytes, indices, flags, selected, count, static_cast<std::int64_t>(n), stream_),
@@ -175,9 +228,6 @@ public:
                                          count, static_cast<std::int64_t>(n), stream_),
               "cub::DeviceSelect::Flagged");
         ++counts_.launches;
-        std::uint32_t result = 0;
-        download(&result, count, 1);
-        return result;
     }
 
     /** \brief order = 0..n-1 stably sorted by keys[i] (each below numKeys): CUB's radix sort (LSD,
@@ -209,47 +259,78 @@ public:
         counts_.launches += 2;  // with the iota
     }
 
-    /** \brief out[i] = sum of in[0..i); the inputs end with a zero, so the last output is the total. */
-    std::size_t exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n)
+    /** \brief out[i] = sum of in[0..i); the inputs end with a zero, so the last output is the
+        total, copied to *total (device memory, not waited for). */
+    void exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n, unsigned long long *total)
     {
-        if (n == 0)
-            return 0;
         std::size_t bytes = 0;
         check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, n, stream_), "cub::DeviceScan::ExclusiveSum (size)");
         check(cub::DeviceScan::ExclusiveSum(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, in, out, n, stream_),
               "cub::DeviceScan::ExclusiveSum");
         ++counts_.launches;
-        unsigned long long total = 0;
-        download(&total, out + (n - 1), 1);
-        return static_cast<std::size_t>(total);
+        check(cudaMemcpyAsync(total, out + (n - 1), sizeof(*total), cudaMemcpyDeviceToDevice, stream_),
+              "cudaMemcpyAsync (scan total)");
     }
 
-    void sortSegments(unsigned long long *keys, std::uint32_t *values, std::size_t n, const std::uint32_t *starts,
+    /** \brief Stable sort of each segment by key. The sorted pairs may end in the other buffers of
+        CUB's double buffers (no copy back): \a keys and \a values then point there. Elements
+        outside the segments (past the fragments' count) are not read. */
+    void sortSegments(unsigned long long *&keys, std::uint32_t *&values, std::size_t n, const std::uint32_t *starts,
                       std::uint32_t numSegments)
     {
         if (n == 0 || numSegments == 0)
             return;
-        unsigned long long *keysOut =
+        auto *keysAlternate =
             static_cast<unsigned long long *>(reserve(keysAlt_, n * sizeof(unsigned long long), "cudaMalloc (sort keys)"));
-        std::uint32_t *valuesOut =
+        auto *valuesAlternate =
             static_cast<std::uint32_t *>(reserve(valuesAlt_, n * sizeof(std::uint32_t), "cudaMalloc (sort values)"));
+        const auto items = static_cast<std::int64_t>(n);
         std::size_t bytes = 0;
-        check(cub::DeviceSegmentedSort::StableSortPairs(nullptr, bytes, keys, keysOut, values, valuesOut,
-                                                        static_cast<std::int64_t>(n), numSegments, starts, starts + 1,
-                                                        stream_),
-              "cub::DeviceSegmentedSort::StableSortPairs (size)");
-        check(cub::DeviceSegmentedSort::StableSortPairs(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, keys,
-                                                        keysOut, values, valuesOut, static_cast<std::int64_t>(n),
-                                                        numSegments, starts, starts + 1, stream_),
+        {
+            cub::DoubleBuffer<unsigned long long> keyBuffers(keys, keysAlternate);
+            cub::DoubleBuffer<std::uint32_t> valueBuffers(values, valuesAlternate);
+            check(cub::DeviceSegmentedSort::StableSortPairs(nullptr, bytes, keyBuffers, valueBuffers, items, numSegments,
+                                                            starts, starts + 1, stream_),
+                  "cub::DeviceSegmentedSort::StableSortPairs (size)");
+        }
+        cub::DoubleBuffer<unsigned long long> keyBuffers(keys, keysAlternate);
+        cub::DoubleBuffer<std::uint32_t> valueBuffers(values, valuesAlternate);
+        check(cub::DeviceSegmentedSort::StableSortPairs(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes,
+                                                        keyBuffers, valueBuffers, items, numSegments, starts,
+                                                        starts + 1, stream_),
               "cub::DeviceSegmentedSort::StableSortPairs");
         ++counts_.launches;
-        check(cudaMemcpyAsync(keys, keysOut, n * sizeof(unsigned long long), cudaMemcpyDeviceToDevice, stream_),
-              "cudaMemcpyAsync (sorted keys)");
-        check(cudaMemcpyAsync(values, valuesOut, n * sizeof(std::uint32_t), cudaMemcpyDeviceToDevice, stream_),
-              "cudaMemcpyAsync (sorted values)");
+        keys = keyBuffers.Current();
+        values = valueBuffers.Current();
     }
 
 private:
+    static constexpr unsigned kThreads = 256;
+
+    static unsigned blocksFor(std::size_t n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
+
+    /** \brief The host mirror of \a slot, at least \a bytes, for a copy that the host fills first
+        (\a hostWrites) or that the stream fills. The host writes or frees a mirror only when no
+        queued copy uses it, else it waits first (the driver's chunks end with a wait, and use a
+        mirror once before it, so that costs nothing in practice). */
+    void *mirror(int slot, std::size_t bytes, bool hostWrites)
+    {
+        const std::size_t i = static_cast<std::size_t>(slot);
+        PinnedAllocation &m = mirrors_[i];
+        const bool grows = bytes > m.bytes();
+        if (mirrorInUse_[i] && (grows || hostWrites))
+            wait();
+        if (grows)
+        {
+            if (!m.grow(bytes, SIZE_MAX, "cudaMallocHost (host mirror)"))
+                throw std::runtime_error("CUDA: no page-locked host memory for a host mirror of " +
+                                         std::to_string(bytes) + " bytes");
+            ++counts_.allocations;
+        }
+        mirrorInUse_[i] = true;
+        return m.pointer();
+    }
+
     /** \brief \a a grown to \a need bytes within the scratch limit. When the limit or the device
         says no, every scratch buffer is freed (the chunk is abandoned; cudaFree waits for the
         kernels using them) and StageMemoryExhausted has the chunk split. */
@@ -269,7 +350,7 @@ private:
 
     std::size_t heldBytes() const
     {
-        std::size_t total = temp_.bytes() + keysAlt_.bytes() + valuesAlt_.bytes() + count_.bytes();
+        std::size_t total = temp_.bytes() + keysAlt_.bytes() + valuesAlt_.bytes();
         for (const DeviceAllocation &a : buffers_)
             total += a.bytes();
         return total;
@@ -282,14 +363,16 @@ private:
         temp_.release();
         keysAlt_.release();
         valuesAlt_.release();
-        count_.release();
     }
 
     cudaStream_t stream_ = nullptr;
     std::size_t maxScratchBytes_ = 0;
     device::ExecutorCounts counts_;
+    device::CountGuesses guesses_;
     std::array<DeviceAllocation, device::kNumStageBuffers> buffers_;
-    DeviceAllocation temp_, keysAlt_, valuesAlt_, count_;
+    DeviceAllocation temp_, keysAlt_, valuesAlt_;
+    std::array<PinnedAllocation, device::kNumStageBuffers> mirrors_;
+    std::array<bool, device::kNumStageBuffers> mirrorInUse_{};  // a queued copy reads or writes it
 };
 
 /** \brief A host array copied to the device once. */
@@ -372,7 +455,9 @@ public:
         // split between the stages' buffers by bytes per element: fragments 56 (key, value, their
         // sorted copies, the walk's fragment, CUB's own sort buffers), (pair, triangle) items 20,
         // (state, pair) elements 8, states perState; what is left covers the surviving pairs'
-        // buffers and CUB's scratch. The scratch limit enforces the sum (StageMemoryExhausted).
+        // buffers (in a chunk below StageBudget::waitForCountsFrom sized by its (state, pair)
+        // elements, a few hundred bytes each) and CUB's scratch. The scratch limit enforces the sum
+        // (StageMemoryExhausted).
         std::size_t freeBytes = 0, totalBytes = 0;
         check(cudaMemGetInfo(&freeBytes, &totalBytes), "cudaMemGetInfo");
         const std::size_t usable = memoryLimit > 0 ? std::min(memoryLimit, freeBytes) : freeBytes / 2;
@@ -390,6 +475,7 @@ public:
     }
 
     std::string name() const override { return "cuda (" + deviceName_ + ")"; }
+    std::size_t executors() const override { return executors_.size(); }
 
     void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
              std::vector<device::PairOutcome> &outcomes) override

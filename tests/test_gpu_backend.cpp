@@ -3,6 +3,9 @@
 // RASTERCHECK_REQUIRE_GPU is set (scripts/gpu-check.sh sets it: on the GPU machine a skip would
 // hide a device the backend could not use). The same driver and per-element code are checked on
 // every machine through the host executor (test_staged_pipeline).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <thread>
 
@@ -11,6 +14,7 @@
 #include "BackendSuites.h"
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/io/OmplAppProblem.h"
 
 namespace rc = rastercheck;
@@ -174,12 +178,51 @@ TEST_F(PandaOnTheGpu, PerStatePairPaddingsMatchTheCpu)
     }
 }
 
+TEST_F(PandaOnTheGpu, ABatchOf32StatesWaitsOnceAndAllocatesNothingAfterTheFirst)
+{
+    // The CUDA executor counts its launches, waits and allocations (device buffers and page-locked
+    // host mirrors) where it makes them; test_staged_pipeline checks the same figures on the host.
+    // Prints what a call costs on the host clock (the latency the benches report).
+    const auto *staged = dynamic_cast<const rc::StagedBackend *>(&gpu_->backend());
+    ASSERT_NE(staged, nullptr);
+    for (std::size_t n : {32u, 1000u})
+    {
+        const std::vector<double> states = rc::test::randomStates(*panda_->robot, n, 21);
+        std::vector<std::uint8_t> valid(n), expected(n);
+        cpu_->check(states.data(), n, expected.data(), nullptr, {}, 0);
+        gpu_->check(states.data(), n, valid.data());  // sizes the buffers and measures the raster's counts
+        EXPECT_EQ(valid, expected);
+        std::vector<double> microseconds;
+        for (int call = 0; call < 20; ++call)
+        {
+            const rc::device::ExecutorCounts before = staged->executorCounts();
+            const auto start = std::chrono::steady_clock::now();
+            gpu_->check(states.data(), n, valid.data());
+            microseconds.push_back(
+                std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
+            const rc::device::ExecutorCounts counts = staged->executorCounts().since(before);
+            EXPECT_EQ(counts.synchronizations, 1u) << n << " states, call " << call;
+            EXPECT_EQ(counts.allocations, 0u) << n << " states, call " << call;
+            EXPECT_EQ(counts.reruns, 0u) << n << " states, call " << call;
+            EXPECT_EQ(valid, expected) << n << " states, call " << call;
+            if (call == 0)
+                std::printf("%zu states: %llu launches, %llu wait, %llu allocations per call\n", n, counts.launches,
+                            counts.synchronizations, counts.allocations);
+        }
+        std::sort(microseconds.begin(), microseconds.end());
+        std::printf("%zu states: %.0f us per call (median of 20, host clock), fastest %.0f us\n", n,
+                    microseconds[microseconds.size() / 2], microseconds.front());
+    }
+}
+
 TEST_F(PandaOnTheGpu, EightThreadsOnOneCheckerGetTheVerdictsOfOne)
 {
-    // Each thread's pass takes its own stream and scratch (StageRunner).
+    // Each thread's pass takes its own executor: stream, device buffers and host mirrors.
     const std::vector<double> states = rc::test::randomStates(*panda_->robot, 2000, 17);
-    std::vector<std::uint8_t> alone(2000);
+    std::vector<std::uint8_t> alone(2000), expected(2000);
     gpu_->check(states.data(), 2000, alone.data());
+    cpu_->check(states.data(), 2000, expected.data(), nullptr, {}, 0);
+    EXPECT_EQ(alone, expected);
     std::vector<std::vector<std::uint8_t>> verdicts(8, std::vector<std::uint8_t>(2000));
     std::vector<std::thread> threads;
     for (int t = 0; t < 8; ++t)
@@ -193,6 +236,10 @@ TEST_F(PandaOnTheGpu, EightThreadsOnOneCheckerGetTheVerdictsOfOne)
         thread.join();
     for (int t = 0; t < 8; ++t)
         EXPECT_EQ(verdicts[t], alone) << "thread " << t;
+    const auto *staged = dynamic_cast<const rc::StagedBackend *>(&gpu_->backend());
+    ASSERT_NE(staged, nullptr);
+    EXPECT_LE(staged->executors(), 8u) << "an executor per concurrent call, no more";
+    EXPECT_EQ(staged->executorCounts().reruns, 0u);
 }
 
 // Verdicts only (the contacts path runs the exact phase on every pair); a separate test so that

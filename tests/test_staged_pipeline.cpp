@@ -6,11 +6,17 @@
 // chunked run, which reuses what earlier chunks left as the CUDA runner does.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <stdexcept>
 #include <thread>
 
 #include "BackendSuites.h"
 #include "BlindSpots.h"
 #include "TestSupport.h"
+#include "rastercheck/collision/StageChunks.h"
 #include "rastercheck/collision/StagedBackend.h"
 
 namespace rc = rastercheck;
@@ -47,8 +53,10 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
         const rc::CpuBackend cpu(model);
         const rc::StagedBackend staged(model, poisonedStages(model));
-        // The proofs in pair order, as the GPU takes them in large batches (StageBudget).
+        // Every chunk waits for each count, as large batches do, and takes the proofs in pair order,
+        // as the GPU does in large batches (StageBudget).
         rc::device::StageBudget pairOrder;
+        pairOrder.waitForCountsFrom = 0;
         pairOrder.orderedProofsFrom = 0;
         const rc::StagedBackend ordered(model, poisonedStages(model, pairOrder));
         for (rc::CollisionMode mode : kModes)
@@ -315,69 +323,246 @@ TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
     }
 }
 
-TEST(StagedPipeline, ABatchCostsAFewWaitsAndNoAllocationAfterTheFirst)
+namespace
 {
-    // What a small batch pays whatever its size (the GPU's fixed cost per call): the executor
-    // counts its launches, waits and allocations on the host, as the CUDA executor does.
-    const rc::test::StateSuite suite = rc::test::accuracySuites(32)[0];
-    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
-    const rc::StagedBackend staged(model, poisonedStages(model));
-    std::vector<std::uint8_t> valid(32);
-    auto call = [&](const rc::CollisionRequest &request)
-    {
-        const rc::device::ExecutorCounts before = staged.executorCounts();
-        staged.check(suite.states.data(), 32, valid.data(), nullptr, request, 1);
-        const rc::device::ExecutorCounts after = staged.executorCounts();
-        return rc::device::ExecutorCounts{after.chunks - before.chunks, after.launches - before.launches,
-                                          after.synchronizations - before.synchronizations,
-                                          after.allocations - before.allocations, after.seconds - before.seconds};
-    };
-    rc::CollisionRequest safe, exact;
-    exact.mode = rc::CollisionMode::Exact;
-    const rc::device::ExecutorCounts first = call(safe);
-    EXPECT_GT(first.allocations, 0u);
-    const rc::device::ExecutorCounts again = call(safe);
-    EXPECT_EQ(again.chunks, 1u);
-    EXPECT_EQ(again.allocations, 0u) << "buffers are kept between calls";
-    // The survivors' count, the two scans' totals (triangles, fragments), the count of the outcomes
-    // the reduction reads, the outcomes.
-    EXPECT_LE(again.synchronizations, 5u);
-    EXPECT_LE(again.launches, 30u);
-    EXPECT_GT(again.seconds, 0.0);
-    call(exact);
-    const rc::device::ExecutorCounts exactAgain = call(exact);
-    EXPECT_EQ(exactAgain.allocations, 0u);
-    EXPECT_LE(exactAgain.synchronizations, 3u) << "nothing to rasterize: no counts to wait for";
-    // Stage counts cost a wait per chunk: only when asked.
-    EXPECT_EQ(staged.stageCounts().states, 0u);
-    staged.countStages(true);
-    call(safe);
-    EXPECT_EQ(staged.stageCounts().states, 32u);
+/** \brief The suite called \a name, with \a states states. */
+rc::test::StateSuite suiteNamed(const std::string &name, std::size_t states)
+{
+    for (rc::test::StateSuite &suite : rc::test::accuracySuites(states))
+        if (suite.name == name)
+            return suite;
+    throw std::runtime_error("no accuracy suite " + name);
 }
 
-TEST(StagedPipeline, EightThreadsOnOneBackendGetTheVerdictsOfOne)
+/** \brief What one call of \a backend cost its executor. */
+rc::device::ExecutorCounts oneCall(const rc::StagedBackend &backend, const rc::test::StateSuite &suite,
+                                   const rc::CollisionRequest &request, std::vector<std::uint8_t> &valid)
 {
-    // Planners call one checker from several threads: each pass takes an executor of its own (on
-    // the GPU, a stream and scratch), none waits for another's.
-    const rc::test::StateSuite suite = rc::test::accuracySuites(64)[0];
+    const std::size_t n = suite.numStates();
+    valid.resize(n);
+    const rc::device::ExecutorCounts before = backend.executorCounts();
+    backend.check(suite.states.data(), n, valid.data(), nullptr, request, 1);
+    return backend.executorCounts().since(before);
+}
+
+/** \brief The CPU backend's verdicts on \a suite. */
+std::vector<std::uint8_t> cpuVerdicts(const rc::CollisionModelConstPtr &model, const rc::test::StateSuite &suite,
+                                      const rc::CollisionRequest &request)
+{
+    std::vector<std::uint8_t> valid(suite.numStates());
+    rc::CpuBackend(model).check(suite.states.data(), valid.size(), valid.data(), nullptr, request, 1);
+    return valid;
+}
+}  // namespace
+
+TEST(StagedPipeline, ASmallBatchWaitsOnceAndAllocatesNothingAfterTheFirst)
+{
+    // What a planner's batch pays whatever its size (the GPU's fixed cost per call): the executor
+    // counts launches, waits and allocations on the host where the CUDA executor makes them. A
+    // small batch keeps its counts on the executor and sizes its buffers by bounds and by what the
+    // executor's earlier batches needed, so that after the first call one like it allocates
+    // nothing and waits once, for its outcomes (StageBudget::waitForCountsFrom).
+    const rc::test::StateSuite suite = suiteNamed("thin plate at 1e6 m", 32);  // rasterizes in safe mode
     const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
     const rc::StagedBackend staged(model, poisonedStages(model));
+    std::vector<std::uint8_t> valid;
+    rc::CollisionRequest safe, exact;
+    exact.mode = rc::CollisionMode::Exact;
+
+    const rc::device::ExecutorCounts first = oneCall(staged, suite, safe, valid);
+    EXPECT_GT(first.allocations, 0u);
+    EXPECT_EQ(first.reruns, 0u);
+    // The first rasterizing call waits for its candidate triangles and fragments, to size them from
+    // then on, and for its outcomes.
+    EXPECT_EQ(first.synchronizations, 3u);
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
+    for (int call = 0; call < 3; ++call)
+    {
+        const rc::device::ExecutorCounts again = oneCall(staged, suite, safe, valid);
+        EXPECT_EQ(again.calls, 1u);
+        EXPECT_EQ(again.chunks, 1u);
+        EXPECT_EQ(again.allocations, 0u) << "call " << call << ": buffers are kept between calls";
+        EXPECT_EQ(again.synchronizations, 1u) << "call " << call << ": the counts stay on the executor";
+        EXPECT_EQ(again.reruns, 0u);
+        EXPECT_EQ(again.launches, first.launches) << "the same kernels as the first call";
+        EXPECT_LE(again.launches, 30u);
+        EXPECT_GT(again.seconds, 0.0);
+        EXPECT_EQ(valid, cpuVerdicts(model, suite, safe)) << "call " << call;
+    }
+
+    // Exact mode rasterizes nothing: one wait from its first call on, in the buffers safe mode grew.
+    for (int call = 0; call < 2; ++call)
+    {
+        const rc::device::ExecutorCounts counts = oneCall(staged, suite, exact, valid);
+        EXPECT_EQ(counts.allocations, 0u);
+        EXPECT_EQ(counts.synchronizations, 1u);
+        EXPECT_EQ(valid, cpuVerdicts(model, suite, exact));
+    }
+
+    // Stage counts ride with the outcomes (two more compactions, no wait), only when asked.
+    EXPECT_EQ(staged.stageCounts().states, 0u);
+    staged.countStages(true);
+    oneCall(staged, suite, safe, valid);
+    const rc::device::ExecutorCounts counted = oneCall(staged, suite, safe, valid);
+    EXPECT_EQ(counted.synchronizations, 1u);
+    EXPECT_EQ(counted.allocations, 0u);
+    EXPECT_EQ(counted.launches, first.launches + 2);
+    const rc::device::StageCounts stages = staged.stageCounts();
+    EXPECT_EQ(stages.states, 64u);
+    EXPECT_GT(stages.candidateTriangles, 0u) << "the batch must rasterize for this test to measure the raster's counts";
+    EXPECT_GT(stages.fragments, 0u);
+}
+
+TEST(StagedPipeline, ALargerBatchRunsAgainAtMostOnceThenWaitsOnce)
+{
+    // A batch that needs more candidate triangles or fragments than the executor's earlier ones
+    // (with half again to spare) outgrows its buffers: nothing runs past them, and the chunk runs
+    // again, waiting for those counts. The verdicts never change.
+    const rc::test::StateSuite few = suiteNamed("thin plate at 1e6 m", 8);
+    const rc::test::StateSuite many = suiteNamed("thin plate at 1e6 m", 240);
+    const auto model = std::make_shared<const rc::CollisionModel>(few.robot, few.scene);
+    const rc::StagedBackend staged(model, poisonedStages(model));
+    staged.countStages(true);
+    std::vector<std::uint8_t> valid;
+    const rc::CollisionRequest safe;
+    oneCall(staged, few, safe, valid);
+    const unsigned long long fewTriangles = staged.stageCounts().candidateTriangles;
+    const rc::device::ExecutorCounts grown = oneCall(staged, many, safe, valid);
+    ASSERT_GT(staged.stageCounts().candidateTriangles - fewTriangles, 2 * fewTriangles)
+        << "the larger batch must need more than the guess";
+    EXPECT_EQ(grown.reruns, 1u);
+    EXPECT_EQ(grown.synchronizations, 4u) << "the outgrown pass's wait, then the triangles', fragments' and outcomes'";
+    EXPECT_EQ(valid, cpuVerdicts(model, many, safe));
+    const rc::device::ExecutorCounts again = oneCall(staged, many, safe, valid);
+    EXPECT_EQ(again.reruns, 0u);
+    EXPECT_EQ(again.synchronizations, 1u);
+    EXPECT_EQ(again.allocations, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, many, safe));
+    // The smaller batch fits what the larger one needed.
+    const rc::device::ExecutorCounts smaller = oneCall(staged, few, safe, valid);
+    EXPECT_EQ(smaller.synchronizations, 1u);
+    EXPECT_EQ(smaller.allocations, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, few, safe));
+}
+
+TEST(StagedPipeline, ALargeChunkWaitsForEachCount)
+{
+    // Past StageBudget::waitForCountsFrom a chunk's buffers and launches take the counts' sizes:
+    // it waits for the pairs past the culls, the candidate triangles, the fragments and the
+    // outcomes, then for their download.
+    const rc::test::StateSuite suite = suiteNamed("thin plate at 1e6 m", 32);
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    rc::device::StageBudget large;
+    large.waitForCountsFrom = 0;
+    const rc::StagedBackend staged(model, poisonedStages(model, large));
+    std::vector<std::uint8_t> valid;
+    rc::CollisionRequest safe, exact;
+    exact.mode = rc::CollisionMode::Exact;
+    oneCall(staged, suite, safe, valid);
+    const rc::device::ExecutorCounts again = oneCall(staged, suite, safe, valid);
+    EXPECT_EQ(again.synchronizations, 5u);
+    EXPECT_EQ(again.allocations, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
+    EXPECT_EQ(oneCall(staged, suite, exact, valid).synchronizations, 3u) << "no raster: no triangles or fragments";
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, exact));
+}
+
+TEST(StagedPipeline, ConcurrentCallsEachTakeAnExecutorOfTheirOwn)
+{
+    // The pool behind a runner: calls that run at the same time never share an executor (on the
+    // GPU: a stream, its buffers and host mirrors), and later calls reuse the executors made.
+    struct Executor
+    {
+        rc::device::ExecutorCounts counts_;
+        std::atomic<int> users{0};
+        rc::device::ExecutorCounts &counts() { return counts_; }
+    };
+    std::atomic<int> made{0};
+    rc::ExecutorPool<Executor> pool(
+        [&]
+        {
+            ++made;
+            return std::make_unique<Executor>();
+        });
+    constexpr int kThreads = 8;
+    std::mutex mutex;
+    std::condition_variable allInside;
+    for (int round = 0; round < 3; ++round)
+    {
+        int inside = 0;
+        std::vector<std::thread> threads;
+        std::vector<const Executor *> used(kThreads);
+        for (int t = 0; t < kThreads; ++t)
+            threads.emplace_back(
+                [&, t]
+                {
+                    pool.run(
+                        [&](Executor &ex)
+                        {
+                            EXPECT_EQ(ex.users++, 0) << "an executor taken by two calls at once";
+                            used[t] = &ex;
+                            std::unique_lock<std::mutex> lock(mutex);
+                            ++inside;
+                            allInside.notify_all();
+                            allInside.wait(lock, [&] { return inside == kThreads; });  // all eight at once
+                            --ex.users;
+                        });
+                });
+        for (std::thread &thread : threads)
+            thread.join();
+        std::sort(used.begin(), used.end());
+        EXPECT_EQ(std::unique(used.begin(), used.end()), used.end()) << "round " << round;
+        EXPECT_EQ(made.load(), kThreads) << "round " << round << ": the executors are made once";
+        EXPECT_EQ(pool.size(), static_cast<std::size_t>(kThreads));
+    }
+}
+
+TEST(StagedPipeline, EightThreadsOnOneBackendGetTheCpuBackendsVerdicts)
+{
+    // Planners call one checker from several threads: each pass takes an executor of its own (on
+    // the GPU, a stream and buffers), none waits for another's. Every executor's first call
+    // allocates its buffers and measures its raster's counts; every later call allocates nothing
+    // and waits once.
+    const rc::test::StateSuite suite = suiteNamed("thin plate at 1e6 m", 64);
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
     const std::size_t n = suite.numStates();
     rc::CollisionRequest request;
     request.pairPadding = rc::test::randomPairPaddings(*model, n, 3);
-    std::vector<std::uint8_t> alone(n);
-    staged.check(suite.states.data(), n, alone.data(), nullptr, request, 1);
-    std::vector<std::vector<std::uint8_t>> verdicts(8, std::vector<std::uint8_t>(n));
+    const std::vector<std::uint8_t> expected = cpuVerdicts(model, suite, request);
+
+    // One executor's first call, to know what a first call costs.
+    const rc::StagedBackend alone(model, poisonedStages(model));
+    std::vector<std::uint8_t> valid;
+    const rc::device::ExecutorCounts firstCall = oneCall(alone, suite, request, valid);
+    EXPECT_EQ(valid, expected);
+
+    const rc::StagedBackend staged(model, poisonedStages(model));
+    constexpr int kThreads = 8, kRounds = 5;
+    std::vector<std::vector<std::vector<std::uint8_t>>> verdicts(
+        kThreads, std::vector<std::vector<std::uint8_t>>(kRounds, std::vector<std::uint8_t>(n)));
     std::vector<std::thread> threads;
-    for (int t = 0; t < 8; ++t)
+    for (int t = 0; t < kThreads; ++t)
         threads.emplace_back(
             [&, t]
             {
-                for (int round = 0; round < 5; ++round)
-                    staged.check(suite.states.data(), n, verdicts[t].data(), nullptr, request, 1);
+                for (int round = 0; round < kRounds; ++round)
+                    staged.check(suite.states.data(), n, verdicts[t][round].data(), nullptr, request, 1);
             });
     for (std::thread &thread : threads)
         thread.join();
-    for (int t = 0; t < 8; ++t)
-        EXPECT_EQ(verdicts[t], alone) << "thread " << t;
+    for (int t = 0; t < kThreads; ++t)
+        for (int round = 0; round < kRounds; ++round)
+            EXPECT_EQ(verdicts[t][round], expected) << "thread " << t << ", round " << round;
+
+    const unsigned long long executors = staged.executors();
+    EXPECT_GE(executors, 1u);
+    EXPECT_LE(executors, static_cast<unsigned long long>(kThreads)) << "an executor per concurrent call, no more";
+    const rc::device::ExecutorCounts all = staged.executorCounts();
+    const unsigned long long calls = kThreads * kRounds;
+    EXPECT_EQ(all.calls, calls);
+    EXPECT_EQ(all.chunks, calls);
+    EXPECT_EQ(all.reruns, 0u);
+    EXPECT_EQ(all.allocations, executors * firstCall.allocations) << "only each executor's first call allocates";
+    EXPECT_EQ(all.synchronizations, executors * firstCall.synchronizations + (calls - executors))
+        << "one wait per call but each executor's first";
 }

@@ -25,7 +25,9 @@ struct StageMemoryExhausted : std::runtime_error
 
 /** \brief Executors for concurrent passes: a call takes one no other call uses (made when none is
     idle) and gives it back, with its scratch, for later calls. A thread that calls again gets a
-    warm executor, so a steady stream of batches allocates nothing. */
+    warm executor, so a steady stream of batches allocates nothing; threads that call at the same
+    time each run on their own (on the GPU: their own stream, buffers and host mirrors), and the
+    pool holds as many executors as calls ever ran at once. */
 template <class Exec>
 class ExecutorPool
 {
@@ -49,9 +51,17 @@ public:
             throw;
         }
         device::ExecutorCounts used = ex->counts();
+        used.calls = 1;
         used.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         giveBack(std::move(ex));
         return used;
+    }
+
+    /** \brief The executors made so far: the most calls that ran at once. */
+    std::size_t size() const
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return made_;
     }
 
 private:
@@ -66,7 +76,10 @@ private:
                 return ex;
             }
         }
-        return make_();
+        std::unique_ptr<Exec> ex = make_();
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++made_;
+        return ex;
     }
 
     void giveBack(std::unique_ptr<Exec> ex)
@@ -76,8 +89,9 @@ private:
     }
 
     std::function<std::unique_ptr<Exec>()> make_;
-    std::mutex mutex_;
+    mutable std::mutex mutex_;
     std::vector<std::unique_ptr<Exec>> idle_;
+    std::size_t made_ = 0;
 };
 
 /** \brief The most bytes one scratch buffer may grow to while the others hold \a heldByOthers,
@@ -99,7 +113,8 @@ inline StageMemoryExhausted scratchExhausted(const std::string &buffer, std::siz
         (need > room ? " within the scratch limit of " + std::to_string(limit) + " bytes" : " on the device"));
 }
 
-/** \brief runStageChunk, with an executor out of scratch memory counted as a chunk over budget. */
+/** \brief runStageChunk, with an executor out of scratch memory counted as a chunk over budget;
+    from then on its chunks size their buffers by the counts, not by bounds (CountGuesses). */
 template <class Exec>
 bool runStageChunkWithin(Exec &ex, const device::ModelArrays &model, const device::StageSettings &settings,
                          const device::StageBudget &budget, const double *q, const std::uint8_t *admissible,
@@ -112,6 +127,7 @@ bool runStageChunkWithin(Exec &ex, const device::ModelArrays &model, const devic
     }
     catch (const StageMemoryExhausted &e)
     {
+        ex.guesses().outOfMemory = true;
         why = e.what();
         return false;
     }
@@ -133,7 +149,6 @@ void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device:
     if (pairs > budget.maxPairElements)
         throw std::length_error("the model has more pairs than one pass can hold");
     std::size_t chunk = std::min({n, budget.maxStates, budget.maxPairElements / pairs});
-    std::vector<device::PairOutcome> part;
     std::size_t start = 0;
     while (start < n)
     {
@@ -159,11 +174,9 @@ void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device:
                                         ")");
         }
         ++ex.counts().chunks;
-        part.resize(numOutcomes);
-        ex.download(part.data(), chunkOutcomes, numOutcomes);
-        for (device::PairOutcome &o : part)
-            o.state += static_cast<std::uint32_t>(start);
-        outcomes.insert(outcomes.end(), part.begin(), part.end());
+        outcomes.insert(outcomes.end(), chunkOutcomes, chunkOutcomes + numOutcomes);
+        for (auto o = outcomes.end() - numOutcomes; o != outcomes.end(); ++o)
+            o->state += static_cast<std::uint32_t>(start);
         start += count;
     }
 }

@@ -22,13 +22,17 @@ class StageRunner
 public:
     virtual ~StageRunner() = default;
     virtual std::string name() const = 0;
+    /** \brief The executors made so far, each with its own scratch (on the GPU its own stream and
+        host mirrors): as many as runs ever ran at once. */
+    virtual std::size_t executors() const = 0;
     /** \brief Appends to \a outcomes every pair of states [0, n) that survives the culls (with
         StageSettings::onlyDecisive, only those the per-state reduction reads), sorted by (state,
         pair), with state indices of this batch. Thread-safe. */
     virtual void run(const double *q, const std::uint8_t *admissible, std::size_t n,
                      const device::StageSettings &settings, std::vector<device::PairOutcome> &outcomes) = 0;
-    /** \brief Whether runs add to counts(): counting the pairs that went to the raster costs a
-        compaction and a wait per chunk, so production passes leave it off (the default). */
+    /** \brief Whether runs add to counts(): counting the pairs that went to the raster and to the
+        exact phase costs two compactions per chunk, so production passes leave it off (the
+        default). */
     void countStages(bool on) { countStages_ = on; }
     /** \brief What the stages did in the runs made while countStages was on. */
     device::StageCounts counts() const
@@ -36,7 +40,8 @@ public:
         std::lock_guard<std::mutex> lock(countsMutex_);
         return counts_;
     }
-    /** \brief The launches, waits and allocations of every run so far (always counted). */
+    /** \brief The launches, waits and allocations of every run so far (always counted; per call:
+        the difference over it, ExecutorCounts::since). */
     device::ExecutorCounts executorCounts() const
     {
         std::lock_guard<std::mutex> lock(countsMutex_);

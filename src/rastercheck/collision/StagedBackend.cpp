@@ -90,7 +90,9 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
 
 namespace
 {
-/** \brief The stages' primitives as host loops (OpenMP), for running the GPU's driver on the CPU. */
+/** \brief The stages' primitives as host loops (OpenMP), for running the GPU's driver on the CPU.
+    Its memory is the host's, so copies need no mirrors and waits wait for nothing, but it counts
+    launches and waits where the CUDA executor makes them. */
 class HostExecutor
 {
 public:
@@ -121,21 +123,27 @@ public:
         return reinterpret_cast<T *>(storage.data());
     }
 
+    /** \brief Buffer \a slot holding a copy of \a count elements at \a source. */
     template <class T>
-    void upload(T *destination, const T *source, std::size_t count)
+    T *upload(int slot, const T *source, std::size_t count)
     {
+        T *destination = buffer<T>(slot, std::max<std::size_t>(count, 1));
         if (count > 0)
             std::memcpy(destination, source, count * sizeof(T));
+        return destination;
     }
 
+    /** \brief \a source itself: executor memory is host memory. */
     template <class T>
-    void download(T *destination, const T *source, std::size_t count)
+    const T *download(int, const T *source, std::size_t)
     {
-        upload(destination, source, count);
-        ++counts_.synchronizations;
+        return source;
     }
+
+    void wait() { ++counts_.synchronizations; }
 
     device::ExecutorCounts &counts() { return counts_; }
+    device::CountGuesses &guesses() { return guesses_; }
 
     template <class F>
     void forEach(std::size_t n, F f)
@@ -148,15 +156,28 @@ public:
             f(static_cast<std::size_t>(i));
     }
 
-    std::uint32_t selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected)
+    /** \brief f(i) for i below the extent's count: one launch over its bound, as on the GPU. */
+    template <class F>
+    void forEach(device::Extent extent, F f)
     {
+        if (extent.bound == 0)
+            return;
         ++counts_.launches;
-        ++counts_.synchronizations;  // the GPU's count comes back to the host
-        std::uint32_t count = 0;
+        const std::size_t n = extent.size();
+#pragma omp parallel for schedule(static)
+        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
+            f(static_cast<std::size_t>(i));
+    }
+
+    void selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected, unsigned long long *count)
+    {
+        *count = 0;
+        if (n == 0)
+            return;
+        ++counts_.launches;
         for (std::size_t i = 0; i < n; ++i)
             if (flags[i])
-                selected[count++] = static_cast<std::uint32_t>(i);
-        return count;
+                selected[(*count)++] = static_cast<std::uint32_t>(i);
     }
 
     /** \brief order = 0..n-1 stably sorted by keys[i] (each below numKeys): a counting sort. */
@@ -174,29 +195,31 @@ public:
             order[next[keys[i]]++] = static_cast<std::uint32_t>(i);
     }
 
-    std::size_t exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n)
+    /** \brief out[i] = sum of in[0..i) (in and out may alias); the inputs end with a zero, so the
+        total, written to \a total, is out[n - 1]. */
+    void exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n, unsigned long long *total)
     {
-        if (n == 0)
-            return 0;
         ++counts_.launches;
-        ++counts_.synchronizations;  // the total comes back to the host
-        unsigned long long total = 0;
+        unsigned long long sum = 0;
         for (std::size_t i = 0; i < n; ++i)
         {
-            const unsigned long long value = in[i];  // in and out may alias
-            out[i] = total;
-            total += value;
+            const unsigned long long value = in[i];
+            out[i] = sum;
+            sum += value;
         }
-        return n > 0 ? static_cast<std::size_t>(out[n - 1] + in[n - 1]) : 0;
+        *total = n > 0 ? out[n - 1] : 0;
     }
 
-    /** \brief Stable sort of each segment [starts[s], starts[s + 1]) by key. */
-    void sortSegments(unsigned long long *keys, std::uint32_t *values, std::size_t n, const std::uint32_t *starts,
+    /** \brief Stable sort of each segment [starts[s], starts[s + 1]) by key, in place (the GPU's
+        may leave the result in other buffers, and moves \a keys and \a values there). */
+    void sortSegments(unsigned long long *&keys, std::uint32_t *&values, std::size_t n, const std::uint32_t *starts,
                       std::uint32_t numSegments)
     {
         if (n == 0 || numSegments == 0)
             return;
         ++counts_.launches;
+        unsigned long long *const k = keys;
+        std::uint32_t *const v = values;
 #pragma omp parallel
         {
             std::vector<std::pair<unsigned long long, std::uint32_t>> scratch;
@@ -206,13 +229,13 @@ public:
                 const std::uint32_t begin = starts[s], end = starts[s + 1];
                 scratch.clear();
                 for (std::uint32_t i = begin; i < end; ++i)
-                    scratch.emplace_back(keys[i], values[i]);
+                    scratch.emplace_back(k[i], v[i]);
                 std::stable_sort(scratch.begin(), scratch.end(),
                                  [](const auto &a, const auto &b) { return a.first < b.first; });
                 for (std::uint32_t i = begin; i < end; ++i)
                 {
-                    keys[i] = scratch[i - begin].first;
-                    values[i] = scratch[i - begin].second;
+                    k[i] = scratch[i - begin].first;
+                    v[i] = scratch[i - begin].second;
                 }
             }
         }
@@ -230,6 +253,7 @@ private:
     HostScratch scratch_;
     std::size_t maxScratchBytes_;
     device::ExecutorCounts counts_;
+    device::CountGuesses guesses_;
     std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
 };
 
@@ -245,6 +269,7 @@ public:
     }
 
     std::string name() const override { return "cpu-staged"; }
+    std::size_t executors() const override { return executors_.size(); }
 
     void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
              std::vector<device::PairOutcome> &outcomes) override

@@ -35,8 +35,9 @@ std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, c
     backend's narrow phase) the pairs the stages leave open. Verdicts and first contacts are the
     CPU backend's: in exact mode by construction; in raster mode through the shared per-element
     code; in safe mode a raster hit settles a pair as colliding when no contacts are asked (the
-    fast path), and when contacts are asked every pair is decided exactly, as on the CPU. A request
-    with CollisionRequest::pairPadding runs on the CPU backend (the stages take one padding). */
+    fast path), and when contacts are asked every pair is decided exactly, as on the CPU.
+    CollisionRequest::pairPadding gives every (state, pair) its own padding in the stages too.
+    Several threads may call check() at once: each pass runs on an executor of its own. */
 class StagedBackend : public Backend
 {
 public:
@@ -46,12 +47,15 @@ public:
     std::string name() const override { return runner_->name(); }
     void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts, const CollisionRequest &request,
                int threads) const override;
-    /** \brief Whether passes count what the stages did (off by default: it costs a wait per chunk). */
+    /** \brief Whether passes count what the stages did (off by default: it costs two compactions
+        per chunk). */
     void countStages(bool on) const;
     /** \brief What the stages did in the passes made while countStages was on. */
     device::StageCounts stageCounts() const;
     /** \brief Launches, waits and allocations of every pass so far. */
     device::ExecutorCounts executorCounts() const;
+    /** \brief The stages' executors made so far (StageRunner::executors). */
+    std::size_t executors() const { return runner_->executors(); }
 
 private:
     CollisionModelConstPtr model_;

@@ -21,6 +21,11 @@
 //      the per-state reduction's compaction: only the outcomes that decide a state come back.
 // The host finishes the reduction (the first colliding pair in pair order), confirms curved
 // primitives on their exact shapes, and places conservative mode's unproven pairs (StagedBackend).
+//
+// A chunk's stages run in order on one executor (on the GPU one stream), and the host waits for it
+// once in a small chunk: the counts that size later stages (survivors, candidate triangles,
+// fragments, outcomes) stay on the executor as tallies, and the host sizes buffers and launches by
+// bounds (Extent, CountGuesses, StageBudget::waitForCountsFrom).
 
 #include <cstddef>
 #include <cstdint>
@@ -223,12 +228,22 @@ struct StageBudget
         pass it, or whose allocator refuses, frees its scratch and throws StageMemoryExhausted,
         and the chunk is split. */
     std::size_t maxScratchBytes = 0;
-    /** Chunks with at least this many pairs past the box culls take the proofs in pair order
-        (stage 3). Measured on an H200 (2026-11-26, docs/benchmarks.md "GPU"): the order made the
-        proof stage 1.8-3.2x faster and a batch of 10^6 Panda states 1.3-1.4x, 10^5 states 1.0-1.2x,
-        but batches of 10^3-10^4 states (2 000 to 20 000 pairs, less than one wave of the device)
-        a third slower; there the unordered stage stays. */
+    /** Chunks that wait for their counts (waitForCountsFrom) with at least this many pairs past the
+        box culls take the proofs in pair order (stage 3). Measured on an H200 (2026-11-26,
+        docs/benchmarks.md "GPU"): the order made the proof stage 1.8-3.2x faster and a batch of
+        10^6 Panda states 1.3-1.4x, 10^5 states 1.0-1.2x, but batches of 10^3-10^4 states (2 000 to
+        20 000 pairs, less than one wave of the device) a third slower; there the unordered stage
+        stays. */
     std::size_t orderedProofsFrom = std::size_t(1) << 16;
+    /** Chunks of fewer (state, pair) elements than this make one wait, for their outcomes: the counts
+        only the executor knows (pairs past the culls, candidate triangles, fragments, outcomes) stay
+        there (Extent), and the host sizes their buffers and launches by bounds: every pair may
+        survive the culls; the triangles and fragments as the executor's earlier chunks needed
+        (CountGuesses: its first rasterizing chunk waits for them, and a chunk that needs more runs
+        again, waiting). Larger chunks wait for each count (five waits), so that their buffers and
+        launches have the counts' sizes; only they take the proofs in pair order (orderedProofsFrom),
+        which needs the survivors' count. At 2^18, 1 000 Panda states make one wait. */
+    std::size_t waitForCountsFrom = std::size_t(1) << 18;
 };
 
 /** \brief What the stages did, summed over the chunks of a runner's passes: how much work the
@@ -256,24 +271,84 @@ struct StageCounts
 
 /** \brief The fixed costs of the passes an executor ran: what a small batch pays whatever its
     size. Counted on the host by both executors alike (a CUB call counts as one launch), so the
-    host executor's tests see the GPU's figures. */
+    host executor's tests see the GPU's launches and waits; allocations differ only in that the GPU
+    also grows page-locked host mirrors of the buffers it copies. */
 struct ExecutorCounts
 {
+    unsigned long long calls = 0;             ///< runs of the stages (StageRunner::run)
     unsigned long long chunks = 0;
+    unsigned long long reruns = 0;            ///< chunk passes run again: a count outgrew CountGuesses
     unsigned long long launches = 0;          ///< kernels and CUB calls
     unsigned long long synchronizations = 0;  ///< waits of the host for the executor
-    unsigned long long allocations = 0;       ///< scratch buffers grown
+    unsigned long long allocations = 0;       ///< scratch buffers (and on the GPU host mirrors) grown
     double seconds = 0;                       ///< host clock inside the passes (kernels, copies, waits)
 
     ExecutorCounts &operator+=(const ExecutorCounts &other)
     {
+        calls += other.calls;
         chunks += other.chunks;
+        reruns += other.reruns;
         launches += other.launches;
         synchronizations += other.synchronizations;
         allocations += other.allocations;
         seconds += other.seconds;
         return *this;
     }
+    /** \brief What happened between \a earlier and these counts (both of one runner). */
+    ExecutorCounts since(const ExecutorCounts &earlier) const
+    {
+        return ExecutorCounts{calls - earlier.calls,
+                              chunks - earlier.chunks,
+                              reruns - earlier.reruns,
+                              launches - earlier.launches,
+                              synchronizations - earlier.synchronizations,
+                              allocations - earlier.allocations,
+                              seconds - earlier.seconds};
+    }
+};
+
+/** \brief Counts the stages leave in executor memory (BufferTallies), each written by the stage
+    that makes it and read by later stages there; the host reads them after the chunk's wait. */
+enum Tally : int
+{
+    TallyCandidates,  ///< (state, pair) elements past the box culls
+    TallyItems,       ///< (pair, candidate triangle) elements
+    TallyFragments,
+    TallyOutcomes,    ///< outcomes that come back (reduceOutcomes)
+    TallyRasterized,  ///< StageCounts::rasterizedPairs (when counting)
+    TallyExact,       ///< StageCounts::exactPairs (when counting)
+    kNumTallies
+};
+
+/** \brief The elements of a stage when the host has not waited for their count: buffers and
+    launches are sized by \a bound, and the executor runs the first *count (a tally, written by an
+    earlier stage of the chunk). A count past its bound (a chunk that needed more than CountGuesses
+    said) runs nothing: the host sees the count after the chunk's wait and runs the chunk again
+    with room for it. */
+struct Extent
+{
+    std::size_t bound;
+    const unsigned long long *count;
+
+    RC_HD bool fits() const { return *count <= bound; }
+    RC_HD std::size_t size() const { return fits() ? static_cast<std::size_t>(*count) : 0; }
+};
+
+/** \brief What an executor's earlier chunks needed of the counts the host does not wait for in
+    small chunks (StageBudget::waitForCountsFrom): the next small chunk sizes their buffers and
+    launches by these, so that a batch like the last allocates nothing and waits once. */
+struct CountGuesses
+{
+    /** Whether items and fragments hold what a chunk needed, half again: a rasterizing small chunk
+        waits for those counts until they do, and after a chunk that needed more (run again). */
+    bool measured = false;
+    std::size_t items = 0;
+    std::size_t fragments = 0;
+    /** Outcomes per state downloaded with the tallies in the chunk's wait (more take a second). */
+    std::size_t outcomesPerState = 1;
+    /** The executor ran out of scratch memory (StageMemoryExhausted): from then on its chunks wait
+        for every count and size their buffers by it, the least memory a chunk can take. */
+    bool outOfMemory = false;
 };
 
 /** \brief The executor's scratch buffers, one per stage output; sized per chunk, reused. */
@@ -317,6 +392,7 @@ enum StageBuffer : int
     BufferKeep,
     BufferKept,
     BufferKeptOutcomes,
+    BufferTallies,
     kNumStageBuffers
 };
 
@@ -444,24 +520,37 @@ RC_HD void exactSolids(const ModelArrays &model, std::uint32_t pair, const Pose<
     component(static_cast<std::uint32_t>(self[1]), b, poseB, closedB);
 }
 
+/** \brief Waits for the executor and reads one tally. */
+template <class Exec>
+std::size_t waitFor(Exec &ex, const unsigned long long *tally)
+{
+    const unsigned long long *host = ex.template download<unsigned long long>(BufferTallies, tally, 1);
+    ex.wait();
+    return static_cast<std::size_t>(*host);
+}
+
 /** \brief The exact phase in the stages: every pair still open after the raster (or without one) is
     decided on the executor by the exact test (solidsOverlap, what the CPU backend decides it by),
     with its first contact: the triangle of B and the place. Not conservative mode's unproven pairs
     other than mesh obstacles, which the host settles as colliding. One element per candidate, in
-    \a order when given (pair order: the same trees in a warp). \a exactFlags (numCandidates) gets
-    1 per pair decided here. */
+    \a order when given (pair order: the same trees in a warp; only with the survivors' count
+    known, so that order holds exactly the survivors). \a exactFlags (survivors.bound) gets 1 per
+    pair decided here, 0 elsewhere. Nothing is decided when the raster's \a items or \a fragments
+    outgrew their bounds: that pass runs again. */
 template <class Exec>
 void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
-                     std::uint32_t numCandidates, const std::uint32_t *order, PairOutcome *decided,
-                     std::uint8_t *exactFlags)
+                     Extent survivors, Extent items, Extent fragments, const std::uint32_t *order,
+                     PairOutcome *decided, std::uint8_t *exactFlags)
 {
     const int numLinks = md.numLinks;
     const std::uint32_t m = static_cast<std::uint32_t>(md.numComponents);
     const std::uint32_t environmentPairs = static_cast<std::uint32_t>(md.numObjects) * m;
-    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t k) {
+    ex.forEach(survivors.bound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = order ? order[k] : k;
-        PairOutcome &out = decided[c];
         exactFlags[c] = 0;
+        if (c >= survivors.size() || !items.fits() || !fragments.fits())
+            return;
+        PairOutcome &out = decided[c];
         if (out.status != PairOpen)
             return;
         const bool meshObstacle = out.pair < environmentPairs && hasPatches(md.convex, m + out.pair / m);
@@ -487,92 +576,182 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     });
 }
 
-/** \brief The per-state reduction's part on the executor (StageSettings::onlyDecisive): of each
+/** \brief The outcomes that come back, compacted in (state, pair) order, their number in
+    \a numKept (a tally). With StageSettings::onlyDecisive, the per-state reduction's part: of each
     state's outcomes (in pair order) only those the host reads: the first overlap that settles the
     state (a curved pair's does not when the host confirms it on the exact shapes), and the pairs
     before it the host must still decide; no pair settled apart. Every other outcome stays on the
-    executor, so a batch's download is about one outcome per colliding state. */
+    executor, so a batch's download is about one outcome per colliding state. \a download: the
+    outcomes to download. A \a small chunk downloads as many as it guessed before it knows the
+    count, so those slots are written whatever the count (zeros past it); a large one waits for the
+    count, which sizes the buffer and the download. */
 template <class Exec>
-void reduceOutcomes(Exec &ex, const ModelArrays &md, const StageSettings &st, std::uint32_t numStates,
-                    std::uint32_t numCandidates, const PairOutcome *decided, const PairOutcome *&outcomes,
-                    std::uint32_t &numOutcomes)
+const PairOutcome *reduceOutcomes(Exec &ex, const ModelArrays &md, const StageSettings &st, std::uint32_t numStates,
+                                  bool small, Extent survivors, const PairOutcome *decided, std::size_t &download,
+                                  unsigned long long *numKept)
 {
-    outcomes = decided;
-    numOutcomes = numCandidates;
-    if (!st.onlyDecisive)
-        return;
+    const std::size_t bound = survivors.bound;
+    const bool onlyDecisive = st.onlyDecisive;
     unsigned long long *firstSettled = ex.template buffer<unsigned long long>(BufferFirstSettled, numStates + 1);
-    std::uint8_t *keep = ex.template buffer<std::uint8_t>(BufferKeep, numCandidates + 1);
-    ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) { firstSettled[s] = ~0ull; });
-    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
-        const PairOutcome &o = decided[c];
-        const bool curved = st.confirmCurvedOverlaps && o.pair < md.numCurvedPairFlags && md.curvedPairs[o.pair];
-        if (o.status == PairOverlaps && !curved)
-            atomicMinimum(&firstSettled[o.state], static_cast<unsigned long long>(c));
+    if (onlyDecisive)
+    {
+        ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) { firstSettled[s] = ~0ull; });
+        ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) {
+            const PairOutcome &o = decided[c];
+            const bool curved = st.confirmCurvedOverlaps && o.pair < md.numCurvedPairFlags && md.curvedPairs[o.pair];
+            if (o.status == PairOverlaps && !curved)
+                atomicMinimum(&firstSettled[o.state], static_cast<unsigned long long>(c));
+        });
+    }
+    std::uint8_t *keep = ex.template buffer<std::uint8_t>(BufferKeep, bound + 1);
+    ex.forEach(bound, [=] RC_LAMBDA(std::size_t c) {
+        keep[c] = c < survivors.size() && (!onlyDecisive || (decided[c].status != PairApart &&
+                                                             c <= firstSettled[decided[c].state]))
+                      ? 1
+                      : 0;
     });
-    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
-        keep[c] = decided[c].status != PairApart && c <= firstSettled[decided[c].state] ? 1 : 0;
+    std::uint32_t *kept = ex.template buffer<std::uint32_t>(BufferKept, bound + 1);
+    ex.selectFlagged(keep, bound, kept, numKept);
+    if (!small)
+        download = waitFor(ex, numKept);
+    const std::size_t room = small ? bound : download;
+    const std::size_t prefix = download;
+    PairOutcome *compact = ex.template buffer<PairOutcome>(BufferKeptOutcomes, room + 1);
+    ex.forEach(room, [=] RC_LAMBDA(std::size_t k) {
+        if (k < *numKept)
+            compact[k] = decided[kept[k]];
+        else if (k < prefix)
+            compact[k] = PairOutcome{};
     });
-    std::uint32_t *kept = ex.template buffer<std::uint32_t>(BufferKept, numCandidates + 1);
-    const std::uint32_t numKept = ex.selectFlagged(keep, numCandidates, kept);
-    PairOutcome *compact = ex.template buffer<PairOutcome>(BufferKeptOutcomes, numKept + 1);
-    ex.forEach(numKept, [=] RC_LAMBDA(std::size_t k) { compact[k] = decided[kept[k]]; });
-    outcomes = compact;
-    numOutcomes = numKept;
+    return compact;
 }
 
-/** \brief A chunk's last stages, with or without a raster before them: the exact phase on the
-    pairs still open (decideOpenPairs), the reduction's compaction (reduceOutcomes), and the counts
-    every chunk adds. */
-template <class Exec>
-void finishChunk(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
-                 std::uint32_t numStates, std::uint32_t numCandidates, const std::uint32_t *order, PairOutcome *decided,
-                 const PairOutcome *&outcomes, std::uint32_t &numOutcomes, StageCounts *counts)
+/** \brief How a pass over a chunk ended. */
+enum class ChunkPass
 {
-    std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, numCandidates + 1);
-    decideOpenPairs(ex, md, st, links, numCandidates, order, decided, exactFlags);
-    reduceOutcomes(ex, md, st, numStates, numCandidates, decided, outcomes, numOutcomes);
-    if (!counts)
-        return;
-    counts->states += numStates;
-    counts->survivingPairs += numCandidates;
-    std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, numCandidates + 1);
-    counts->exactPairs += ex.selectFlagged(exactFlags, numCandidates, list);
+    Done,        ///< outcomes in host memory
+    OverBudget,  ///< the chunk needs more than StageBudget allows: split it
+    Rerun        ///< a count outgrew its guess: run the chunk again, measuring it (CountGuesses)
+};
+
+/** \brief \a guess grown to hold \a needed, with half again for batches that vary, within \a limit
+    (the budget's, which \a needed does not pass). */
+inline std::size_t grownGuess(std::size_t guess, std::size_t needed, std::size_t limit)
+{
+    const std::size_t roomy = needed + needed / 2 < limit ? needed + needed / 2 : limit;
+    return guess > roomy ? guess : roomy;
 }
 
-/** \brief Runs the stages for \a numStates states (host arrays: \a hostStates row-major,
-    \a hostAdmissible 1 per state that passed the bounds check). On return \a outcomes points at
-    the surviving pairs' outcomes in the executor's memory (\a numOutcomes of them, in (state,
-    pair) order). Returns false, having decided nothing, when the chunk exceeds \a budget (the
-    caller splits it); else adds to \a counts (when not null) what the chunk did. */
+/** \brief The bound of a raster count (candidate triangles, fragments) whose \a tally a stage just
+    wrote: a large chunk waits for it; a small one takes \a guess, having waited for the count to
+    grow the guess first while it is not measured (CountGuesses). Past \a limit: over budget. */
 template <class Exec>
-bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &settings, const StageBudget &budget,
-                   const double *hostStates, const std::uint8_t *hostAdmissible, std::uint32_t numStates,
-                   const PairOutcome *&outcomes, std::uint32_t &numOutcomes, StageCounts *counts = nullptr)
+std::size_t countBound(Exec &ex, std::size_t limit, bool small, std::size_t &guess, const unsigned long long *tally)
+{
+    if (small && ex.guesses().measured)
+        return guess;
+    const std::size_t count = waitFor(ex, tally);
+    if (!small || count > limit)
+        return count;
+    guess = grownGuess(guess, count, limit);
+    return guess;
+}
+
+/** \brief A chunk's last stages, with or without a raster before them (\a items and \a fragments
+    its counts; without one, tallies that stay zero): the exact phase on the pairs still open
+    (decideOpenPairs), the reduction's compaction (reduceOutcomes), the counts when asked, and the
+    chunk's wait: the tallies and the outcomes come back together. Then the host checks what a
+    \a small chunk needed against the bounds it had. */
+template <class Exec>
+ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, const StageBudget &budget,
+                     const Pose<double> *links, std::uint32_t numStates, bool small, Extent survivors, Extent items,
+                     Extent fragments, const std::uint32_t *order, PairOutcome *decided, unsigned long long *tallies,
+                     const std::uint8_t *rasterized, const PairOutcome *&outcomes, std::uint32_t &numOutcomes,
+                     StageCounts *counts)
+{
+    const std::size_t bound = survivors.bound;
+    std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, bound + 1);
+    decideOpenPairs(ex, md, st, links, survivors, items, fragments, order, decided, exactFlags);
+    CountGuesses &guesses = ex.guesses();
+    std::size_t prefix = bound < numStates * guesses.outcomesPerState ? bound : numStates * guesses.outcomesPerState;
+    const PairOutcome *kept =
+        reduceOutcomes(ex, md, st, numStates, small, survivors, decided, prefix, tallies + TallyOutcomes);
+    if (counts)
+    {
+        std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, bound + 1);
+        if (st.rasterize)
+            ex.selectFlagged(rasterized, bound, list, tallies + TallyRasterized);
+        ex.selectFlagged(exactFlags, bound, list, tallies + TallyExact);
+    }
+
+    // The chunk's wait (the only one of a small chunk): the tallies and the outcomes (as many as
+    // the guess says in a small chunk).
+    const unsigned long long *tally = ex.template download<unsigned long long>(BufferTallies, tallies, kNumTallies);
+    const PairOutcome *host = ex.template download<PairOutcome>(BufferKeptOutcomes, kept, prefix);
+    ex.wait();
+    if (st.rasterize)
+    {
+        if (tally[TallyItems] > budget.maxItems || tally[TallyFragments] > budget.maxFragments)
+            return ChunkPass::OverBudget;
+        if (tally[TallyItems] > items.bound || tally[TallyFragments] > fragments.bound)
+        {
+            guesses.measured = false;  // the pass again, waiting for both counts
+            return ChunkPass::Rerun;
+        }
+        guesses.measured = guesses.measured || small;
+    }
+    const std::size_t numKept = static_cast<std::size_t>(tally[TallyOutcomes]);
+    if (numKept > prefix)
+    {
+        host = ex.template download<PairOutcome>(BufferKeptOutcomes, kept, numKept);
+        ex.wait();
+        guesses.outcomesPerState = (numKept + numStates - 1) / numStates;
+    }
+    if (counts)
+    {
+        counts->states += numStates;
+        counts->survivingPairs += tally[TallyCandidates];
+        counts->exactPairs += tally[TallyExact];
+        if (st.rasterize)
+        {
+            counts->rasterizedPairs += tally[TallyRasterized];
+            counts->candidateTriangles += tally[TallyItems];
+            counts->fragments += tally[TallyFragments];
+        }
+    }
+    outcomes = host;
+    numOutcomes = static_cast<std::uint32_t>(numKept);
+    return ChunkPass::Done;
+}
+
+/** \brief One pass of the stages over a chunk (runStageChunk). */
+template <class Exec>
+ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &settings, const StageBudget &budget,
+                       const double *hostStates, const std::uint8_t *hostAdmissible, std::uint32_t numStates,
+                       const PairOutcome *&outcomes, std::uint32_t &numOutcomes, StageCounts *counts)
 {
     const int dof = model.numCoordinates, m = model.numComponents, numLinks = model.numLinks;
     const std::uint32_t pairs = model.numPairs();
     const std::uint32_t environmentPairs =
         static_cast<std::uint32_t>(model.numObjects) * static_cast<std::uint32_t>(m);
-    if (static_cast<std::size_t>(numStates) * pairs > budget.maxPairElements)
-        return false;
+    const std::size_t pairElements = static_cast<std::size_t>(numStates) * pairs;
+    // A small chunk waits once, at its end (but to measure its raster's counts, CountGuesses); a
+    // large one for each count.
+    CountGuesses &guesses = ex.guesses();
+    const bool small = pairElements < budget.waitForCountsFrom && !guesses.outOfMemory;
 
-    double *states = ex.template buffer<double>(BufferStates, static_cast<std::size_t>(numStates) * dof);
-    std::uint8_t *admissible = ex.template buffer<std::uint8_t>(BufferAdmissible, numStates);
-    ex.upload(states, hostStates, static_cast<std::size_t>(numStates) * dof);
-    ex.upload(admissible, hostAdmissible, numStates);
+    const unsigned long long zeros[kNumTallies] = {};
+    unsigned long long *tallies = ex.upload(BufferTallies, zeros, kNumTallies);
+    const double *states = ex.upload(BufferStates, hostStates, static_cast<std::size_t>(numStates) * dof);
+    const std::uint8_t *admissible = ex.upload(BufferAdmissible, hostAdmissible, numStates);
     StageSettings st = settings;  // with the chunk's pair paddings in executor memory
     if (settings.extraPadding.any())
     {
         const std::size_t rows = settings.extraPadding.rowPerState ? numStates : 1;
-        const std::size_t environmentValues = rows * static_cast<std::size_t>(m);
-        const std::size_t selfValues = rows * static_cast<std::size_t>(model.numSelfPairs);
-        double *environment = ex.template buffer<double>(BufferExtraEnvironment, environmentValues + 1);
-        double *self = ex.template buffer<double>(BufferExtraSelf, selfValues + 1);
-        ex.upload(environment, settings.extraPadding.environment, environmentValues);
-        ex.upload(self, settings.extraPadding.self, selfValues);
-        st.extraPadding.environment = environment;
-        st.extraPadding.self = self;
+        st.extraPadding.environment =
+            ex.upload(BufferExtraEnvironment, settings.extraPadding.environment, rows * static_cast<std::size_t>(m));
+        st.extraPadding.self =
+            ex.upload(BufferExtraSelf, settings.extraPadding.self, rows * static_cast<std::size_t>(model.numSelfPairs));
     }
 
     // 1. Forward kinematics and the hybrid hierarchy's boxes.
@@ -611,7 +790,6 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     });
 
     // 2. Culls per (state, pair), then compaction: the survivors in (state, pair) order.
-    const std::size_t pairElements = static_cast<std::size_t>(numStates) * pairs;
     std::uint8_t *flags = ex.template buffer<std::uint8_t>(BufferPairFlags, pairElements + 1);
     ex.forEach(pairElements, [=] RC_LAMBDA(std::size_t i) {
         const std::size_t s = i / pairs;
@@ -639,7 +817,12 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         flags[i] = survives ? 1 : 0;
     });
     std::uint32_t *candidates = ex.template buffer<std::uint32_t>(BufferCandidates, pairElements + 1);
-    const std::uint32_t numCandidates = ex.selectFlagged(flags, pairElements, candidates);
+    ex.selectFlagged(flags, pairElements, candidates, tallies + TallyCandidates);
+    // Per surviving pair from here on: element c < survivors.size() is candidates[c]. In a small
+    // chunk, buffers and launches are sized as if every pair survived.
+    const Extent survivors{small ? pairElements : waitFor(ex, tallies + TallyCandidates), tallies + TallyCandidates};
+    const std::size_t survivorBound = survivors.bound;
+    const std::uint32_t numSegments = static_cast<std::uint32_t>(survivorBound);
 
     // 3. Per surviving pair: the image window, the grid, and how many triangles to rasterize.
     // The survivors are in (state, pair) order, so a warp holds different pairs of a few states,
@@ -648,26 +831,26 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     // 2/3 of a safe-mode batch's kernel time, at 6 % occupancy). Taken in pair order, a warp runs
     // one pair's proof for 32 states: the same hull data and trip counts (budget.orderedProofsFrom
     // says when that pays).
-    const bool pairOrdered = numCandidates >= budget.orderedProofsFrom;
+    const bool pairOrdered = !small && survivorBound >= budget.orderedProofsFrom;
     std::uint32_t *proofOrder = nullptr;
     if (pairOrdered)
     {
-        std::uint32_t *candidatePairs = ex.template buffer<std::uint32_t>(BufferCandidatePairs, numCandidates + 1);
-        proofOrder = ex.template buffer<std::uint32_t>(BufferProofOrder, numCandidates + 1);
-        ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) { candidatePairs[c] = candidates[c] % pairs; });
-        ex.orderByKey(candidatePairs, numCandidates, pairs, proofOrder);
+        std::uint32_t *candidatePairs = ex.template buffer<std::uint32_t>(BufferCandidatePairs, survivorBound + 1);
+        proofOrder = ex.template buffer<std::uint32_t>(BufferProofOrder, survivorBound + 1);
+        ex.forEach(survivorBound, [=] RC_LAMBDA(std::size_t c) { candidatePairs[c] = candidates[c] % pairs; });
+        ex.orderByKey(candidatePairs, survivorBound, pairs, proofOrder);
     }
-    RasterGrid *grids = ex.template buffer<RasterGrid>(BufferGrids, numCandidates + 1);
-    float *margins = ex.template buffer<float>(BufferMargins, numCandidates + 1);
-    std::int32_t *status = ex.template buffer<std::int32_t>(BufferStatus, numCandidates + 1);
-    unsigned long long *triangleCount = ex.template buffer<unsigned long long>(BufferTriangleCount, numCandidates + 1);
-    std::uint8_t *rasterized = ex.template buffer<std::uint8_t>(BufferRasterized, numCandidates + 1);
-    ex.forEach(numCandidates + 1, [=] RC_LAMBDA(std::size_t k) {
-        const std::size_t c = pairOrdered && k < numCandidates ? proofOrder[k] : k;
+    RasterGrid *grids = ex.template buffer<RasterGrid>(BufferGrids, survivorBound + 1);
+    float *margins = ex.template buffer<float>(BufferMargins, survivorBound + 1);
+    std::int32_t *status = ex.template buffer<std::int32_t>(BufferStatus, survivorBound + 1);
+    unsigned long long *triangleCount = ex.template buffer<unsigned long long>(BufferTriangleCount, survivorBound + 1);
+    std::uint8_t *rasterized = ex.template buffer<std::uint8_t>(BufferRasterized, survivorBound + 1);
+    ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t k) {
+        const std::size_t c = pairOrdered && k < survivorBound ? proofOrder[k] : k;
         triangleCount[c] = 0;
         rasterized[c] = 0;
-        if (c == numCandidates)
-            return;  // the scan's trailing zero: its output is the total
+        if (c >= survivors.size())
+            return;  // past the survivors: zeros for the scan, whose last output is then the total
         const std::size_t s = candidates[c] / pairs;
         const std::uint32_t pair = candidates[c] % pairs;
         StageSolid a, b;
@@ -700,26 +883,29 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         forEachTriangleNearImage(b.tree, b.treePlacement, grids[c], margins[c], [&](std::uint32_t) { ++count; });
         triangleCount[c] = count;
     });
-    PairOutcome *decided = ex.template buffer<PairOutcome>(BufferOutcomes, numCandidates + 1);
+    PairOutcome *decided = ex.template buffer<PairOutcome>(BufferOutcomes, survivorBound + 1);
     if (!st.rasterize)
     {
         // Nothing to rasterize (exact and conservative mode, contacts asked): no counts to wait for.
-        ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
+        ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) {
             decided[c] = PairOutcome{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs,
                                      status[c], -1, {0.0, 0.0, 0.0}};
         });
-        finishChunk(ex, md, st, links, numStates, numCandidates, proofOrder, decided, outcomes, numOutcomes, counts);
-        return true;
+        const Extent none{0, tallies + TallyItems};  // no raster: its tallies stay zero
+        return finishPass(ex, md, st, budget, links, numStates, small, survivors, none, none, proofOrder, decided,
+                          tallies, rasterized, outcomes, numOutcomes, counts);
     }
-    unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, numCandidates + 1);
-    const std::size_t numItems = ex.exclusiveSum(triangleCount, itemStart, numCandidates + 1);
-    if (numItems > budget.maxItems)
-        return false;
+    unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, survivorBound + 1);
+    ex.exclusiveSum(triangleCount, itemStart, survivorBound + 1, tallies + TallyItems);
+    const std::size_t itemBound = countBound(ex, budget.maxItems, small, guesses.items, tallies + TallyItems);
+    if (itemBound > budget.maxItems)
+        return ChunkPass::OverBudget;
+    const Extent items{itemBound, tallies + TallyItems};
     // The candidates themselves, the same walk again: item i of pair c is triangle itemTriangles[i]
     // of the pair (A's numbers first, then B's after A's count, as rasterizePairTriangle reads them).
-    std::uint32_t *itemTriangles = ex.template buffer<std::uint32_t>(BufferItemTriangles, numItems + 1);
-    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
-        if (triangleCount[c] == 0)
+    std::uint32_t *itemTriangles = ex.template buffer<std::uint32_t>(BufferItemTriangles, itemBound + 1);
+    ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) {
+        if (triangleCount[c] == 0 || !items.fits())
             return;
         const std::size_t s = candidates[c] / pairs;
         StageSolid a, b;
@@ -733,30 +919,35 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     });
 
     // Pre-rasterization count per (pair, triangle): the per-triangle cull, then the pixels covered.
-    unsigned long long *fragmentCount = ex.template buffer<unsigned long long>(BufferFragmentCount, numItems + 1);
-    ex.forEach(numItems + 1, [=] RC_LAMBDA(std::size_t i) {
-        if (i == numItems)
+    unsigned long long *fragmentCount = ex.template buffer<unsigned long long>(BufferFragmentCount, itemBound + 1);
+    ex.forEach(itemBound + 1, [=] RC_LAMBDA(std::size_t i) {
+        if (i >= items.size())
         {
-            fragmentCount[i] = 0;
+            fragmentCount[i] = 0;  // the scan's trailing zeros
             return;
         }
-        const std::uint32_t c = findSegment(itemStart, numCandidates, static_cast<unsigned long long>(i));
+        const std::uint32_t c = findSegment(itemStart, numSegments, static_cast<unsigned long long>(i));
         const std::size_t s = candidates[c] / pairs;
         StageSolid a, b;
         pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
         fragmentCount[i] = static_cast<unsigned long long>(
             rasterizePairTriangle(a, b, itemTriangles[i], grids[c], margins[c], [](int, float, std::uint32_t) {}));
     });
-    unsigned long long *fragmentStart = ex.template buffer<unsigned long long>(BufferFragmentStart, numItems + 1);
-    const std::size_t numFragments = ex.exclusiveSum(fragmentCount, fragmentStart, numItems + 1);
-    if (numFragments > budget.maxFragments)
-        return false;
+    unsigned long long *fragmentStart = ex.template buffer<unsigned long long>(BufferFragmentStart, itemBound + 1);
+    ex.exclusiveSum(fragmentCount, fragmentStart, itemBound + 1, tallies + TallyFragments);
+    const std::size_t fragmentBound =
+        countBound(ex, budget.maxFragments, small, guesses.fragments, tallies + TallyFragments);
+    if (fragmentBound > budget.maxFragments)
+        return ChunkPass::OverBudget;
+    const Extent fragmentExtent{fragmentBound, tallies + TallyFragments};
 
     // 4. Rasterization into the counted slots, keyed by (pixel, depth); sort within each pair.
-    unsigned long long *keys = ex.template buffer<unsigned long long>(BufferKeys, numFragments + 1);
-    std::uint32_t *values = ex.template buffer<std::uint32_t>(BufferValues, numFragments + 1);
-    ex.forEach(numItems, [=] RC_LAMBDA(std::size_t i) {
-        const std::uint32_t c = findSegment(itemStart, numCandidates, static_cast<unsigned long long>(i));
+    unsigned long long *keys = ex.template buffer<unsigned long long>(BufferKeys, fragmentBound + 1);
+    std::uint32_t *values = ex.template buffer<std::uint32_t>(BufferValues, fragmentBound + 1);
+    ex.forEach(items, [=] RC_LAMBDA(std::size_t i) {
+        if (!fragmentExtent.fits())
+            return;
+        const std::uint32_t c = findSegment(itemStart, numSegments, static_cast<unsigned long long>(i));
         const std::size_t s = candidates[c] / pairs;
         StageSolid a, b;
         pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
@@ -768,21 +959,23 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
                                   ++slot;
                               });
     });
-    std::uint32_t *segmentStart = ex.template buffer<std::uint32_t>(BufferSegmentStart, numCandidates + 1);
-    ex.forEach(numCandidates + 1, [=] RC_LAMBDA(std::size_t c) {
-        segmentStart[c] = static_cast<std::uint32_t>(fragmentStart[itemStart[c]]);
+    // Pair c's fragments; past the survivors (or when a count outgrew its bound) empty segments.
+    std::uint32_t *segmentStart = ex.template buffer<std::uint32_t>(BufferSegmentStart, survivorBound + 1);
+    ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t c) {
+        segmentStart[c] =
+            items.fits() && fragmentExtent.fits() ? static_cast<std::uint32_t>(fragmentStart[itemStart[c]]) : 0u;
     });
-    ex.sortSegments(keys, values, numFragments, segmentStart, numCandidates);
+    ex.sortSegments(keys, values, fragmentBound, segmentStart, numSegments);  // may move them to other buffers
 
     // 5. Sort_Search_Pair on each pixel's run; the first hit pixel of each pair.
-    Fragment *fragments = ex.template buffer<Fragment>(BufferFragments, numFragments + 1);
-    unsigned long long *hit = ex.template buffer<unsigned long long>(BufferHit, numCandidates + 1);
-    ex.forEach(numFragments, [=] RC_LAMBDA(std::size_t f) {
+    Fragment *fragments = ex.template buffer<Fragment>(BufferFragments, fragmentBound + 1);
+    unsigned long long *hit = ex.template buffer<unsigned long long>(BufferHit, survivorBound + 1);
+    ex.forEach(fragmentExtent, [=] RC_LAMBDA(std::size_t f) {
         fragments[f] = Fragment{depthFromKey(static_cast<std::uint32_t>(keys[f])), values[f]};
     });
-    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) { hit[c] = ~0ull; });
-    ex.forEach(numFragments, [=] RC_LAMBDA(std::size_t f) {
-        const std::uint32_t c = findSegment(segmentStart, numCandidates, static_cast<std::uint32_t>(f));
+    ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) { hit[c] = ~0ull; });
+    ex.forEach(fragmentExtent, [=] RC_LAMBDA(std::size_t f) {
+        const std::uint32_t c = findSegment(segmentStart, numSegments, static_cast<std::uint32_t>(f));
         const unsigned long long pixel = keys[f] >> 32;
         if (f > segmentStart[c] && (keys[f - 1] >> 32) == pixel)
             return;  // not the first fragment of its pixel's run
@@ -802,7 +995,7 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
     });
 
     // Outcomes, in (state, pair) order.
-    ex.forEach(numCandidates, [=] RC_LAMBDA(std::size_t c) {
+    ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) {
         PairOutcome out{static_cast<std::uint32_t>(candidates[c] / pairs), candidates[c] % pairs, status[c], -1,
                         {0.0, 0.0, 0.0}};
         if (out.status == PairOpen && rasterized[c])
@@ -829,14 +1022,43 @@ bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &sett
         }
         decided[c] = out;
     });
-    finishChunk(ex, md, st, links, numStates, numCandidates, proofOrder, decided, outcomes, numOutcomes, counts);
-    if (counts)
+    return finishPass(ex, md, st, budget, links, numStates, small, survivors, items, fragmentExtent, proofOrder, decided,
+                      tallies, rasterized, outcomes, numOutcomes, counts);
+}
+
+/** \brief Runs the stages for \a numStates states (host arrays: \a hostStates row-major,
+    \a hostAdmissible 1 per state that passed the bounds check). On return \a outcomes points at
+    the surviving pairs' outcomes in host memory the executor keeps (\a numOutcomes of them, in
+    (state, pair) order; until its next chunk). Returns false, having decided nothing, when the
+    chunk exceeds \a budget (the caller splits it); else adds to \a counts (when not null) what
+    the chunk did.
+
+    The executor provides (the host's in collision/StagedBackend.cpp, the GPU's in cuda/):
+    buffer(slot, n) (scratch in its memory, kept and grown), upload(slot, host, n) and
+    download(slot, its, n) (copies through host mirrors; downloaded data is read after wait()),
+    wait() (the host waits for it: counted), forEach(n or Extent, f) (a kernel),
+    selectFlagged, exclusiveSum (their counts and totals written to its memory, not waited for),
+    orderByKey, sortSegments, counts() (ExecutorCounts) and guesses() (CountGuesses). */
+template <class Exec>
+bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &settings, const StageBudget &budget,
+                   const double *hostStates, const std::uint8_t *hostAdmissible, std::uint32_t numStates,
+                   const PairOutcome *&outcomes, std::uint32_t &numOutcomes, StageCounts *counts = nullptr)
+{
+    if (static_cast<std::size_t>(numStates) * model.numPairs() > budget.maxPairElements)
+        return false;
+    for (;;)
     {
-        std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, numCandidates + 1);
-        counts->rasterizedPairs += ex.selectFlagged(rasterized, numCandidates, list);
-        counts->candidateTriangles += numItems;
-        counts->fragments += numFragments;
+        switch (runStagePass(ex, model, settings, budget, hostStates, hostAdmissible, numStates, outcomes, numOutcomes,
+                             counts))
+        {
+        case ChunkPass::Done:
+            return true;
+        case ChunkPass::OverBudget:
+            return false;
+        case ChunkPass::Rerun:
+            ++ex.counts().reruns;
+            break;
+        }
     }
-    return true;
 }
 }  // namespace rastercheck::device
