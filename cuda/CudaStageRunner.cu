@@ -444,6 +444,9 @@ public:
                                             host.numComponentGridCells, host.numComponentProbeDoubles,
                                             host.numComponentShellStarts, m);
         model_.curvedPairs = uploadOnce(model_memory_, host.curvedPairs, host.numCurvedPairFlags);
+        model_.curvedShapes.shapes = uploadOnce(model_memory_, host.curvedShapes.shapes, host.numCurvedShapes);
+        model_.curvedShapes.reach = uploadOnce(model_memory_, host.curvedShapes.reach, host.numCurvedShapes);
+        model_.curvedShapes.solidShapes = uploadOnce(model_memory_, host.curvedShapes.solidShapes, m + o + 1);
         model_.objectExact = uploadExact(host.objectExact, host.numObjectTriangleIndices / 3, host.numObjectGridCells,
                                          host.numObjectProbeDoubles, host.numObjectShellStarts, o);
 

@@ -15,6 +15,8 @@
 
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
+#include "rastercheck/collision/StageRunner.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/device/ConvexDistance.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/Problem.h"
@@ -204,6 +206,14 @@ void expectExactLine(const rc::RobotModelConstPtr &robot, const rc::ScenePtr &sc
         std::vector<std::uint8_t> valid(2);
         checker.check(q.data(), 2, valid.data(), request);
         EXPECT_EQ(valid, (std::vector<std::uint8_t>{1, 0})) << what << " (batch)";
+        // The batched stages (on the host executor, the GPU's code) decide the pair on the exact
+        // shapes in their exact phase, with nothing left to the host.
+        const rc::StagedBackend staged(checker.collisionModelPtr(),
+                                       rc::makeHostStageRunner(checker.collisionModelPtr(), {}));
+        std::vector<rc::Contact> contacts(2);
+        staged.check(q.data(), 2, valid.data(), contacts.data(), request, 1);
+        EXPECT_EQ(valid, (std::vector<std::uint8_t>{1, 0})) << what << " (stages)";
+        EXPECT_EQ(contacts[1].kind, rc::Contact::Kind::Environment) << what << " (stages)";
         // The tessellated meshes see the gap as a contact: conservative mode may say so, never the reverse.
         request.mode = rc::CollisionMode::Conservative;
         EXPECT_FALSE(checker.isValid(std::vector<double>{contact + kGap}, request)) << what << " conservative";

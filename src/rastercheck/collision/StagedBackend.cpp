@@ -65,6 +65,8 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.objectTrees.shellProbeStart.size(),
                                model.curved.refinedPairs().data(),
                                model.curved.refinedPairs().size(),
+                               model.curved.arrays(),
+                               model.curved.shapes().size(),
                                model.objectTreePlacement};
 }
 
@@ -343,7 +345,6 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     // Per-state reduction: the first pair (in the CPU's order) that collides. An open pair is decided
     // with its own padding (the state's pairPadding row).
     const bool rowPerState = request.pairPadding && request.pairPadding->rows > 1;
-    const bool exactCurved = settings.confirmCurvedOverlaps;
 #pragma omp parallel num_threads(workers)
     {
         std::unique_ptr<CpuWorkspace> ws = exact_.borrow();
@@ -360,10 +361,7 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
             }
             const device::PairOutcome *begin = outcomes.data() + firstOutcome[i];
             const device::PairOutcome *end = outcomes.data() + firstOutcome[i + 1];
-            // The stages see curved primitives as their meshes, which lie outside the exact shapes:
-            // an overlap they find there is confirmed on the shapes (CurvedSolids) by the host.
-            auto overlapSettled = [&](const device::PairOutcome &o)
-            { return o.status == device::PairOverlaps && !(exactCurved && model.curved.refines(o.pair)); };
+            auto overlapSettled = [](const device::PairOutcome &o) { return o.status == device::PairOverlaps; };
             if (!collides && !contacts)
                 collides = std::any_of(begin, end, overlapSettled);
             bool refitted = false;

@@ -31,6 +31,7 @@
 #include <cstdint>
 
 #include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/CurvedShapes.h"
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/HostDevice.h"
 #include "rastercheck/device/Kinematics.h"
@@ -101,6 +102,10 @@ struct ModelArrays
     /** \brief 1 per pair with curved primitives (CurvedSolids::refines), numCurvedPairFlags of them. */
     const std::uint8_t *curvedPairs;
     std::size_t numCurvedPairFlags;
+    /** \brief Every solid's primitive shapes (CurvedSolids::arrays): what such a pair is decided by
+        once its meshes overlap. */
+    CurvedArrays curvedShapes;
+    std::size_t numCurvedShapes;
     /** \brief Places the objects' trees (world frame) in the stages' float frame (relative to
         origin). */
     Pose<float> objectTreePlacement;
@@ -162,8 +167,8 @@ struct StageSettings
         obstacles): the stages leave those pairs open. Every other open pair is decided by the exact
         phase in the stages (decideOpenPairs). */
     bool unprovenCollides;
-    /** \brief An overlap of a pair with curved primitives is confirmed on the exact shapes by the host
-        (safe and exact mode): it does not settle its state. */
+    /** \brief An overlap of a pair with curved primitives is decided again on the exact shapes
+        (safe and exact mode), in the exact phase (decideOpenPairs). */
     bool confirmCurvedOverlaps;
     /** \brief Only the outcomes the per-state reduction reads come back (reduceOutcomes): per state,
         the pairs up to its first settled overlap, none settled apart. */
@@ -551,10 +556,13 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         if (c >= survivors.size() || !items.fits() || !fragments.fits())
             return;
         PairOutcome &out = decided[c];
-        if (out.status != PairOpen)
+        // The stages see curved primitives as their meshes, which lie outside the exact shapes: an
+        // overlap of such a pair, however found, is decided again here, as the CPU backend decides it.
+        const bool curved = st.confirmCurvedOverlaps && out.pair < md.numCurvedPairFlags && md.curvedPairs[out.pair];
+        if (out.status != PairOpen && !(curved && out.status == PairOverlaps))
             return;
         const bool meshObstacle = out.pair < environmentPairs && hasPatches(md.convex, m + out.pair / m);
-        if (st.unprovenCollides && !(st.meshObstaclesUnproven && meshObstacle))
+        if (out.status == PairOpen && st.unprovenCollides && !(st.meshObstaclesUnproven && meshObstacle))
             return;
         ExactTree a, b;
         Pose<double> poseA, poseB;
@@ -563,10 +571,27 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
                     closedB);
         ExactContact contact;
         exactFlags[c] = 1;
-        if (!solidsOverlap(a, poseA, closedA, b, poseB, closedB, pairPadding(md, st, out.state, out.pair), &contact))
+        const double padding = pairPadding(md, st, out.state, out.pair);
+        if (!solidsOverlap(a, poseA, closedA, b, poseB, closedB, padding, &contact))
         {
             out.status = PairApart;
             return;
+        }
+        if (curved)
+        {
+            // Solids in CurvedArrays' numbering: the components, then the objects.
+            const std::uint32_t solidA = out.pair < environmentPairs
+                                             ? out.pair % m
+                                             : static_cast<std::uint32_t>(md.selfPairs[2 * (out.pair - environmentPairs)]);
+            const std::uint32_t solidB =
+                out.pair < environmentPairs
+                    ? m + out.pair / m
+                    : static_cast<std::uint32_t>(md.selfPairs[2 * (out.pair - environmentPairs) + 1]);
+            if (!curvedPairCollides(md.curvedShapes, solidA, poseA, a, closedA, solidB, poseB, b, closedB, padding))
+            {
+                out.status = PairApart;
+                return;
+            }
         }
         out.status = PairOverlaps;
         out.triangle = contact.triangleB;
@@ -578,9 +603,8 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
 
 /** \brief The outcomes that come back, compacted in (state, pair) order, their number in
     \a numKept (a tally). With StageSettings::onlyDecisive, the per-state reduction's part: of each
-    state's outcomes (in pair order) only those the host reads: the first overlap that settles the
-    state (a curved pair's does not when the host confirms it on the exact shapes), and the pairs
-    before it the host must still decide; no pair settled apart. Every other outcome stays on the
+    state's outcomes (in pair order) only those the host reads: the first overlap, which settles the
+    state, and the pairs before it the host must still decide; no pair settled apart. Every other outcome stays on the
     executor, so a batch's download is about one outcome per colliding state. \a download: the
     outcomes to download. A \a small chunk downloads as many as it guessed before it knows the
     count, so those slots are written whatever the count (zeros past it); a large one waits for the
@@ -597,10 +621,8 @@ const PairOutcome *reduceOutcomes(Exec &ex, const ModelArrays &md, const StageSe
     {
         ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) { firstSettled[s] = ~0ull; });
         ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) {
-            const PairOutcome &o = decided[c];
-            const bool curved = st.confirmCurvedOverlaps && o.pair < md.numCurvedPairFlags && md.curvedPairs[o.pair];
-            if (o.status == PairOverlaps && !curved)
-                atomicMinimum(&firstSettled[o.state], static_cast<unsigned long long>(c));
+            if (decided[c].status == PairOverlaps)
+                atomicMinimum(&firstSettled[decided[c].state], static_cast<unsigned long long>(c));
         });
     }
     std::uint8_t *keep = ex.template buffer<std::uint8_t>(BufferKeep, bound + 1);
