@@ -85,8 +85,10 @@ RC_HD double closestPoints(const SupportA &a, const SupportB &b, Vec3<double> &o
         }
         if (result == detail::SimplexStep::Flat)
         {
-            --count;  // nothing written: the old simplex and weights stand
-            overlap = vv <= 1e-24 * size * size;  // v is the origin within rounding
+            // Nothing written: the old simplex and weights stand. The origin on it within rounding
+            // is a contact.
+            --count;
+            overlap = vv <= 1e-24 * size * size;
             break;
         }
         if (!(dot(closest, closest) < vv))
