@@ -376,6 +376,7 @@ TEST(ConvexPenetration, TheDepthIsTheShortestWayOut)
     const rd::ConvexKind kinds[] = {rd::ConvexKind::Box, rd::ConvexKind::Sphere, rd::ConvexKind::Cylinder,
                                     rd::ConvexKind::Cone};
     int overlapping = 0, exact = 0;
+    double widest = 0.0;  // depth - lower bound
     for (int i = 0; i < 3000; ++i)
     {
         const rd::ConvexKind kindA = kinds[i % 4], kindB = kinds[(i / 4) % 4];
@@ -388,6 +389,7 @@ TEST(ConvexPenetration, TheDepthIsTheShortestWayOut)
             continue;
         ++overlapping;
         exact += r.converged ? 1 : 0;
+        widest = std::max(widest, r.depth - r.lowerBound);
         EXPECT_LE(r.lowerBound, r.depth);
         const bool curved = kindA != rd::ConvexKind::Box || kindB != rd::ConvexKind::Box;
         const double hair = curved ? 1e-4 : 1e-9;
@@ -404,6 +406,7 @@ TEST(ConvexPenetration, TheDepthIsTheShortestWayOut)
             EXPECT_TRUE(overlap(moved(a, (r.lowerBound - hair) * Vector3d(u(rng), u(rng), u(rng)).normalized()), b))
                 << "pair " << i;
     }
+    std::printf("%d overlapping pairs, %d converged; widest depth - lower bound %.3g m\n", overlapping, exact, widest);
     EXPECT_GT(overlapping, 1500);
     EXPECT_GE(exact, overlapping - overlapping / 100);  // nearly all bounds meet
 }
@@ -781,6 +784,7 @@ TEST(CheckerPenetration, NonConvexMeshesGetTheirHullsDepth)
         EXPECT_GE(p.depth, 0.0);
         EXPECT_TRUE(valid(bar, at + (p.depth + 1e-9) * p.direction)) << at.transpose();
     }
+    std::printf("%d colliding L bar states\n", colliding);
     EXPECT_GT(colliding, 100);
 }
 
