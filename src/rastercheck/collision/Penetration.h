@@ -64,8 +64,10 @@ struct Penetration
 };
 
 /** \brief The penetration depths of a model's pairs (Penetration, which says what is measured).
-    What it reads of each solid is prepared once, the first time a pair of it is measured (the
-    shrunken hulls of its shells read every vertex against every face plane). Thread-safe. */
+    Each step of the expanding polytope reads every vertex of a mesh side (its hull's support
+    point), a few dozen steps a pair: a large scene mesh costs in proportion. What it reads of each
+    solid is prepared once, the first time a pair of it is measured (the shrunken hulls of its
+    shells read every vertex against every face plane). Thread-safe. */
 class PairPenetration
 {
 public:
