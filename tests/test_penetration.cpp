@@ -30,17 +30,16 @@ namespace rd = rastercheck::device;
 using Eigen::Isometry3d;
 using Eigen::Vector3d;
 
+using rastercheck::test::randomPose;
+
 namespace
 {
-Isometry3d randomPose(std::mt19937_64 &rng, double spread)
+
+/** \brief Half sizes (or radius, half length) each uniform in [least, least + spread]. */
+Vector3d randomSizes(std::mt19937_64 &rng, double spread, double least)
 {
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Eigen::Quaterniond rotation(u(rng), u(rng), u(rng), u(rng));
-    rotation.normalize();
-    Isometry3d pose = Isometry3d::Identity();
-    pose.linear() = rotation.toRotationMatrix();
-    pose.translation() = spread * Vector3d(u(rng), u(rng), u(rng));
-    return pose;
+    std::uniform_real_distribution<double> u(least, least + spread);
+    return Vector3d(u(rng), u(rng), u(rng));
 }
 
 Vector3d toEigen(const rd::Vec3<double> &v)
@@ -222,8 +221,7 @@ TEST(ConvexPenetration, BoxesOnFacesEdgesAndCorners)
     for (int i = 0; i < 300; ++i)
     {
         const Isometry3d frame = randomPose(rng, 1.0);
-        const Vector3d halfA = Vector3d(u(rng), u(rng), u(rng)).cwiseAbs() * 0.5 + Vector3d::Constant(0.05);
-        const Vector3d halfB = Vector3d(u(rng), u(rng), u(rng)).cwiseAbs() * 0.5 + Vector3d::Constant(0.05);
+        const Vector3d halfA = randomSizes(rng, 0.5, 0.05), halfB = randomSizes(rng, 0.5, 0.05);
         const Vector3d offset = 0.7 * Vector3d(u(rng), u(rng), u(rng));
         Isometry3d poseB = frame;
         poseB.translation() += frame.linear() * offset;
@@ -380,10 +378,8 @@ TEST(ConvexPenetration, TheDepthIsTheShortestWayOut)
     for (int i = 0; i < 3000; ++i)
     {
         const rd::ConvexKind kindA = kinds[i % 4], kindB = kinds[(i / 4) % 4];
-        const auto size = [&]() -> Vector3d
-        { return Vector3d(u(rng), u(rng), u(rng)).cwiseAbs() * 0.4 + Vector3d::Constant(0.1); };
-        const rd::ConvexShape a = shape(kindA, size(), randomPose(rng, 0.3));
-        const rd::ConvexShape b = shape(kindB, size(), randomPose(rng, 0.3));
+        const rd::ConvexShape a = shape(kindA, randomSizes(rng, 0.4, 0.1), randomPose(rng, 0.3));
+        const rd::ConvexShape b = shape(kindB, randomSizes(rng, 0.4, 0.1), randomPose(rng, 0.3));
         const rd::ConvexPenetration r = depthOf(a, b, 1e-9);
         if (!(r.depth > 0.0))
             continue;
@@ -416,7 +412,6 @@ TEST(ConvexPenetration, TheDepthIsTheShortestWayOut)
 TEST(ConvexPenetration, MatchesFclOnConvexHullsAndBoxes)
 {
     std::mt19937_64 rng(4);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
     int compared = 0;
     double worst = 0.0;
     for (int i = 0; i < 400; ++i)
@@ -442,8 +437,7 @@ TEST(ConvexPenetration, MatchesFclOnConvexHullsAndBoxes)
     }
     for (int i = 0; i < 400; ++i)
     {
-        const Vector3d halfA = Vector3d(u(rng), u(rng), u(rng)).cwiseAbs() * 0.4 + Vector3d::Constant(0.1);
-        const Vector3d halfB = Vector3d(u(rng), u(rng), u(rng)).cwiseAbs() * 0.4 + Vector3d::Constant(0.1);
+        const Vector3d halfA = randomSizes(rng, 0.4, 0.1), halfB = randomSizes(rng, 0.4, 0.1);
         const Isometry3d poseA = randomPose(rng, 0.3), poseB = randomPose(rng, 0.3);
         const double theirs =
             fclDepth(std::make_shared<fcl::Boxd>(2 * halfA), poseA, std::make_shared<fcl::Boxd>(2 * halfB), poseB);
@@ -520,16 +514,11 @@ TEST(ConvexPenetration, MatchesFclsSphereFormulas)
 TEST(ConvexPenetration, GjkCallsNoOverlappingPairApart)
 {
     std::mt19937_64 rng(7);
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
     int apart = 0;
     for (int i = 0; i < 20000; ++i)
     {
         const auto random = [&](int kind)
-        {
-            return shape(static_cast<rd::ConvexKind>(kind),
-                         Vector3d(u(rng), u(rng), u(rng)).cwiseAbs() * 0.5 + Vector3d::Constant(0.1),
-                         randomPose(rng, 0.5));
-        };
+        { return shape(static_cast<rd::ConvexKind>(kind), randomSizes(rng, 0.5, 0.1), randomPose(rng, 0.5)); };
         const rd::ConvexShape a = random(i % 4), b = random((i / 4) % 4);
         rd::Vec3<double> onA, onB;
         const double d = rd::convexClosest(a, b, onA, onB);
@@ -562,17 +551,6 @@ rc::RobotModelPtr slidingBody(const std::string &collision, const std::string &f
         folder);
 }
 
-std::string objText(const rc::Mesh &mesh)
-{
-    std::ostringstream obj;
-    obj << std::setprecision(17);
-    for (const Vector3d &v : mesh.vertices)
-        obj << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
-    for (const rc::Mesh::Triangle &t : mesh.triangles)
-        obj << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
-    return obj.str();
-}
-
 rc::Mesh hullMesh(const std::vector<Vector3d> &points)
 {
     rc::Mesh mesh;
@@ -603,6 +581,24 @@ Vector3d randomDirection(std::mt19937_64 &rng)
 {
     std::normal_distribution<double> n;
     return Vector3d(n(rng), n(rng), n(rng)).normalized();
+}
+
+/** \brief The penetration at \a n states that \a draw gives: \a check(q, penetration) at each one
+    that collides; returns how many did. */
+template <class Draw, class Check>
+int atCollidingStates(const rc::Checker &checker, int n, Draw &&draw, Check &&check)
+{
+    int colliding = 0;
+    for (int i = 0; i < n; ++i)
+    {
+        const Vector3d q = draw();
+        const rc::DistanceResult result = penetrationAt(checker, q);
+        if (!result.colliding())
+            continue;
+        ++colliding;
+        check(q, result.penetration);
+    }
+    return colliding;
 }
 }  // namespace
 
@@ -646,29 +642,25 @@ TEST(CheckerPenetration, BallAgainstABoxIsExact)
             "0, 0.25881904510252074, 0.96592582628906831]}]\n"));
     std::mt19937_64 rng(8);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
-    int colliding = 0;
-    for (int i = 0; i < 300; ++i)
-    {
-        const Vector3d q = centre + Vector3d(0.8 * u(rng), 0.6 * u(rng), 0.5 * u(rng));
-        const rc::DistanceResult result = penetrationAt(checker, q);
-        if (!result.colliding())
-            continue;
-        ++colliding;
-        const Vector3d local = turn.inverse() * (q - centre);
-        const Vector3d outside = (local.cwiseAbs() - half).cwiseMax(0.0);
-        const double expected = outside.norm() > 0.0 ? r - outside.norm() : r + (half - local.cwiseAbs()).minCoeff();
-        const rc::Penetration &p = result.penetration;
-        EXPECT_NEAR(p.depth, expected, 1e-12) << q.transpose();
-        EXPECT_TRUE(p.exact);
-        EXPECT_NEAR(p.lowerBound, p.depth, 1e-12);
-        EXPECT_NEAR((p.pointOnOther - p.pointOnComponent - p.depth * p.direction).norm(), 0.0, 1e-9);
-        // The exact mode calls a curved pair within about 1e-6 of touching colliding (convexWithin).
-        EXPECT_TRUE(valid(checker, q + (p.depth + 1e-5) * p.direction)) << q.transpose();
-        if (p.depth > 1e-7)
+    const int colliding = atCollidingStates(
+        checker, 300, [&] { return Vector3d(centre + Vector3d(0.8 * u(rng), 0.6 * u(rng), 0.5 * u(rng))); },
+        [&](const Vector3d &q, const rc::Penetration &p)
         {
-            EXPECT_FALSE(valid(checker, q + (p.depth - 1e-7) * p.direction)) << q.transpose();
-        }
-    }
+            const Vector3d local = turn.inverse() * (q - centre);
+            const Vector3d outside = (local.cwiseAbs() - half).cwiseMax(0.0);
+            const double expected =
+                outside.norm() > 0.0 ? r - outside.norm() : r + (half - local.cwiseAbs()).minCoeff();
+            EXPECT_NEAR(p.depth, expected, 1e-12) << q.transpose();
+            EXPECT_TRUE(p.exact);
+            EXPECT_NEAR(p.lowerBound, p.depth, 1e-12);
+            EXPECT_NEAR((p.pointOnOther - p.pointOnComponent - p.depth * p.direction).norm(), 0.0, 1e-9);
+            // The exact mode calls a curved pair within about 1e-6 of touching colliding (convexWithin).
+            EXPECT_TRUE(valid(checker, q + (p.depth + 1e-5) * p.direction)) << q.transpose();
+            if (p.depth > 1e-7)
+            {
+                EXPECT_FALSE(valid(checker, q + (p.depth - 1e-7) * p.direction)) << q.transpose();
+            }
+        });
     EXPECT_GT(colliding, 60);
 }
 
@@ -685,33 +677,29 @@ TEST(CheckerPenetration, ConvexMeshesAreExactAndMatchFcl)
             points.push_back(radius * Vector3d(n(rng), n(rng), 0.6 * n(rng)).normalized());
         return hullMesh(points);
     };
-    rc::test::writeFile(folder + "/body.obj", objText(roundish(0.3)));
+    rc::test::writeFile(folder + "/body.obj", rc::test::objText(roundish(0.3)));
     auto scene = std::make_shared<rc::Scene>();
     scene->addObject("rock", roundish(0.5));
     const rc::Checker checker(slidingBody(rc::test::urdfCollisionMesh("body.obj"), folder), scene);
     const rc::Mesh &body = checker.robot().components.at(0).mesh, &rock = checker.scene().objects.at(0).mesh;
     const auto fclRock = fclConvex(rock.vertices), fclBody = fclConvex(body.vertices);
     std::uniform_real_distribution<double> u(-0.7, 0.7);
-    int colliding = 0;
     double worst = 0.0;
-    for (int i = 0; i < 200; ++i)
-    {
-        const Vector3d q(u(rng), u(rng), u(rng));
-        const rc::DistanceResult result = penetrationAt(checker, q);
-        if (!result.colliding())
-            continue;
-        ++colliding;
-        const rc::Penetration &p = result.penetration;
-        EXPECT_TRUE(p.exact) << q.transpose() << ": " << p.depth << " / " << p.lowerBound;
-        const double theirs = fclDepth(fclBody, Isometry3d(Eigen::Translation3d(q)), fclRock, Isometry3d::Identity());
-        EXPECT_NEAR(p.depth, theirs, 1e-9) << q.transpose();
-        worst = std::max(worst, std::abs(p.depth - theirs));
-        EXPECT_TRUE(valid(checker, q + (p.depth + 1e-7) * p.direction)) << q.transpose();
-        if (p.depth > 1e-7)
+    const int colliding = atCollidingStates(
+        checker, 200, [&] { return Vector3d(u(rng), u(rng), u(rng)); },
+        [&](const Vector3d &q, const rc::Penetration &p)
         {
-            EXPECT_FALSE(valid(checker, q + (p.depth - 1e-7) * p.direction)) << q.transpose();
-        }
-    }
+            EXPECT_TRUE(p.exact) << q.transpose() << ": " << p.depth << " / " << p.lowerBound;
+            const double theirs =
+                fclDepth(fclBody, Isometry3d(Eigen::Translation3d(q)), fclRock, Isometry3d::Identity());
+            EXPECT_NEAR(p.depth, theirs, 1e-9) << q.transpose();
+            worst = std::max(worst, std::abs(p.depth - theirs));
+            EXPECT_TRUE(valid(checker, q + (p.depth + 1e-7) * p.direction)) << q.transpose();
+            if (p.depth > 1e-7)
+            {
+                EXPECT_FALSE(valid(checker, q + (p.depth - 1e-7) * p.direction)) << q.transpose();
+            }
+        });
     std::printf("%d colliding states, worst |ours - FCL| %.3g m\n", colliding, worst);
     EXPECT_GT(colliding, 50);
 }
@@ -767,23 +755,18 @@ TEST(CheckerPenetration, NonConvexMeshesGetTheirHullsDepth)
     EXPECT_TRUE(valid(box, q + Vector3d(0.001 + 1e-9, 0, 0)));
 
     const std::string folder = rc::test::makeTempDir("penetration_lbar");
-    rc::test::writeFile(folder + "/l.obj", objText(rc::test::lBar(1.0)));
+    rc::test::writeFile(folder + "/l.obj", rc::test::objText(rc::test::lBar(1.0)));
     const rc::Checker bar(slidingBody(rc::test::urdfCollisionMesh("l.obj"), folder), scene);
     std::mt19937_64 rng(11);
     std::uniform_real_distribution<double> x(-0.3, 2.3), z(-0.3, 1.3);
-    int colliding = 0;
-    for (int i = 0; i < 300; ++i)
-    {
-        const Vector3d at(x(rng), x(rng), z(rng));
-        const rc::DistanceResult result = penetrationAt(bar, at);
-        if (!result.colliding())
-            continue;
-        ++colliding;
-        const rc::Penetration &p = result.penetration;
-        EXPECT_EQ(p.lowerBound, 0.0);
-        EXPECT_GE(p.depth, 0.0);
-        EXPECT_TRUE(valid(bar, at + (p.depth + 1e-9) * p.direction)) << at.transpose();
-    }
+    const int colliding = atCollidingStates(
+        bar, 300, [&] { return Vector3d(x(rng), x(rng), z(rng)); },
+        [&](const Vector3d &at, const rc::Penetration &p)
+        {
+            EXPECT_EQ(p.lowerBound, 0.0);
+            EXPECT_GE(p.depth, 0.0);
+            EXPECT_TRUE(valid(bar, at + (p.depth + 1e-9) * p.direction)) << at.transpose();
+        });
     std::printf("%d colliding L bar states\n", colliding);
     EXPECT_GT(colliding, 100);
 }
@@ -840,9 +823,7 @@ TEST(CheckerPenetration, PandaBoundsHold)
     {
         SCOPED_TRACE(scenario);
         const rc::Problem problem = rc::test::pandaProblem(root, scenario);
-        rc::CheckerOptions options;
-        options.backend = rc::BackendChoice::Cpu;
-        const rc::Checker checker(problem.robot, problem.scene, options);
+        const rc::Checker checker(problem.robot, problem.scene);  // distance queries run on the CPU
         const rc::CollisionModel &model = checker.collisionModel();
         const std::size_t n = 200;
         const std::vector<double> q = rc::test::randomStates(checker.robot(), n, 12);

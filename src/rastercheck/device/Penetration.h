@@ -253,46 +253,31 @@ RC_HD double distanceFromLine(const Vec3<double> &p, const Vec3<double> &a, cons
 RC_HD int spanningCorners(const Vec3<double> *points, int count, double flat, int corner[4], Vec3<double> &normal)
 {
     corner[0] = 0;
-    double best = flat;
     int found = 1;
-    for (int k = 1; k < count; ++k)
+    // The point farthest by \a measure, when farther than flat, is the next corner.
+    const auto farthest = [&](const auto &measure)
     {
-        const double d = sqrt(dot(points[k] - points[0], points[k] - points[0]));
-        if (d > best)
+        double best = flat;
+        int index = -1;
+        for (int k = 1; k < count; ++k)
         {
-            best = d;
-            corner[1] = k;
-            found = 2;
+            const double d = measure(points[k]);
+            if (d > best)
+            {
+                best = d;
+                index = k;
+            }
         }
-    }
-    if (found < 2)
-        return found;
-    best = flat;
-    for (int k = 1; k < count; ++k)
-    {
-        const double d = distanceFromLine(points[k], points[corner[0]], points[corner[1]]);
-        if (d > best)
-        {
-            best = d;
-            corner[2] = k;
-            found = 3;
-        }
-    }
-    if (found < 3)
+        if (index >= 0)
+            corner[found++] = index;
+        return index >= 0;
+    };
+    if (!farthest([&](const Vec3<double> &p) { return sqrt(dot(p - points[0], p - points[0])); }) ||
+        !farthest([&](const Vec3<double> &p) { return distanceFromLine(p, points[0], points[corner[1]]); }))
         return found;
     const Vec3<double> n = cross(points[corner[1]] - points[0], points[corner[2]] - points[0]);
     normal = (1.0 / sqrt(dot(n, n))) * n;
-    best = flat;
-    for (int k = 1; k < count; ++k)
-    {
-        const double d = fabs(dot(normal, points[k] - points[0]));
-        if (d > best)
-        {
-            best = d;
-            corner[3] = k;
-            found = 4;
-        }
-    }
+    farthest([&](const Vec3<double> &p) { return fabs(dot(normal, p - points[0])); });
     return found;
 }
 }  // namespace detail
