@@ -270,13 +270,14 @@ public:
         return states.array.ndim() == 1 ? py::reinterpret_borrow<py::list>(perState[0]) : perState;
     }
 
-    py::dict distance(const py::handle &q, double upperBound) const
+    py::dict distance(const py::handle &q, double upperBound, bool penetration) const
     {
         const StatesArgument states = statesArgument(q, *problem_, "q");
         rc::DistanceRequest request;
         request.checkEnvironment = request_.checkEnvironment;
         request.checkSelfCollision = request_.checkSelfCollision;
         request.upperBound = upperBound;
+        request.penetration = penetration;
         try
         {
             rc::validate(request);
@@ -321,6 +322,23 @@ public:
         answer["points"] = points;
         answer["component"] = components;
         answer["other"] = others;
+        if (penetration)
+        {
+            py::array_t<double> depths(n), lowerBounds(n), directions({n, py::ssize_t{3}});
+            auto depth = depths.mutable_unchecked<1>(), lower = lowerBounds.mutable_unchecked<1>();
+            auto direction = directions.mutable_unchecked<2>();
+            for (py::ssize_t i = 0; i < n; ++i)
+            {
+                const rc::Penetration &p = results[static_cast<std::size_t>(i)].penetration;
+                depth(i) = p.depth;
+                lower(i) = p.lowerBound;
+                for (int k = 0; k < 3; ++k)
+                    direction(i, k) = std::isnan(p.depth) ? std::nan("") : p.direction[k];
+            }
+            answer["penetration_depth"] = depths;
+            answer["penetration_lower_bound"] = lowerBounds;
+            answer["penetration_direction"] = directions;
+        }
         return answer;
     }
 
@@ -654,7 +672,7 @@ the other), "point" (x, y, z, world frame) and "description". Decided exactly
 whatever the mode; empty for a valid state. For q of shape (N, dof), one such
 list per row.)doc")
         .def("distance", &PyChecker::distance, py::arg("q"),
-             py::arg("upper_bound") = std::numeric_limits<double>::infinity(),
+             py::arg("upper_bound") = std::numeric_limits<double>::infinity(), py::arg("penetration") = false,
              R"doc(Exact distances of configurations q (shape (N, dof) or (dof,)): the smallest
 distance between the robot and the scene and between its self pairs that the
 SRDF does not exempt (those the mode's request checks), not padded. Returns a
@@ -663,6 +681,12 @@ upper bound where it is at least upper_bound), "points" ((N, 2, 3): a nearest
 point on the component and on the other solid, world frame; NaN where no pair
 is named), "component" and "other" (lists of N names, None where no pair is
 named). upper_bound (> 0): stop as soon as the distance is known to reach it.
+penetration=True adds how deep the pair named overlaps where a state collides
+(NaN elsewhere; rastercheck::Penetration says what is measured):
+"penetration_depth" ((N,): moving the component that far along
+"penetration_direction" ((N, 3), world frame) frees the pair; exact for convex
+solids, the convex hulls' depth otherwise) and "penetration_lower_bound" ((N,):
+no shorter move frees it; equal to the depth for convex solids).
 A state outside the limits has distance 0 and no pair; a value that is not
 finite is a ValueError, as for check.)doc")
         .def("check_motions", &PyChecker::checkMotions, py::arg("a"), py::arg("b"), py::arg("certified") = true,

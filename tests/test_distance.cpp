@@ -28,18 +28,10 @@ namespace rc = rastercheck;
 using Eigen::Isometry3d;
 using Eigen::Vector3d;
 
+using rastercheck::test::randomPose;
+
 namespace
 {
-Isometry3d randomPose(std::mt19937_64 &rng, double spread)
-{
-    std::uniform_real_distribution<double> u(-1.0, 1.0);
-    Eigen::Quaterniond rotation(u(rng), u(rng), u(rng), u(rng));
-    rotation.normalize();
-    Isometry3d pose = Isometry3d::Identity();
-    pose.linear() = rotation.toRotationMatrix();
-    pose.translation() = spread * Vector3d(u(rng), u(rng), u(rng));
-    return pose;
-}
 
 /** \brief The minimum of triangleDistance over every pair of triangles, with both placed in the world. */
 double bruteForceDistance(const rc::Mesh &a, const Isometry3d &poseA, const rc::Mesh &b, const Isometry3d &poseB)
@@ -414,15 +406,8 @@ TEST(CheckerDistance, CheckCommandWritesTheDistanceColumns)
 TEST(CheckerDistance, BallAgainstAMeshIsItsCentresDistanceLessItsRadius)
 {
     const std::string folder = rc::test::makeTempDir("distance_ball");
-    const rc::Mesh u = rc::test::uShape(0.2);
-    std::ostringstream obj;
-    obj << std::setprecision(17);
-    for (const Vector3d &v : u.vertices)
-        obj << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
-    for (const rc::Mesh::Triangle &t : u.triangles)
-        obj << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
     rc::ProblemSource source;
-    source.scenePath = rc::test::writeFile(folder + "/u.obj", obj.str());
+    source.scenePath = rc::test::writeFile(folder + "/u.obj", rc::test::objText(rc::test::uShape(0.2)));
     const std::string limit = "<axis xyz=\"%\"/><limit lower=\"-1\" upper=\"3\" effort=\"1\" velocity=\"1\"/>";
     const auto axis = [&](const char *xyz)
     {

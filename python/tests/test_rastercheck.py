@@ -84,6 +84,22 @@ def test_crane_distance_is_zero_exactly_where_the_lift_collides_and_its_points_t
             crane_checker.distance(states, upper_bound=bad)
 
 
+def test_crane_penetration_depth_is_measured_where_the_lift_collides(crane, crane_checker):
+    states = line(crane.start, crane.goal, 41)
+    assert "penetration_depth" not in crane_checker.distance(states)
+    answer = crane_checker.distance(states, penetration=True)
+    depth, lower, direction = (answer["penetration_depth"], answer["penetration_lower_bound"],
+                               answer["penetration_direction"])
+    assert depth.shape == lower.shape == (41,) and direction.shape == (41, 3)
+    colliding = answer["distance"] <= 0
+    assert colliding.any() and not colliding.all()
+    # Measured exactly on the colliding states: the hulls' depth, at least the lower bound.
+    assert np.array_equal(np.isnan(depth), ~colliding) and np.array_equal(np.isnan(lower), ~colliding)
+    assert np.all(depth[colliding] >= lower[colliding]) and np.all(lower[colliding] >= 0)
+    moving = colliding & (depth > 0)
+    assert np.allclose(np.linalg.norm(direction[moving], axis=1), 1.0)
+
+
 def test_crane_straight_edge_is_rejected_certified_and_discrete(crane, crane_checker):
     assert crane_checker.check_motions(crane.start, crane.goal).tolist() == [False]
     valid, last_valid = crane_checker.check_motions(crane.start, crane.goal, certified=False)

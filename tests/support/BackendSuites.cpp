@@ -28,6 +28,17 @@ std::vector<double> randomStates(const RobotModel &robot, std::size_t n, unsigne
     return q;
 }
 
+Eigen::Isometry3d randomPose(std::mt19937_64 &rng, double spread)
+{
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::Quaterniond rotation(u(rng), u(rng), u(rng), u(rng));
+    rotation.normalize();
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = rotation.toRotationMatrix();
+    pose.translation() = spread * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    return pose;
+}
+
 std::vector<StateSuite> accuracySuites(std::size_t statesPerSuite)
 {
     std::vector<StateSuite> suites;

@@ -2,8 +2,11 @@
 
 #include <cstddef>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "rastercheck/collision/Backend.h"
 #include "rastercheck/collision/CollisionModel.h"
@@ -29,6 +32,10 @@ std::vector<StateSuite> accuracySuites(std::size_t statesPerSuite);
 
 /** \brief \a n uniform random states within \a robot's bounds (continuous joints in [-pi, pi]). */
 std::vector<double> randomStates(const RobotModel &robot, std::size_t n, unsigned seed);
+
+/** \brief A random pose: a rotation from a normalised random quaternion, a translation with each
+    coordinate uniform in [-spread, spread]. */
+Eigen::Isometry3d randomPose(std::mt19937_64 &rng, double spread);
 
 /** \brief Extra paddings (CollisionRequest::pairPadding) for \a rows rows of \a model's pairs: 0, 2 mm,
     1 cm or 5 cm at random (fixed \a seed), the range a certified midpoint's sweeps take on the Panda. */

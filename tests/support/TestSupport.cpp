@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
@@ -95,6 +96,17 @@ std::string writeFile(const std::string &path, const std::string &text)
     if (!out)
         throw std::runtime_error("cannot write " + path);
     return path;
+}
+
+std::string objText(const Mesh &mesh)
+{
+    std::ostringstream obj;
+    obj << std::setprecision(17);
+    for (const Eigen::Vector3d &v : mesh.vertices)
+        obj << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+    for (const Mesh::Triangle &t : mesh.triangles)
+        obj << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+    return obj.str();
 }
 
 std::string objBox(const std::string &name, double x0, double y0, double z0, double x1, double y1, double z1, int base)

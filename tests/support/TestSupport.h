@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "rastercheck/geometry/Mesh.h"
 #include "rastercheck/io/DataPath.h"
 #include "rastercheck/io/Problem.h"
 
@@ -88,6 +89,9 @@ struct ProcessFootprint
 
 /** \brief Writes \a text to \a path (creating it) and returns the path. */
 std::string writeFile(const std::string &path, const std::string &text);
+
+/** \brief \a mesh as OBJ text, its coordinates at full precision. */
+std::string objText(const Mesh &mesh);
 
 /** \brief An axis-aligned box as OBJ text (object \a name), outward faces, vertex indices starting at
     \a base + 1 (the vertices written before it in the same file). */

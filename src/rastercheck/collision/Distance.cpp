@@ -92,7 +92,7 @@ struct DistanceQueries::PairMetric
     }
 };
 
-DistanceQueries::DistanceQueries(CollisionModelConstPtr model) : model_(std::move(model)) {}
+DistanceQueries::DistanceQueries(CollisionModelConstPtr model) : model_(std::move(model)), penetration_(*model_) {}
 
 DistanceQueries::~DistanceQueries() = default;
 
@@ -328,5 +328,10 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, c
     result.otherTriangle = nearest.triangleB;
     result.pointOnComponent = nearest.pointA;
     result.pointOnOther = nearest.pointB;
+    if (request.penetration && result.distance <= 0.0)
+    {
+        const Sides s = sides(bestPair);
+        penetration_.measure(bestPair, *s.poseA, *s.poseB, result.penetration);
+    }
 }
 }  // namespace rastercheck

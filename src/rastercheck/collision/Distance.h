@@ -10,6 +10,7 @@
 
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/collision/CollisionRequest.h"
+#include "rastercheck/collision/Penetration.h"
 
 namespace rastercheck
 {
@@ -25,6 +26,10 @@ struct DistanceRequest
         For callers that need only a threshold ("is the clearance at least d?"): pairs and node pairs
         whose lower bounds reach it are never measured. Infinity (the default): the exact minimum. */
     double upperBound = std::numeric_limits<double>::infinity();
+    /** \brief On a colliding state, also measure how deep the pair named overlaps
+        (DistanceResult::penetration; Penetration says what is and is not returned). Off by default:
+        a query that does not ask pays nothing. */
+    bool penetration = false;
 };
 
 /** \brief Throws ConfigurationError unless upperBound is > 0 (NaN is not). */
@@ -58,6 +63,9 @@ struct DistanceResult
     int coordinate = -1;
     Eigen::Vector3d pointOnComponent = Eigen::Vector3d::Zero();  ///< world frame
     Eigen::Vector3d pointOnOther = Eigen::Vector3d::Zero();      ///< world frame; equal when colliding
+    /** \brief DistanceRequest::penetration on a colliding state: how deep the pair named overlaps
+        (the first colliding pair the query met: others may overlap too, deeper). NaN otherwise. */
+    Penetration penetration;
 
     bool colliding() const { return kind != Contact::Kind::None && distance <= 0.0; }
 };
@@ -113,6 +121,7 @@ private:
     void giveBack(std::unique_ptr<DistanceWorkspace> workspace) const;
 
     CollisionModelConstPtr model_;
+    PairPenetration penetration_;
     mutable std::mutex poolMutex_;
     mutable std::vector<std::unique_ptr<DistanceWorkspace>> pool_;
 };

@@ -1,7 +1,9 @@
 #pragma once
 
-// The distance between two convex shapes (primitives, triangles) with a closest pair of points:
-// what a distance query measures curved primitives by, where convexWithin() only answers yes or no.
+// The distance between two convex shapes (primitives, triangles, hulls) with a closest pair of
+// points: what a distance query measures curved primitives by, where convexWithin() only answers
+// yes or no; and, when the shapes overlap, the simplex that encloses the origin, where the
+// penetration depth's expanding polytope starts (Penetration.h).
 
 #include "rastercheck/device/ConvexDistance.h"
 #include "rastercheck/device/HostDevice.h"
@@ -9,22 +11,45 @@
 
 namespace rastercheck::device
 {
-/** \brief Distance between the convex solids \a a and \a b (0 when they touch or overlap), with
-    \a onA / \a onB a closest pair of points (world frame; one point of both when they overlap).
-    GJK (van den Bergen) on their Minkowski difference, A's support points kept beside the simplex
-    so that the closest point's barycentric weights give the witnesses. Stops when the upper bound
-    |v| and the support plane's lower bound meet within 1e-12 of |v|^2 (so the distance is exact to
-    about 1e-6 of itself at worst, far better in practice), when the origin is enclosed, or when
-    the simplex stops shrinking (rounding); at most 128 steps. */
-RC_HD double convexClosest(const ConvexShape &a, const ConvexShape &b, Vec3<double> &onA, Vec3<double> &onB)
+/** \brief A ConvexShape as the support function the GJK below reads. */
+struct ShapeSupport
+{
+    const ConvexShape *shape;
+    RC_HD Vec3<double> operator()(const Vec3<double> &d) const { return supportPoint(*shape, d); }
+};
+
+/** \brief GJK's last simplex: points of the Minkowski difference A - B, each with the point of A
+    it was made from. With \a overlap, the origin lies in the simplex's hull (a tetrahedron that
+    encloses it, or, when the origin fell exactly on a vertex, edge or face, that sub-simplex). */
+struct GjkSimplex
+{
+    Vec3<double> points[4];
+    Vec3<double> pointsOfA[4];
+    int count = 0;
+    bool overlap = false;
+};
+
+/** \brief Distance between the convex solids given by the support functions \a a and \a b (each
+    callable on a world direction, returning the solid's point farthest along it; 0 when they touch
+    or overlap), with \a onA / \a onB a closest pair of points (world frame; one point of both when
+    they overlap). GJK (van den Bergen) on their Minkowski difference, A's support points kept
+    beside the simplex so that the closest point's barycentric weights give the witnesses. Stops
+    when the upper bound |v| and the support plane's lower bound meet within 1e-12 of |v|^2 (so the
+    distance is exact to about 1e-6 of itself at worst, far better in practice), when the origin is
+    enclosed, or when the simplex stops shrinking (rounding); at most 128 steps. \a terminal
+    (optional) receives the last simplex. */
+template <class SupportA, class SupportB>
+RC_HD double closestPoints(const SupportA &a, const SupportB &b, Vec3<double> &onA, Vec3<double> &onB,
+                           GjkSimplex *terminal = nullptr)
 {
     Vec3<double> simplex[4], pointsOfA[4];
     double weights[4] = {1.0, 0.0, 0.0, 0.0};
     int count = 1;
-    pointsOfA[0] = supportPoint(a, Vec3<double>{1.0, 0.0, 0.0});
-    simplex[0] = pointsOfA[0] - supportPoint(b, Vec3<double>{-1.0, 0.0, 0.0});
+    pointsOfA[0] = a(Vec3<double>{1.0, 0.0, 0.0});
+    simplex[0] = pointsOfA[0] - b(Vec3<double>{-1.0, 0.0, 0.0});
     Vec3<double> v = simplex[0];
     bool overlap = false;
+    double size = sqrt(dot(v, v));  // the largest simplex point: what rounding is relative to
     for (int step = 0; step < 128; ++step)
     {
         const double vv = dot(v, v);
@@ -33,10 +58,19 @@ RC_HD double convexClosest(const ConvexShape &a, const ConvexShape &b, Vec3<doub
             overlap = true;
             break;
         }
-        const Vec3<double> pointOfA = supportPoint(a, Vec3<double>{-v.x, -v.y, -v.z});
-        const Vec3<double> w = pointOfA - supportPoint(b, v);
+        const Vec3<double> pointOfA = a(Vec3<double>{-v.x, -v.y, -v.z});
+        const Vec3<double> w = pointOfA - b(v);
         if (vv - dot(v, w) <= 1e-12 * vv)
             break;  // the support plane along v is as far as the simplex's nearest point
+        size = fmax(size, sqrt(dot(w, w)));
+        // The simplex before this step: it stands when the step gets no closer.
+        Vec3<double> previous[4], previousOfA[4];
+        for (int k = 0; k < count; ++k)
+        {
+            previous[k] = simplex[k];
+            previousOfA[k] = pointsOfA[k];
+        }
+        const int previousCount = count;
         pointsOfA[count] = pointOfA;
         simplex[count++] = w;
         Vec3<double> closest = v;
@@ -51,16 +85,40 @@ RC_HD double convexClosest(const ConvexShape &a, const ConvexShape &b, Vec3<doub
         }
         if (result == detail::SimplexStep::Flat)
         {
-            --count;  // nothing written: the old simplex and weights stand
+            // Nothing written: the old simplex and weights stand. The origin on it within rounding
+            // is a contact.
+            --count;
+            overlap = vv <= 1e-24 * size * size;
+            break;
+        }
+        if (!(dot(closest, closest) < vv))
+        {
+            // No progress left: v is the nearest within rounding, on the simplex before this step
+            // (the reduced one may hold a farther point: the origin on a face, the new point's
+            // faces all past it). The origin itself within rounding is a contact.
+            for (int k = 0; k < previousCount; ++k)
+            {
+                simplex[k] = previous[k];
+                pointsOfA[k] = previousOfA[k];
+            }
+            count = previousCount;
+            overlap = vv <= 1e-24 * size * size;
             break;
         }
         // The simplex was reduced in place: its weights and closest point go with it.
         for (int k = 0; k < 4; ++k)
             weights[k] = stepWeights[k];
-        const bool progress = dot(closest, closest) < vv;
         v = closest;
-        if (!progress)
-            break;  // no progress left: v is the nearest within rounding
+    }
+    if (terminal)
+    {
+        for (int k = 0; k < count; ++k)
+        {
+            terminal->points[k] = simplex[k];
+            terminal->pointsOfA[k] = pointsOfA[k];
+        }
+        terminal->count = count;
+        terminal->overlap = overlap;
     }
     Vec3<double> p{0.0, 0.0, 0.0};
     for (int k = 0; k < count; ++k)
@@ -73,5 +131,11 @@ RC_HD double convexClosest(const ConvexShape &a, const ConvexShape &b, Vec3<doub
     }
     onB = p - v;
     return sqrt(dot(v, v));
+}
+
+/** \brief closestPoints() of two ConvexShapes. */
+RC_HD double convexClosest(const ConvexShape &a, const ConvexShape &b, Vec3<double> &onA, Vec3<double> &onB)
+{
+    return closestPoints(ShapeSupport{&a}, ShapeSupport{&b}, onA, onB);
 }
 }  // namespace rastercheck::device
