@@ -104,8 +104,11 @@ public:
         nothing unless it is within its padding now. 0 for a state within a pair's padding (or
         touching, or one solid inside another) and for a state outside the bounds. Exact as
         distance() is (the same walks, each pair's bound padding + rate x the smallest step so
-        far), so a step is never longer than the motion allows. CertifiedMotionValidator sizes its
-        intervals with it. */
+        far): between meshes to rounding, so a step is never longer than the motion allows; a pair
+        with curved primitives is measured by GJK (device::convexClosest), which converges to
+        rounding in practice but is not proven near contact (within about a millimetre of it, its
+        witnesses' plane proves up to 1e-6 less than the distance it gives). CertifiedMotionValidator
+        sizes its intervals with it when asked (CertifiedMotionOptions::sizeByClearance). */
     void freeRadius(const double *q, std::size_t n, const CollisionRequest &request, const PairPadding &rates,
                     const double *caps, double *radii, int threads) const;
 
