@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "rastercheck/device/Traversal.h"
 #include "rastercheck/model/Kinematics.h"
@@ -22,28 +23,61 @@ double treeScale(const MeshBvh &bvh)
     return device::treeScale(bvh.exactTree());
 }
 
-// A lower bound on the distance between triangles p and q: how far q's corners all lie on one side
-// of p's plane (0 when they do not). It settles most leaf pairs near the best distance for a cross
-// product and three dot products, where the exact distance costs the exact intersection test and
-// fifteen feature pairs. The margin covers its rounding, so a pair it skips is farther than the
-// best by more than rounding.
-double planeGap(const Vec p[3], const Vec q[3])
+// Are triangles p and q at least `reach` apart along one of the eleven axes that separate disjoint
+// triangles (each one's normal, and the cross products of an edge of each)? The gap along an axis is
+// a lower bound on their distance, and equals it where the closest points are a vertex over a face
+// (the normal) or two edges' interiors (their cross product), so near the best distance it settles
+// most triangle pairs that hold nothing nearer for a few dozen products, where the exact distance
+// costs the exact intersection test and fifteen feature pairs. Squared, so no root is taken. The
+// margin covers the rounding of the projections (taken about p's first corner), so a pair it skips
+// is farther than the reach.
+bool trianglesApart(const Vec p[3], const Vec q[3], double reach)
 {
-    const Vec normal = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double length = normal.norm();
-    if (!(length > 0.0))
-        return 0.0;
-    const double s0 = normal.dot(q[0] - p[0]), s1 = normal.dot(q[1] - p[0]), s2 = normal.dot(q[2] - p[0]);
-    const double low = std::min(s0, std::min(s1, s2)), high = std::max(s0, std::max(s1, s2));
-    const double gap = low > 0.0 ? low : (high < 0.0 ? -high : 0.0);
-    const double scale = (p[1] - p[0]).norm() + (p[2] - p[0]).norm() + (q[0] - p[0]).norm() + (q[1] - p[0]).norm() +
-                         (q[2] - p[0]).norm();
-    return gap / length - 1e-12 * scale;
+    const Vec pe[3] = {Vec::Zero(), p[1] - p[0], p[2] - p[0]};
+    const Vec qe[3] = {q[0] - p[0], q[1] - p[0], q[2] - p[0]};
+    const double scale = pe[1].lpNorm<1>() + pe[2].lpNorm<1>() + qe[0].lpNorm<1>() + qe[1].lpNorm<1>() +
+                         qe[2].lpNorm<1>();
+    const double margined = reach + 1e-12 * scale;
+    const double reach2 = margined * margined;
+    // Gap between the projections [lowP, highP] and [lowQ, highQ] on axis a, against the reach.
+    const auto apart = [reach2](const Vec &a, double lowP, double highP, double lowQ, double highQ)
+    {
+        const double gap = std::max(lowQ - highP, lowP - highQ);
+        return gap > 0.0 && gap * gap >= reach2 * a.squaredNorm();
+    };
+    const auto range = [](double x, double y, double z, double &low, double &high)
+    {
+        low = std::min(x, std::min(y, z));
+        high = std::max(x, std::max(y, z));
+    };
+    double lowP, highP, lowQ, highQ;
+    const Vec normalP = pe[1].cross(pe[2]);
+    range(normalP.dot(qe[0]), normalP.dot(qe[1]), normalP.dot(qe[2]), lowQ, highQ);
+    if (apart(normalP, 0.0, 0.0, lowQ, highQ))
+        return true;
+    const Vec normalQ = (qe[1] - qe[0]).cross(qe[2] - qe[0]);
+    const double onQ = normalQ.dot(qe[0]);
+    range(0.0, normalQ.dot(pe[1]), normalQ.dot(pe[2]), lowP, highP);
+    if (apart(normalQ, lowP, highP, onQ, onQ))
+        return true;
+    for (int i = 0; i < 3; ++i)
+    {
+        const Vec edgeP = pe[(i + 1) % 3] - pe[i];
+        for (int j = 0; j < 3; ++j)
+        {
+            // Along edgeP x edgeQ both ends of each edge project alike: two corners of each suffice.
+            const Vec axis = edgeP.cross(qe[(j + 1) % 3] - qe[j]);
+            const double p0 = axis.dot(pe[i]), p1 = axis.dot(pe[(i + 2) % 3]);
+            const double q0 = axis.dot(qe[j]), q1 = axis.dot(qe[(j + 2) % 3]);
+            if (apart(axis, std::min(p0, p1), std::max(p0, p1), std::min(q0, q1), std::max(q0, q1)))
+                return true;
+        }
+    }
+    return false;
 }
 
-// The distance query for device::walkPairs, in the fixed tree's frame with the moving tree placed
-// there by R, T. `best` is the reach: it starts at the caller's bound and shrinks with every nearer
-// triangle pair, so the pairs still on the walk's stack are pruned against it when popped.
+// The distance query, in the fixed tree's frame with the moving tree placed there by R, T. `best` is
+// the reach: it starts at the caller's bound and shrinks with every nearer triangle pair.
 struct DistanceQuery
 {
     const MeshBvh &fixed, &moving;
@@ -65,13 +99,13 @@ struct DistanceQuery
         return device::placedNode(nodesM, index, nodePlacement, scratch, cached, visit);
     }
 
-    // The pair's lower bound, or the best distance when the bounding spheres already show that
-    // the pair holds nothing nearer.
-    double bound(device::NodePair pair)
+    // The pair's lower bound; at least the best distance when the pair holds nothing nearer (then
+    // not necessarily the tightest bound: the bounding spheres alone, or the first axis that shows it).
+    double bound(std::int32_t indexF, std::int32_t indexM)
     {
-        const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
-        const device::PlacedNode &pm = placed(pair.b);
-        const Vec between = Vec(pm.centre.x, pm.centre.y, pm.centre.z) - nodeCentre(nf);
+        const MeshBvh::Node &nf = nodesF[indexF], &nm = nodesM[indexM];
+        const device::PlacedNode &pm = placed(indexM);
+        const Vec between(pm.centre.x - nf.centre[0], pm.centre.y - nf.centre[1], pm.centre.z - nf.centre[2]);
         // Bounding spheres first: one dot product settles most pairs far from the best.
         const double spheres = static_cast<double>(nf.radius) + nm.radius + best + slack;
         if (between.squaredNorm() >= spheres * spheres)
@@ -79,32 +113,8 @@ struct DistanceQuery
         Eigen::Matrix3d axes;
         for (int j = 0; j < 3; ++j)
             axes.col(j) = Vec(pm.axis[j].x, pm.axis[j].y, pm.axis[j].z);
-        return nodeDistanceLowerBound(nf, axes, nm, between) - slack;
+        return nodeDistanceLowerBound(nf, axes, nm, between, best + slack) - slack;
     }
-
-    // secondFirst() bounds both children; the walk tests the nearer at once and the other later, so
-    // the bounds are kept by pair for test() (direct-mapped; a bound only grows stale on the safe
-    // side, since the best distance only shrinks).
-    struct KeptBound
-    {
-        std::int32_t a = -1, b = -1;
-        double bound = 0.0;
-    };
-    static constexpr unsigned kKept = 64;
-    KeptBound kept[kKept]{};
-    static unsigned keptSlot(device::NodePair pair)
-    {
-        return (static_cast<unsigned>(pair.a) * 2654435761u ^ static_cast<unsigned>(pair.b)) % kKept;
-    }
-    double keptBound(device::NodePair pair)
-    {
-        KeptBound &slot = kept[keptSlot(pair)];
-        if (slot.a != pair.a || slot.b != pair.b)
-            slot = KeptBound{pair.a, pair.b, bound(pair)};
-        return slot.bound;
-    }
-
-    bool test(device::NodePair pair) { return keptBound(pair) < best; }
 
     // The moving tree's triangle in slot sm, placed in the fixed frame.
     void place(std::uint32_t sm, Vec placedTriangle[3]) const
@@ -120,7 +130,7 @@ struct DistanceQuery
     {
         const double *cf = fixed.slotCorners(sf);
         const Vec fixedTriangle[3] = {CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6)};
-        if (planeGap(fixedTriangle, placedTriangle) >= best || planeGap(placedTriangle, fixedTriangle) >= best)
+        if (trianglesApart(fixedTriangle, placedTriangle, best))
             return true;
         Vec onFixed, onMoving;
         const double d = triangleDistance(fixedTriangle[0], fixedTriangle[1], fixedTriangle[2], placedTriangle[0],
@@ -137,9 +147,10 @@ struct DistanceQuery
         return d > 0.0;
     }
 
-    bool leaves(device::NodePair pair)
+    // Every triangle pair of two leaves; false once the surfaces meet.
+    bool leaves(std::int32_t indexF, std::int32_t indexM)
     {
-        const MeshBvh::Node &nf = nodesF[pair.a], &nm = nodesM[pair.b];
+        const MeshBvh::Node &nf = nodesF[indexF], &nm = nodesM[indexM];
         Vec placedTriangle[3];
         for (std::uint32_t sm = nm.firstSlot(); sm < nm.firstSlot() + nm.count; ++sm)
         {
@@ -150,25 +161,123 @@ struct DistanceQuery
         }
         return true;
     }
-
-    // Descend into the bigger node, so both trees shrink at a similar pace.
-    bool splitA(device::NodePair pair) const { return nodesF[pair.a].radius >= nodesM[pair.b].radius; }
-
-    // The child pair with the lower bound first (as FCL's distanceRecurse): the best distance
-    // shrinks sooner, and the walk prunes more of what remains.
-    bool secondFirst(device::NodePair first, device::NodePair second)
-    {
-        const double boundFirst = keptBound(first);  // one at a time: placed() may reuse its scratch
-        return keptBound(second) < boundFirst;
-    }
 };
+
+// A node pair waiting in the best-first walk, with its lower bound.
+struct PendingPair
+{
+    double bound;
+    std::int32_t fixed, moving;
+};
+
+// The waiting pairs, nearest on top (a binary heap): on the stack up to kInline pairs, beyond that
+// in a vector (large trees whose nearest regions hold many pairs at nearly the best distance).
+class PendingPairs
+{
+public:
+    PendingPairs() = default;
+    PendingPairs(const PendingPairs &) = delete;
+    PendingPairs &operator=(const PendingPairs &) = delete;
+
+    bool empty() const { return size_ == 0; }
+    const PendingPair &top() const { return data_[0]; }
+    void push(const PendingPair &pair)
+    {
+        if (size_ == capacity_)
+        {
+            std::vector<PendingPair> grown(data_, data_ + size_);
+            grown.resize(2 * capacity_);
+            spilled_.swap(grown);
+            data_ = spilled_.data();
+            capacity_ = spilled_.size();
+        }
+        data_[size_++] = pair;
+        std::push_heap(data_, data_ + size_, farther);
+    }
+    PendingPair pop()
+    {
+        std::pop_heap(data_, data_ + size_, farther);
+        return data_[--size_];
+    }
+
+private:
+    static bool farther(const PendingPair &x, const PendingPair &y) { return x.bound > y.bound; }
+    static constexpr std::size_t kInline = 256;
+    PendingPair inline_[kInline];
+    std::vector<PendingPair> spilled_;
+    PendingPair *data_ = inline_;
+    std::size_t size_ = 0, capacity_ = kInline;
+};
+
+// Walks the trees for query.best (the caller's bound, or the hint's distance below it), which then
+// holds the nearest pair below it, if any: best first (as FCL's distance traversal with a queue,
+// qsize > 2), each node pair in the order of its lower bound, so the walk ends when the nearest
+// waiting pair's bound reaches the best distance found. It visits only the node pairs whose bound is
+// below the answer (a depth-first walk also visits those below the best distance it had when it got
+// there, which early on is far above the answer): on FCL's env/rob, 1000 uniform poses, 168 node
+// bounds and 26 triangle pairs per query, against 243 and 48 for a depth-first walk whose reach was
+// widened from below, and 633 and 116 for a plain one. The nearer child is walked on at once
+// when it is still the nearest pair, so most steps never touch the heap.
+void walkNearestFirst(DistanceQuery &query)
+{
+    const MeshBvh::Node *nodesF = query.nodesF, *nodesM = query.nodesM;
+    PendingPairs pending;
+    PendingPair current{query.bound(0, 0), 0, 0};
+    for (;;)
+    {
+        if (current.bound < query.best)
+        {
+            const MeshBvh::Node &nf = nodesF[current.fixed], &nm = nodesM[current.moving];
+            const bool leafF = device::isLeafNode(nf), leafM = device::isLeafNode(nm);
+            if (leafF && leafM)
+            {
+                if (!query.leaves(current.fixed, current.moving))
+                    return;  // the surfaces meet
+            }
+            else
+            {
+                // Descend into the bigger node, so both trees shrink at a similar pace.
+                const bool splitF = leafM || (!leafF && nf.radius >= nm.radius);
+                PendingPair near = current, far = current;
+                if (splitF)
+                {
+                    near.fixed = nf.first;
+                    far.fixed = nf.first + 1;
+                }
+                else
+                {
+                    near.moving = nm.first;
+                    far.moving = nm.first + 1;
+                }
+                near.bound = query.bound(near.fixed, near.moving);  // one at a time: placed() may reuse its scratch
+                far.bound = query.bound(far.fixed, far.moving);
+                if (far.bound < near.bound)
+                    std::swap(near, far);
+                if (far.bound < query.best)
+                    pending.push(far);
+                if (near.bound < query.best && (pending.empty() || near.bound <= pending.top().bound))
+                {
+                    current = near;
+                    continue;
+                }
+                if (near.bound < query.best)
+                    pending.push(near);
+            }
+        }
+        if (pending.empty() || pending.top().bound >= query.best)
+            return;
+        current = pending.pop();
+    }
+}
 }  // namespace
 
 double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P, const MeshBvh::Node &nm,
-                              const Vec &between)
+                              const Vec &between, double reach)
 {
     const double centres = between.norm();
     double bound = centres - (static_cast<double>(nf.radius) + nm.radius);
+    if (bound >= reach)
+        return bound;
     const float *f = nf.axes;  // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
     const double ea[3] = {nf.halfExtents[0], nf.halfExtents[1], nf.halfExtents[2]};
     const double eb[3] = {nm.halfExtents[0], nm.halfExtents[1], nm.halfExtents[2]};
@@ -205,6 +314,8 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P,
     }
     bound = std::max(bound, std::sqrt(outsideFixed) - nm.radius);
     bound = std::max(bound, std::sqrt(outsideMoving) - nf.radius);
+    if (bound >= reach)
+        return bound;
     for (int i = 0; i < 3; ++i)
     {
         const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
@@ -212,14 +323,20 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P,
         {
             // Axis i of the fixed box cross axis j of the moving one: its length is the sine of their
             // angle, read from the two other rows of R (no cancellation when they are parallel;
-            // a near-zero axis is skipped, the face axes cover that case).
-            const double length = std::sqrt(R[i1][j] * R[i1][j] + R[i2][j] * R[i2][j]);
-            if (length < 1e-6)
+            // a near-zero axis is skipped, the face axes cover that case). Its gap is divided by the
+            // length only where it raises the bound (compared squared, so mostly no root is taken).
+            const double length2 = R[i1][j] * R[i1][j] + R[i2][j] * R[i2][j];
+            if (length2 < 1e-12)
                 continue;
             const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
             const double gap = std::abs(d[i2] * R[i1][j] - d[i1] * R[i2][j]) -
                                (ea[i1] * Q[i2][j] + ea[i2] * Q[i1][j] + eb[j1] * Q[i][j2] + eb[j2] * Q[i][j1]);
-            bound = std::max(bound, gap / length);
+            if (gap > 0.0 && (bound <= 0.0 || gap * gap > bound * bound * length2))
+            {
+                bound = gap / std::sqrt(length2);
+                if (bound >= reach)
+                    return bound;
+            }
         }
     }
     return std::max(bound, 0.0);
@@ -227,53 +344,6 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P,
 
 namespace
 {
-// Widening: the first reach is the roots' lower bound plus this fraction of the smaller root's
-// radius, doubled after each walk that finds nothing.
-constexpr double kWideningStep = 0.05;
-
-// Walks the trees for query.best (the caller's bound, or the hint's distance below it), which then
-// holds the nearest pair below it, if any. A walk without a good bound spends most of its time
-// before its best distance gets near the answer (FCL env/rob, 1000 uniform poses: 113-132 us cold,
-// 38 us with the answer itself as the bound). So where the caller gave no bound (\a unbounded),
-// walks with a reach widened from the roots' lower bound come first, up to the hint's distance:
-// the first that finds a pair within its reach has found the nearest (every node pair nearer than
-// the reach was visited). bench/distance, FCL env/rob, 300 uniform poses, us per query by first
-// step (fraction of the radius): 0.01: 59, 0.02: 54, 0.05: 55-57, 0.1: 63, 0.2: 94; 105 without
-// widening, FCL 102. Only without a bound: a pair measured against another pair's distance
-// (Checker::distance's pairs after the first) mostly finds nothing nearer, and would walk every
-// widened reach in vain (Panda scenes: 10 to 25 % slower when it widened below finite bounds).
-device::WalkEnd widenedWalks(DistanceQuery &query, bool unbounded)
-{
-    const MeshBvh::Node *nodesF = query.nodesF, *nodesM = query.nodesM;
-    double step = kWideningStep * std::min<double>(nodesF[0].radius, nodesM[0].radius);
-    if (unbounded && step > 0.0)
-    {
-        // The hint's pair (if any) stands unless a widened walk finds a nearer one.
-        const double reach = query.best;
-        const bool found = query.found;
-        const std::uint32_t slotFixed = query.slotFixed, slotMoving = query.slotMoving;
-        const Vec pointFixed = query.pointFixed, pointMoving = query.pointMoving;
-        const double lowest = std::max(0.0, query.bound(device::NodePair{0, 0}));
-        for (double widened = lowest + step; widened < reach; step *= 2.0, widened = lowest + step)
-        {
-            query.best = widened;
-            query.found = false;
-            std::fill(std::begin(query.kept), std::end(query.kept), DistanceQuery::KeptBound{});
-            const device::WalkEnd end = device::walkPairs(nodesF, nodesM, query);
-            if (end == device::WalkEnd::Overflow || query.found)
-                return end;
-        }
-        query.best = reach;
-        query.found = found;
-        query.slotFixed = slotFixed;
-        query.slotMoving = slotMoving;
-        query.pointFixed = pointFixed;
-        query.pointMoving = pointMoving;
-        std::fill(std::begin(query.kept), std::end(query.kept), DistanceQuery::KeptBound{});
-    }
-    return device::walkPairs(nodesF, nodesM, query);
-}
-
 // surfaceDistance, or with `walk` false only the hint's pair (hintedDistance): one setup and one
 // placement arithmetic for both, so a hinted pair measures the same as it does in the walk.
 bool measureSurfaces(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
@@ -310,17 +380,8 @@ bool measureSurfaces(const MeshBvh &a, const Eigen::Isometry3d &poseA, const Mes
         query.place(hintMoving, placedTriangle);
         query.measure(hintFixed, hintMoving, placedTriangle);
     }
-    device::WalkEnd end = device::WalkEnd::Stopped;
     if (walk && !(query.found && query.best <= 0.0))
-        end = widenedWalks(query, std::isinf(bound));
-    if (end == device::WalkEnd::Overflow)
-    {
-        // A tree deeper than the walk's stack (the builder rules it out): no bound can be trusted.
-        result = SurfaceDistance{};
-        result.distance = 0.0;
-        result.pointA = result.pointB = fixedPose * nodeCentre(fixed.nodes()[0]);
-        return true;
-    }
+        walkNearestFirst(query);
     if (!query.found)
         return false;
     const std::int32_t triangleFixed = static_cast<std::int32_t>(fixed.triangleOrder()[query.slotFixed]);

@@ -33,11 +33,14 @@ struct SurfaceHint
 
 /** \brief Lower bound on the distance between a fixed tree's node and a moving tree's node placed in
     the fixed frame (its axes the columns of \a axesM, its centre at \a between from the fixed node's
-    centre): the larger of the bounding spheres' gap and the widest gap between the boxes along
-    any of the 15 separating axes (each axis normalised, so its gap is a Euclidean lower bound).
-    0 when the boxes overlap. Not grown by any rounding slack: the caller subtracts it. */
+    centre): the larger of the bounding spheres' gap, the widest gap between the boxes along any of
+    the 15 separating axes (each axis normalised, so its gap is a Euclidean lower bound) and each box
+    against the other's centre. 0 when the boxes overlap. Not grown by any rounding slack: the caller
+    subtracts it. Returns as soon as the bound reaches \a reach (then a value at least \a reach, not
+    necessarily the largest): a walk that prunes at its best distance needs no more. */
 double nodeDistanceLowerBound(const MeshBvh::Node &fixed, const Eigen::Matrix3d &axesM, const MeshBvh::Node &moving,
-                              const Eigen::Vector3d &between);
+                              const Eigen::Vector3d &between,
+                              double reach = std::numeric_limits<double>::infinity());
 
 /** \brief The smallest distance between the surfaces of A (placed by \a poseA) and B (placed by
     \a poseB) when it is below \a bound (metres): true, and \a result holds it with a closest pair
