@@ -25,12 +25,13 @@ double treeScale(const MeshBvh &bvh)
 
 // Are triangles p and q at least `reach` apart along one of the eleven axes that separate disjoint
 // triangles (each one's normal, and the cross products of an edge of each)? The gap along an axis is
-// a lower bound on their distance, and equals it where the closest points are a vertex over a face
+// a lower bound on their distance, and equals it where the closest points are a corner over a face
 // (the normal) or two edges' interiors (their cross product), so near the best distance it settles
-// most triangle pairs that hold nothing nearer for a few dozen products, where the exact distance
-// costs the exact intersection test and fifteen feature pairs. Squared, so no root is taken. The
-// margin covers the rounding of the projections (taken about p's first corner), so a pair it skips
-// is farther than the reach.
+// many triangle pairs that hold nothing nearer for a few dozen products, where the exact distance
+// costs the exact intersection test and fifteen feature pairs. Every corner is projected (about p's
+// first corner), so an axis may carry any rounding (the cross product of nearly parallel edges, the
+// normal of a sliver): the margin covers only the projections' rounding. The gaps are compared
+// squared against the reach times the axis's squared length, so no root is taken.
 bool trianglesApart(const Vec p[3], const Vec q[3], double reach)
 {
     const Vec pe[3] = {Vec::Zero(), p[1] - p[0], p[2] - p[0]};
@@ -39,39 +40,22 @@ bool trianglesApart(const Vec p[3], const Vec q[3], double reach)
                          qe[2].lpNorm<1>();
     const double margined = reach + 1e-12 * scale;
     const double reach2 = margined * margined;
-    // Gap between the projections [lowP, highP] and [lowQ, highQ] on axis a, against the reach.
-    const auto apart = [reach2](const Vec &a, double lowP, double highP, double lowQ, double highQ)
+    const auto apart = [&](const Vec &axis)
     {
-        const double gap = std::max(lowQ - highP, lowP - highQ);
-        return gap > 0.0 && gap * gap >= reach2 * a.squaredNorm();
+        const double p1 = axis.dot(pe[1]), p2 = axis.dot(pe[2]);  // p's first corner projects to 0
+        const double q0 = axis.dot(qe[0]), q1 = axis.dot(qe[1]), q2 = axis.dot(qe[2]);
+        const double gap = std::max(std::min(q0, std::min(q1, q2)) - std::max(0.0, std::max(p1, p2)),
+                                    std::min(0.0, std::min(p1, p2)) - std::max(q0, std::max(q1, q2)));
+        return gap > 0.0 && gap * gap >= reach2 * axis.squaredNorm();
     };
-    const auto range = [](double x, double y, double z, double &low, double &high)
-    {
-        low = std::min(x, std::min(y, z));
-        high = std::max(x, std::max(y, z));
-    };
-    double lowP, highP, lowQ, highQ;
-    const Vec normalP = pe[1].cross(pe[2]);
-    range(normalP.dot(qe[0]), normalP.dot(qe[1]), normalP.dot(qe[2]), lowQ, highQ);
-    if (apart(normalP, 0.0, 0.0, lowQ, highQ))
-        return true;
-    const Vec normalQ = (qe[1] - qe[0]).cross(qe[2] - qe[0]);
-    const double onQ = normalQ.dot(qe[0]);
-    range(0.0, normalQ.dot(pe[1]), normalQ.dot(pe[2]), lowP, highP);
-    if (apart(normalQ, lowP, highP, onQ, onQ))
+    if (apart(pe[1].cross(pe[2])) || apart((qe[1] - qe[0]).cross(qe[2] - qe[0])))
         return true;
     for (int i = 0; i < 3; ++i)
     {
         const Vec edgeP = pe[(i + 1) % 3] - pe[i];
         for (int j = 0; j < 3; ++j)
-        {
-            // Along edgeP x edgeQ both ends of each edge project alike: two corners of each suffice.
-            const Vec axis = edgeP.cross(qe[(j + 1) % 3] - qe[j]);
-            const double p0 = axis.dot(pe[i]), p1 = axis.dot(pe[(i + 2) % 3]);
-            const double q0 = axis.dot(qe[j]), q1 = axis.dot(qe[(j + 2) % 3]);
-            if (apart(axis, std::min(p0, p1), std::max(p0, p1), std::min(q0, q1), std::max(q0, q1)))
+            if (apart(edgeP.cross(qe[(j + 1) % 3] - qe[j])))
                 return true;
-        }
     }
     return false;
 }
@@ -192,16 +176,19 @@ public:
             capacity_ = spilled_.size();
         }
         data_[size_++] = pair;
-        std::push_heap(data_, data_ + size_, farther);
+        std::push_heap(data_, data_ + size_, Farther{});
     }
     PendingPair pop()
     {
-        std::pop_heap(data_, data_ + size_, farther);
+        std::pop_heap(data_, data_ + size_, Farther{});
         return data_[--size_];
     }
 
 private:
-    static bool farther(const PendingPair &x, const PendingPair &y) { return x.bound > y.bound; }
+    struct Farther
+    {
+        bool operator()(const PendingPair &x, const PendingPair &y) const { return x.bound > y.bound; }
+    };
     static constexpr std::size_t kInline = 256;
     PendingPair inline_[kInline];
     std::vector<PendingPair> spilled_;
@@ -276,8 +263,6 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P,
 {
     const double centres = between.norm();
     double bound = centres - (static_cast<double>(nf.radius) + nm.radius);
-    if (bound >= reach)
-        return bound;
     const float *f = nf.axes;  // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
     const double ea[3] = {nf.halfExtents[0], nf.halfExtents[1], nf.halfExtents[2]};
     const double eb[3] = {nm.halfExtents[0], nm.halfExtents[1], nm.halfExtents[2]};
@@ -323,20 +308,14 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P,
         {
             // Axis i of the fixed box cross axis j of the moving one: its length is the sine of their
             // angle, read from the two other rows of R (no cancellation when they are parallel;
-            // a near-zero axis is skipped, the face axes cover that case). Its gap is divided by the
-            // length only where it raises the bound (compared squared, so mostly no root is taken).
+            // a near-zero axis is skipped, the face axes cover that case).
             const double length2 = R[i1][j] * R[i1][j] + R[i2][j] * R[i2][j];
             if (length2 < 1e-12)
                 continue;
             const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
             const double gap = std::abs(d[i2] * R[i1][j] - d[i1] * R[i2][j]) -
                                (ea[i1] * Q[i2][j] + ea[i2] * Q[i1][j] + eb[j1] * Q[i][j2] + eb[j2] * Q[i][j1]);
-            if (gap > 0.0 && (bound <= 0.0 || gap * gap > bound * bound * length2))
-            {
-                bound = gap / std::sqrt(length2);
-                if (bound >= reach)
-                    return bound;
-            }
+            bound = std::max(bound, gap / std::sqrt(length2));
         }
     }
     return std::max(bound, 0.0);
