@@ -434,8 +434,9 @@ RC_HD_CALL double triangleDistance(const Vec3<double> &p0, const Vec3<double> &p
     const V *const q[3] = {&q0, &q1, &q2};
     double best = HUGE_VAL;
     V bestP = p0, bestQ = q0;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
+    bool separated = false;
+    for (int i = 0; i < 3 && !separated; ++i)
+        for (int j = 0; j < 3 && !separated; ++j)
         {
             const double d = segmentSegment(*p[i], *p[(i + 1) % 3], *q[j], *q[(j + 1) % 3], x, y);
             if (d < best)
@@ -444,8 +445,13 @@ RC_HD_CALL double triangleDistance(const Vec3<double> &p0, const Vec3<double> &p
                 bestP = x;
                 bestQ = y;
             }
+            // The edges' closest points are the triangles' when the plane through each, normal to
+            // the segment between them, has the other corner of its triangle behind it (PQP's test):
+            // then nothing is nearer, and the remaining features need not be measured.
+            const V between = y - x;
+            separated = dot(*p[(i + 2) % 3] - x, between) <= 0.0 && dot(*q[(j + 2) % 3] - y, between) >= 0.0;
         }
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < 3 && !separated; ++i)
     {
         double d = vertexFace(*p[i], q0, q1, q2, y);
         if (d < best)
