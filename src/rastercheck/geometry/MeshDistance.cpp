@@ -51,6 +51,70 @@ bool planesApart(const Vec p[3], const Vec q[3], double reach)
     return apart(pe[1].cross(pe[2])) || apart((qe[1] - qe[0]).cross(qe[2] - qe[0]));
 }
 
+// nodeDistanceLowerBound(), inlined into the walk: the moving node's axes as placed (axesM[j] its
+// axis j in the fixed frame).
+inline double boxesLowerBound(const MeshBvh::Node &nf, const device::Vec3<double> axesM[3], const MeshBvh::Node &nm,
+                              const device::Vec3<double> &between, double reach)
+{
+    const double centres = std::sqrt(dot(between, between));
+    double bound = centres - (static_cast<double>(nf.radius) + nm.radius);
+    const float *f = nf.axes;  // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
+    const double ea[3] = {nf.halfExtents[0], nf.halfExtents[1], nf.halfExtents[2]};
+    const double eb[3] = {nm.halfExtents[0], nm.halfExtents[1], nm.halfExtents[2]};
+    double d[3];
+    for (int i = 0; i < 3; ++i)
+        d[i] = f[i] * between.x + f[3 + i] * between.y + f[6 + i] * between.z;
+    double R[3][3], Q[3][3];     // R(i, j) = axis i of the fixed box . axis j of the moving box; Q = |R|
+    for (int i = 0; i < 3; ++i)
+    {
+        const double a0 = f[i], a1 = f[3 + i], a2 = f[6 + i];
+        for (int j = 0; j < 3; ++j)
+        {
+            R[i][j] = a0 * axesM[j].x + a1 * axesM[j].y + a2 * axesM[j].z;
+            Q[i][j] = std::abs(R[i][j]);
+        }
+        bound = std::max(bound, std::abs(d[i]) - (ea[i] + Q[i][0] * eb[0] + Q[i][1] * eb[1] + Q[i][2] * eb[2]));
+    }
+    // Each box against the other's centre: no point of the moving node is nearer the fixed box than
+    // its centre less its radius, and the other way round. Tight where a node is small against the
+    // gap, which the axes' projections are not when the gap runs diagonally to every axis.
+    double outsideFixed = 0.0, outsideMoving = 0.0;
+    for (int i = 0; i < 3; ++i)
+    {
+        const double t = std::max(std::abs(d[i]) - ea[i], 0.0);
+        outsideFixed += t * t;
+    }
+    for (int j = 0; j < 3; ++j)
+    {
+        const double along = std::abs(d[0] * R[0][j] + d[1] * R[1][j] + d[2] * R[2][j]);
+        bound = std::max(bound, along - (ea[0] * Q[0][j] + ea[1] * Q[1][j] + ea[2] * Q[2][j] + eb[j]));
+        const double t = std::max(along - eb[j], 0.0);
+        outsideMoving += t * t;
+    }
+    bound = std::max(bound, std::sqrt(outsideFixed) - nm.radius);
+    bound = std::max(bound, std::sqrt(outsideMoving) - nf.radius);
+    if (bound >= reach)
+        return bound;
+    for (int i = 0; i < 3; ++i)
+    {
+        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+        for (int j = 0; j < 3; ++j)
+        {
+            // Axis i of the fixed box cross axis j of the moving one: its length is the sine of their
+            // angle, read from the two other rows of R (no cancellation when they are parallel;
+            // a near-zero axis is skipped, the face axes cover that case).
+            const double length2 = R[i1][j] * R[i1][j] + R[i2][j] * R[i2][j];
+            if (length2 < 1e-12)
+                continue;
+            const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+            const double gap = std::abs(d[i2] * R[i1][j] - d[i1] * R[i2][j]) -
+                               (ea[i1] * Q[i2][j] + ea[i2] * Q[i1][j] + eb[j1] * Q[i][j2] + eb[j2] * Q[i][j1]);
+            bound = std::max(bound, gap / std::sqrt(length2));
+        }
+    }
+    return std::max(bound, 0.0);
+}
+
 // The distance query, in the fixed tree's frame with the moving tree placed there by R, T. `best` is
 // the reach: it starts at the caller's bound and shrinks with every nearer triangle pair.
 struct DistanceQuery
@@ -80,15 +144,13 @@ struct DistanceQuery
     {
         const MeshBvh::Node &nf = nodesF[indexF], &nm = nodesM[indexM];
         const device::PlacedNode &pm = placed(indexM);
-        const Vec between(pm.centre.x - nf.centre[0], pm.centre.y - nf.centre[1], pm.centre.z - nf.centre[2]);
+        const device::Vec3<double> between{pm.centre.x - nf.centre[0], pm.centre.y - nf.centre[1],
+                                           pm.centre.z - nf.centre[2]};
         // Bounding spheres first: one dot product settles most pairs far from the best.
         const double spheres = static_cast<double>(nf.radius) + nm.radius + best + slack;
-        if (between.squaredNorm() >= spheres * spheres)
+        if (dot(between, between) >= spheres * spheres)
             return best;
-        Eigen::Matrix3d axes;
-        for (int j = 0; j < 3; ++j)
-            axes.col(j) = Vec(pm.axis[j].x, pm.axis[j].y, pm.axis[j].z);
-        return nodeDistanceLowerBound(nf, axes, nm, between, best + slack) - slack;
+        return boxesLowerBound(nf, pm.axis, nm, between, best + slack) - slack;
     }
 
     // The moving tree's triangle in slot sm, placed in the fixed frame.
@@ -249,67 +311,13 @@ void walkNearestFirst(DistanceQuery &query)
 }
 }  // namespace
 
-double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &P, const MeshBvh::Node &nm,
+double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &axesM, const MeshBvh::Node &nm,
                               const Vec &between, double reach)
 {
-    const double centres = between.norm();
-    double bound = centres - (static_cast<double>(nf.radius) + nm.radius);
-    const float *f = nf.axes;  // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
-    const double ea[3] = {nf.halfExtents[0], nf.halfExtents[1], nf.halfExtents[2]};
-    const double eb[3] = {nm.halfExtents[0], nm.halfExtents[1], nm.halfExtents[2]};
-    double d[3];
-    for (int i = 0; i < 3; ++i)
-        d[i] = f[i] * between[0] + f[3 + i] * between[1] + f[6 + i] * between[2];
-    const double *p = P.data();  // column-major: the moving box's axis j is p[3j .. 3j + 2]
-    double R[3][3], Q[3][3];     // R(i, j) = axis i of the fixed box . axis j of the moving box; Q = |R|
-    for (int i = 0; i < 3; ++i)
-    {
-        const double a0 = f[i], a1 = f[3 + i], a2 = f[6 + i];
-        for (int j = 0; j < 3; ++j)
-        {
-            R[i][j] = a0 * p[3 * j] + a1 * p[3 * j + 1] + a2 * p[3 * j + 2];
-            Q[i][j] = std::abs(R[i][j]);
-        }
-        bound = std::max(bound, std::abs(d[i]) - (ea[i] + Q[i][0] * eb[0] + Q[i][1] * eb[1] + Q[i][2] * eb[2]));
-    }
-    // Each box against the other's centre: no point of the moving node is nearer the fixed box than
-    // its centre less its radius, and the other way round. Tight where a node is small against the
-    // gap, which the axes' projections are not when the gap runs diagonally to every axis.
-    double outsideFixed = 0.0, outsideMoving = 0.0;
-    for (int i = 0; i < 3; ++i)
-    {
-        const double t = std::max(std::abs(d[i]) - ea[i], 0.0);
-        outsideFixed += t * t;
-    }
+    device::Vec3<double> axes[3];
     for (int j = 0; j < 3; ++j)
-    {
-        const double along = std::abs(d[0] * R[0][j] + d[1] * R[1][j] + d[2] * R[2][j]);
-        bound = std::max(bound, along - (ea[0] * Q[0][j] + ea[1] * Q[1][j] + ea[2] * Q[2][j] + eb[j]));
-        const double t = std::max(along - eb[j], 0.0);
-        outsideMoving += t * t;
-    }
-    bound = std::max(bound, std::sqrt(outsideFixed) - nm.radius);
-    bound = std::max(bound, std::sqrt(outsideMoving) - nf.radius);
-    if (bound >= reach)
-        return bound;
-    for (int i = 0; i < 3; ++i)
-    {
-        const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-        for (int j = 0; j < 3; ++j)
-        {
-            // Axis i of the fixed box cross axis j of the moving one: its length is the sine of their
-            // angle, read from the two other rows of R (no cancellation when they are parallel;
-            // a near-zero axis is skipped, the face axes cover that case).
-            const double length2 = R[i1][j] * R[i1][j] + R[i2][j] * R[i2][j];
-            if (length2 < 1e-12)
-                continue;
-            const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-            const double gap = std::abs(d[i2] * R[i1][j] - d[i1] * R[i2][j]) -
-                               (ea[i1] * Q[i2][j] + ea[i2] * Q[i1][j] + eb[j1] * Q[i][j2] + eb[j2] * Q[i][j1]);
-            bound = std::max(bound, gap / std::sqrt(length2));
-        }
-    }
-    return std::max(bound, 0.0);
+        axes[j] = {axesM(0, j), axesM(1, j), axesM(2, j)};
+    return boxesLowerBound(nf, axes, nm, device::Vec3<double>{between.x(), between.y(), between.z()}, reach);
 }
 
 namespace
