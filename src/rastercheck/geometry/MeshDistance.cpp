@@ -7,6 +7,7 @@
 
 #include "rastercheck/device/Traversal.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/device/TriangleTests.h"
 #include "rastercheck/geometry/TriangleTests.h"
 
 namespace rastercheck
@@ -23,32 +24,83 @@ double treeScale(const MeshBvh &bvh)
     return device::treeScale(bvh.exactTree());
 }
 
-// Does one of triangles p and q lie at least `reach` beyond the other's plane, all on one side? A
-// lower bound on their distance (exact where the nearest points are a corner over the other's face)
-// that settles a good share of the leaf pairs near the best distance for two cross products, where
-// triangleDistance() costs the exact intersection test and up to fifteen feature pairs. (The nine
-// axes across an edge of each settle more pairs, but cost more than they save: bench/distance, FCL
-// env/rob 28.8 -> 29.9 us, alpha-1.5 167 -> 194 us.) Every corner is projected (about p's first
-// corner), so a normal may carry any rounding (a sliver's): the margin covers only the projections'
-// rounding. The gap is compared squared against the reach times the normal's squared length, so
-// no root is taken.
-bool planesApart(const Vec p[3], const Vec q[3], double reach)
+// What each triangle's plane tells of triangles p and q, before triangleDistance() (which costs the
+// exact intersection test and up to fifteen feature pairs) is asked.
+enum class PlanesShow
+{
+    Beyond,      // one triangle lies at least the reach beyond the other's plane: nothing nearer
+    CornerOver,  // one lies wholly on one side of the other's plane, and its corner nearest that plane
+                 // projects into the other: that corner and its foot are a closest pair (the slab
+                 // between the plane and the parallel one through the corner holds nothing of either)
+    Nothing
+};
+
+// Each normal's gap is a lower bound on the distance (exact where the nearest points are a corner
+// over a face), which settles a good share of the leaf pairs near the best distance for two cross
+// products, and a corner over a face (the nearest pair of most pairs of large triangles, as in
+// OMPL.app's Easy and Twistycool) is measured by one corner/face distance, so neither the
+// intersection test nor an edge pair is. (The nine axes across an edge of each settle more pairs, but
+// cost more than they save: bench/distance, FCL env/rob 28.8 -> 29.9 us, alpha-1.5 167 -> 194 us.)
+// Every corner is projected (about p's first corner), so a normal may carry any rounding (a
+// sliver's): the margin covers the projections' rounding. A gap is compared squared against the
+// reach times the normal's squared length, so no root is taken. On CornerOver, `distance`, `onP` and
+// `onQ` are set as triangleDistance() would set them for that pair of features.
+PlanesShow whatPlanesShow(const Vec p[3], const Vec q[3], double reach, double &distance, Vec &onP, Vec &onQ)
 {
     const Vec pe[3] = {Vec::Zero(), p[1] - p[0], p[2] - p[0]};
     const Vec qe[3] = {q[0] - p[0], q[1] - p[0], q[2] - p[0]};
-    const double scale = pe[1].lpNorm<1>() + pe[2].lpNorm<1>() + qe[0].lpNorm<1>() + qe[1].lpNorm<1>() +
-                         qe[2].lpNorm<1>();
-    const double margined = reach + 1e-12 * scale;
-    const double reach2 = margined * margined;
-    const auto apart = [&](const Vec &axis)
+    const double rounding = 1e-12 * (pe[1].lpNorm<1>() + pe[2].lpNorm<1>() + qe[0].lpNorm<1>() +
+                                     qe[1].lpNorm<1>() + qe[2].lpNorm<1>());
+    const double reach2 = (reach + rounding) * (reach + rounding);
+    // One triangle against the other's plane: `gap` (0 unless it lies wholly beyond the plane, by more
+    // than rounding), the normal's squared length and the triangle's corner nearest the plane.
+    struct Side
     {
-        const double p1 = axis.dot(pe[1]), p2 = axis.dot(pe[2]);  // p's first corner projects to 0
-        const double q0 = axis.dot(qe[0]), q1 = axis.dot(qe[1]), q2 = axis.dot(qe[2]);
-        const double gap = std::max(std::min(q0, std::min(q1, q2)) - std::max(0.0, std::max(p1, p2)),
-                                    std::min(0.0, std::min(p1, p2)) - std::max(q0, std::max(q1, q2)));
-        return gap > 0.0 && gap * gap >= reach2 * axis.squaredNorm();
+        double gap = 0.0, length2 = 1.0;
+        int nearest = 0;
     };
-    return apart(pe[1].cross(pe[2])) || apart((qe[1] - qe[0]).cross(qe[2] - qe[0]));
+    const auto against = [&](const Vec &normal, const Vec *own, const Vec *other)
+    {
+        Side side;
+        side.length2 = normal.squaredNorm();
+        const double o0 = normal.dot(own[0]), o1 = normal.dot(own[1]), o2 = normal.dot(own[2]);
+        const double h[3] = {normal.dot(other[0]), normal.dot(other[1]), normal.dot(other[2])};
+        const double above = std::min(h[0], std::min(h[1], h[2])) - std::max(o0, std::max(o1, o2));
+        const double below = std::min(o0, std::min(o1, o2)) - std::max(h[0], std::max(h[1], h[2]));
+        const double gap = std::max(above, below);
+        if (gap > 0.0 && gap * gap > rounding * rounding * side.length2)
+        {
+            side.gap = gap;
+            const double sign = above > below ? 1.0 : -1.0;
+            side.nearest = sign * h[1] < sign * h[0] ? 1 : 0;
+            side.nearest = sign * h[2] < sign * h[side.nearest] ? 2 : side.nearest;
+        }
+        return side;
+    };
+    const auto beyond = [&](const Side &side) { return side.gap * side.gap >= reach2 * side.length2; };
+    const Side overP = against(pe[1].cross(pe[2]), pe, qe);
+    if (beyond(overP))
+        return PlanesShow::Beyond;
+    const Side overQ = against((qe[1] - qe[0]).cross(qe[2] - qe[0]), qe, pe);
+    if (beyond(overQ))
+        return PlanesShow::Beyond;
+    // A corner over a face is nearest only across the wider of the two gaps (the distance is at least
+    // both), so one corner/face distance is tried at most.
+    if (overP.gap <= 0.0 && overQ.gap <= 0.0)
+        return PlanesShow::Nothing;
+    const bool acrossP = overP.gap * overP.gap * overQ.length2 >= overQ.gap * overQ.gap * overP.length2;
+    const Vec *face = acrossP ? p : q;
+    const Vec &corner = acrossP ? q[overP.nearest] : p[overQ.nearest];
+    const auto toDevice = [](const Vec &v) { return device::Vec3<double>{v.x(), v.y(), v.z()}; };
+    device::Vec3<double> foot;
+    const double d =
+        device::triangles::vertexFace(toDevice(corner), toDevice(face[0]), toDevice(face[1]), toDevice(face[2]), foot);
+    if (!(d < HUGE_VAL))
+        return PlanesShow::Nothing;
+    distance = std::sqrt(d);
+    (acrossP ? onP : onQ) = Vec(foot.x, foot.y, foot.z);
+    (acrossP ? onQ : onP) = corner;
+    return PlanesShow::CornerOver;
 }
 
 // nodeDistanceLowerBound(), inlined into the walk: the moving node's axes as placed (axesM[j] its
@@ -167,11 +219,14 @@ struct DistanceQuery
     {
         const double *cf = fixed.slotCorners(sf);
         const Vec fixedTriangle[3] = {CornersMap(cf), CornersMap(cf + 3), CornersMap(cf + 6)};
-        if (planesApart(fixedTriangle, placedTriangle, best))
-            return true;
+        double d;
         Vec onFixed, onMoving;
-        const double d = triangleDistance(fixedTriangle[0], fixedTriangle[1], fixedTriangle[2], placedTriangle[0],
-                                          placedTriangle[1], placedTriangle[2], &onFixed, &onMoving);
+        const PlanesShow shown = whatPlanesShow(fixedTriangle, placedTriangle, best, d, onFixed, onMoving);
+        if (shown == PlanesShow::Beyond)
+            return true;
+        if (shown == PlanesShow::Nothing)
+            d = triangleDistance(fixedTriangle[0], fixedTriangle[1], fixedTriangle[2], placedTriangle[0],
+                                 placedTriangle[1], placedTriangle[2], &onFixed, &onMoving);
         if (d < best)
         {
             best = d;
