@@ -49,8 +49,8 @@ PlanesShow whatPlanesShow(const Vec p[3], const Vec q[3], double reach, double &
 {
     const Vec pe[3] = {Vec::Zero(), p[1] - p[0], p[2] - p[0]};
     const Vec qe[3] = {q[0] - p[0], q[1] - p[0], q[2] - p[0]};
-    const double rounding = 1e-12 * (pe[1].lpNorm<1>() + pe[2].lpNorm<1>() + qe[0].lpNorm<1>() +
-                                     qe[1].lpNorm<1>() + qe[2].lpNorm<1>());
+    const double rounding =
+        1e-12 * (pe[1].lpNorm<1>() + pe[2].lpNorm<1>() + qe[0].lpNorm<1>() + qe[1].lpNorm<1>() + qe[2].lpNorm<1>());
     const double reach2 = (reach + rounding) * (reach + rounding);
     // One triangle against the other's plane: `gap` (0 unless it lies wholly beyond the plane, by more
     // than rounding), the normal's squared length and the triangle's corner nearest the plane.
@@ -116,7 +116,7 @@ inline double boxesLowerBound(const MeshBvh::Node &nf, const device::Vec3<double
     double d[3];
     for (int i = 0; i < 3; ++i)
         d[i] = f[i] * between.x + f[3 + i] * between.y + f[6 + i] * between.z;
-    double R[3][3], Q[3][3];     // R(i, j) = axis i of the fixed box . axis j of the moving box; Q = |R|
+    double R[3][3], Q[3][3];  // R(i, j) = axis i of the fixed box . axis j of the moving box; Q = |R|
     for (int i = 0; i < 3; ++i)
     {
         const double a0 = f[i], a1 = f[3 + i], a2 = f[6 + i];

@@ -39,8 +39,7 @@ struct SurfaceHint
     subtracts it. Returns as soon as the bound reaches \a reach (then a value at least \a reach, not
     necessarily the largest): a walk that prunes at its best distance needs no more. */
 double nodeDistanceLowerBound(const MeshBvh::Node &fixed, const Eigen::Matrix3d &axesM, const MeshBvh::Node &moving,
-                              const Eigen::Vector3d &between,
-                              double reach = std::numeric_limits<double>::infinity());
+                              const Eigen::Vector3d &between, double reach = std::numeric_limits<double>::infinity());
 
 /** \brief The smallest distance between the surfaces of A (placed by \a poseA) and B (placed by
     \a poseB) when it is below \a bound (metres): true, and \a result holds it with a closest pair
