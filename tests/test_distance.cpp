@@ -142,6 +142,23 @@ void compareChecker(const rc::Checker &checker, std::size_t n, unsigned seed, bo
         EXPECT_FALSE(checker.isValid(state, padded)) << "state " << i << ": " << checker.describe(r);
     }
 }
+
+/** \brief A flat square grid of n x n cells (two triangles each) in the plane z = 0, side 1. */
+rc::Mesh flatGrid(int n)
+{
+    rc::Mesh grid;
+    for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n; ++j)
+            grid.vertices.emplace_back(static_cast<double>(i) / n, static_cast<double>(j) / n, 0.0);
+    const auto at = [n](int i, int j) { return static_cast<std::uint32_t>(i * (n + 1) + j); };
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j)
+        {
+            grid.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            grid.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    return grid;
+}
 }  // namespace
 
 TEST(SurfaceDistance, MatchesBruteForceAndFclOnNonConvexMeshes)
@@ -186,6 +203,81 @@ TEST(SurfaceDistance, MatchesFclOnFclsEnvAndRob)
         EXPECT_LT(pointToTriangle(d.pointB, env, d.triangleB, Isometry3d::Identity()), 1e-9 * extent);
     }
     EXPECT_GT(apart, 20);
+}
+
+TEST(SurfaceDistance, SingleTrianglesMatchTriangleDistance)
+{
+    // One triangle each: the walk's own tests of a triangle pair (beyond a plane, a corner over a
+    // face) decide alone, so every answer must be triangleDistance's, near pairs and slivers included.
+    std::mt19937_64 rng(13);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int atCorner = 0;
+    for (int trial = 0; trial < 20000; ++trial)
+    {
+        rc::Mesh a, b;
+        for (int k = 0; k < 3; ++k)
+        {
+            a.vertices.emplace_back(u(rng), u(rng), u(rng));
+            b.vertices.emplace_back(u(rng) + 1.5, u(rng), u(rng));
+        }
+        if (trial % 4 == 1)  // a sliver
+            a.vertices[2] = 0.5 * (a.vertices[0] + a.vertices[1]) + Vector3d::Constant(1e-7 * u(rng));
+        if (trial % 4 == 2)  // a flat triangle over the other's face
+            b.vertices[2] = Vector3d(b.vertices[2].x(), b.vertices[0].y(), b.vertices[0].z() + 0.5);
+        a.triangles.push_back({0, 1, 2});
+        b.triangles.push_back({0, 1, 2});
+        const rc::MeshBvh bvhA(a), bvhB(b);
+        Vector3d x, y;
+        const double expected = rc::triangleDistance(a.vertices[0], a.vertices[1], a.vertices[2], b.vertices[0],
+                                                     b.vertices[1], b.vertices[2], &x, &y);
+        rc::SurfaceDistance d;
+        ASSERT_TRUE(rc::surfaceDistance(bvhA, Isometry3d::Identity(), bvhB, Isometry3d::Identity(),
+                                        std::numeric_limits<double>::infinity(), d));
+        ASSERT_NEAR(d.distance, expected, 1e-13) << "trial " << trial;
+        ASSERT_NEAR((d.pointA - d.pointB).norm(), d.distance, 1e-12) << "trial " << trial;
+        for (int k = 0; k < 3; ++k)  // a corner of either is a closest point
+            if (expected > 0.0 && (d.pointA == a.vertices[k] || d.pointB == b.vertices[k]))
+            {
+                ++atCorner;
+                break;
+            }
+        if (expected > 0.0)
+        {
+            rc::SurfaceDistance capped;
+            ASSERT_FALSE(rc::surfaceDistance(bvhA, Isometry3d::Identity(), bvhB, Isometry3d::Identity(),
+                                             expected * (1.0 - 1e-9), capped));
+        }
+    }
+    std::printf("[ info     ] 20000 pairs, %d with a corner as a closest point\n", atCorner);
+    EXPECT_GT(atCorner, 5000);
+}
+
+TEST(SurfaceDistance, ParallelGridsWhereThousandsOfPairsTie)
+{
+    // Two fine grids facing each other: every pair of triangles one above the other is at (nearly)
+    // the same distance, so the nearest-first walk keeps hundreds of node pairs waiting at once
+    // (more than it holds on the stack) and no bound settles the ties.
+    const rc::Mesh a = flatGrid(24), b = flatGrid(20);
+    const rc::MeshBvh bvhA(a), bvhB(b, 2);
+    const double extent = extentOf(a, b);
+    for (int k = 0; k < 6; ++k)
+    {
+        Isometry3d pose = Isometry3d::Identity();
+        pose.linear() = (Eigen::AngleAxisd(0.3 * k, Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(k % 2 ? 1e-4 * k : 0.0, Vector3d::UnitX()))
+                            .toRotationMatrix();
+        pose.translation() = Vector3d(0.1 + 0.05 * k, 0.2 - 0.03 * k, 0.01 * (k + 1));
+        rc::SurfaceDistance d;
+        ASSERT_TRUE(
+            rc::surfaceDistance(bvhA, Isometry3d::Identity(), bvhB, pose, std::numeric_limits<double>::infinity(), d));
+        const double brute = bruteForceDistance(a, Isometry3d::Identity(), b, pose);
+        EXPECT_NEAR(d.distance, brute, 1e-12 * extent) << "pose " << k;
+        EXPECT_NEAR(d.distance, rc::test::fclMeshDistance(a, Isometry3d::Identity(), b, pose), 1e-9 * extent);
+        EXPECT_LT(pointToTriangle(d.pointA, a, d.triangleA, Isometry3d::Identity()), 1e-9 * extent);
+        EXPECT_LT(pointToTriangle(d.pointB, b, d.triangleB, pose), 1e-9 * extent);
+        rc::SurfaceDistance capped;
+        EXPECT_FALSE(rc::surfaceDistance(bvhA, Isometry3d::Identity(), bvhB, pose, 0.999 * d.distance, capped));
+    }
 }
 
 TEST(SurfaceDistance, SolidInsideAnotherIsFound)

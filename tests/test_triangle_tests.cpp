@@ -13,6 +13,7 @@
 #include <fcl/narrowphase/detail/traversal/collision/intersect.h>
 
 #include "rastercheck/device/Predicates.h"
+#include "rastercheck/device/TriangleTests.h"
 #include "rastercheck/geometry/TriangleTests.h"
 
 namespace rc = rastercheck;
@@ -425,6 +426,57 @@ TEST(TriangleDistance, MatchesFclOnIntegerPairsWithParallelEdges)
         ++compared;
     }
     std::printf("[ info     ] %d integer pairs: largest |distance - FCL| %.3g\n", compared, worst);
+}
+
+TEST(TriangleDistance, IsTheSmallestOfAllFifteenFeatures)
+{
+    // triangleDistance ends its search at the first edge pair whose closest points the corners show
+    // to be the nearest; measured against every edge/edge and corner/face distance, it must still be
+    // their smallest, on pairs near each other (where the search ends early), slivers (whose
+    // normals carry rounding) and nearly parallel edges, far from the origin too.
+    using rc::device::triangles::segmentSegment;
+    using rc::device::triangles::vertexFace;
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+    int apart = 0;
+    double worst = 0.0;
+    for (int trial = 0; trial < 30000; ++trial)
+    {
+        const int kind = trial % 3;  // general, sliver, nearly parallel edges
+        const Vec origin = trial % 2 ? Vec(1e3, -2e3, 5e2) : Vec::Zero();
+        Triangle p, q;
+        for (int i = 0; i < 3; ++i)
+        {
+            p[i] = origin + Vec(coordinate(rng), coordinate(rng), coordinate(rng));
+            q[i] = origin + Vec(coordinate(rng), coordinate(rng), coordinate(rng)) + Vec(1.2, 0.0, 0.0);
+        }
+        if (kind == 1)
+            p[2] = p[0] + (0.5 + 1e-7 * coordinate(rng)) * (p[1] - p[0]) + Vec::Constant(1e-9 * coordinate(rng));
+        if (kind == 2)
+            q[1] = q[0] + (p[1] - p[0]) + Vec::Constant(1e-8 * coordinate(rng));
+        Vec x, y;
+        const double ours = distance(p, q, &x, &y);
+        if (ours == 0.0)
+            continue;
+        ++apart;
+        const rc::device::Vec3<double> dp[3] = {toDevice(p[0]), toDevice(p[1]), toDevice(p[2])};
+        const rc::device::Vec3<double> dq[3] = {toDevice(q[0]), toDevice(q[1]), toDevice(q[2])};
+        double smallest = HUGE_VAL;
+        rc::device::Vec3<double> a, b;
+        for (int i = 0; i < 3; ++i)
+        {
+            for (int j = 0; j < 3; ++j)
+                smallest = std::min(smallest, segmentSegment(dp[i], dp[(i + 1) % 3], dq[j], dq[(j + 1) % 3], a, b));
+            smallest = std::min(smallest, vertexFace(dp[i], dq[0], dq[1], dq[2], b));
+            smallest = std::min(smallest, vertexFace(dq[i], dp[0], dp[1], dp[2], a));
+        }
+        ASSERT_NEAR(ours, std::sqrt(smallest), 1e-12 * (1.0 + origin.norm())) << "trial " << trial;
+        ASSERT_NEAR((x - y).norm(), ours, 1e-9);
+        worst = std::max(worst, std::abs(ours - std::sqrt(smallest)) / (1.0 + origin.norm()));
+    }
+    std::printf("[ info     ] %d pairs apart: largest |distance - smallest feature| %.3g of the coordinates\n", apart,
+                worst);
+    EXPECT_GT(apart, 10000);
 }
 
 TEST(TriangleDistance, HandMadeCases)

@@ -262,8 +262,8 @@ void DistanceQueries::measure(const double *q, const DistanceRequest &request, c
     // smallest is a real distance of this state, at or near the answer where the state is near the
     // workspace's last (a planner's next state) or the pair's relative pose depends on a few joints
     // only (a wrist), so the walks below prune against it from their first node pair. A single
-    // pair (a rigid body among meshes) has no other pair to bound: its own walk reads its hint, and
-    // widens its reach from below when the request gives no bound (surfaceDistance).
+    // pair (a rigid body among meshes) has no other pair to bound: its own walk reads its hint
+    // (surfaceDistance).
     for (std::size_t k = 0; ws.candidates.size() > 1 && k < ws.candidates.size(); ++k)
     {
         const DistanceWorkspace::Candidate &candidate = ws.candidates[k];

@@ -33,29 +33,31 @@ struct SurfaceHint
 
 /** \brief Lower bound on the distance between a fixed tree's node and a moving tree's node placed in
     the fixed frame (its axes the columns of \a axesM, its centre at \a between from the fixed node's
-    centre): the larger of the bounding spheres' gap and the widest gap between the boxes along
-    any of the 15 separating axes (each axis normalised, so its gap is a Euclidean lower bound).
-    0 when the boxes overlap. Not grown by any rounding slack: the caller subtracts it. */
+    centre): the larger of the bounding spheres' gap, the widest gap between the boxes along any of
+    the 15 separating axes (each axis normalised, so its gap is a Euclidean lower bound) and each box
+    against the other's centre. 0 when the boxes overlap. Not grown by any rounding slack: the caller
+    subtracts it. Returns as soon as the bound reaches \a reach (then a value at least \a reach, not
+    necessarily the largest): a walk that prunes at its best distance needs no more. */
 double nodeDistanceLowerBound(const MeshBvh::Node &fixed, const Eigen::Matrix3d &axesM, const MeshBvh::Node &moving,
-                              const Eigen::Vector3d &between);
+                              const Eigen::Vector3d &between, double reach = std::numeric_limits<double>::infinity());
 
 /** \brief The smallest distance between the surfaces of A (placed by \a poseA) and B (placed by
     \a poseB) when it is below \a bound (metres): true, and \a result holds it with a closest pair
     of points and their triangles. False when every pair of triangles is at least \a bound apart
     (result untouched); with an infinite bound, false only for an empty mesh.
 
-    FCL's and Coal's distance traversal over the two trees (device::walkPairs): a node pair is
-    skipped when its lower bound (nodeDistanceLowerBound, less a slack for the nodes' float
-    storage) is not below the best distance found so far, and leaf pairs are measured by
-    triangleDistance() with the smaller tree's triangles placed in the other's frame. So the
-    distance is exact for the coordinates after that one rigid transform (an intersection is decided
-    by exact predicates); the walk stops at the first crossing. With an infinite bound the walk's
-    reach is first widened from the roots' lower bound (doubling from a twentieth of the smaller
-    root's radius) until a walk finds a pair within it, which is then the nearest: a cold walk
-    spends most of its time before its best distance nears the answer. Surfaces only: a solid inside
-    another is apart by this measure (solidInside() tells). \a workspace (optional) caches the
-    placed nodes as for surfacesWithin; \a hint (optional) is read first and receives this query's
-    nearest pair when one is found. Thread-safe given one workspace and hint per thread. */
+    A best-first walk of the two trees (FCL's distance traversal with a queue): node pairs wait in a
+    heap by their lower bound (nodeDistanceLowerBound, less a slack for the nodes' float storage),
+    nearest first, and the walk ends when the nearest waiting bound reaches the best distance found,
+    so it visits only the node pairs whose bound is below the answer. Leaf pairs are measured with
+    the smaller tree's triangles placed in the other's frame: a pair one of whose triangles lies
+    beyond the other's plane by the best distance is skipped, a corner over the other's face is
+    measured as that corner/face distance, and any other pair by triangleDistance(). So the distance
+    is exact for the coordinates after that one rigid transform (an intersection is decided by exact
+    predicates); the walk stops at the first crossing. Surfaces only: a solid inside another is apart
+    by this measure (solidInside() tells). \a workspace (optional) caches the placed nodes as for
+    surfacesWithin; \a hint (optional) is read first and receives this query's nearest pair when one
+    is found. Thread-safe given one workspace and hint per thread. */
 bool surfaceDistance(const MeshBvh &a, const Eigen::Isometry3d &poseA, const MeshBvh &b, const Eigen::Isometry3d &poseB,
                      double bound, SurfaceDistance &result, ExactWorkspace *workspace = nullptr,
                      SurfaceHint *hint = nullptr);
