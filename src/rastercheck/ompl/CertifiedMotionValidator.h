@@ -32,7 +32,7 @@ struct CertifiedMotionOptions
         (Checker::freeRadius: each pair's exact distance against what it can close in along the
         edge) instead of halving the interval: conservative advancement. It checks fewer states
         (Panda MotionBenchMaker edges, bench/edges: 24.7 -> 19.6 per edge, plus 3 clearances) but
-        a clearance costs about a hundred checks there, so it is off by default
+        a clearance costs about fifty checks there (7x the time per edge), so it is off by default
         (docs/benchmarks.md, "Edges sized by clearance"). */
     bool sizeByClearance = false;
 };
