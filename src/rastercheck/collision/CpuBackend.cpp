@@ -361,7 +361,10 @@ int batchWorkers(std::size_t n, int requested)
     return static_cast<int>(std::min(wanted, cap));
 }
 
-CpuBackend::CpuBackend(CollisionModelConstPtr model) : model_(std::move(model)) {}
+CpuBackend::CpuBackend(CollisionModelConstPtr model)
+    : model_(std::move(model)), workspaces_([this] { return makeWorkspace(); })
+{
+}
 
 CpuBackend::~CpuBackend() = default;
 
@@ -372,22 +375,12 @@ std::unique_ptr<CpuWorkspace> CpuBackend::makeWorkspace() const
 
 std::unique_ptr<CpuWorkspace> CpuBackend::borrow() const
 {
-    {
-        std::lock_guard<std::mutex> lock(poolMutex_);
-        if (!pool_.empty())
-        {
-            std::unique_ptr<CpuWorkspace> workspace = std::move(pool_.back());
-            pool_.pop_back();
-            return workspace;
-        }
-    }
-    return makeWorkspace();
+    return workspaces_.borrow();
 }
 
 void CpuBackend::giveBack(std::unique_ptr<CpuWorkspace> workspace) const
 {
-    std::lock_guard<std::mutex> lock(poolMutex_);
-    pool_.push_back(std::move(workspace));
+    workspaces_.giveBack(std::move(workspace));
 }
 
 void CpuBackend::refitState(const double *q, CpuWorkspace &ws) const

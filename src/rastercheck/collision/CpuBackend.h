@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "rastercheck/collision/Backend.h"
+#include "rastercheck/core/Pool.h"
 #include "rastercheck/device/Boxes.h"
 #include "rastercheck/device/Pose.h"
 #include "rastercheck/device/Raster.h"
@@ -111,7 +112,6 @@ public:
 
 private:
     CollisionModelConstPtr model_;
-    mutable std::mutex poolMutex_;
-    mutable std::vector<std::unique_ptr<CpuWorkspace>> pool_;
+    Pool<CpuWorkspace> workspaces_;
 };
 }  // namespace rastercheck

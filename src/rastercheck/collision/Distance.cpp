@@ -92,34 +92,14 @@ struct DistanceQueries::PairMetric
     }
 };
 
-DistanceQueries::DistanceQueries(CollisionModelConstPtr model) : model_(std::move(model)), penetration_(*model_) {}
+DistanceQueries::DistanceQueries(CollisionModelConstPtr model)
+    : model_(std::move(model)),
+      penetration_(*model_),
+      workspaces_([this] { return std::make_unique<DistanceWorkspace>(*model_->robot); })
+{
+}
 
 DistanceQueries::~DistanceQueries() = default;
-
-std::unique_ptr<DistanceWorkspace> DistanceQueries::borrow() const
-{
-    {
-        const std::lock_guard<std::mutex> lock(poolMutex_);
-        if (!pool_.empty())
-        {
-            std::unique_ptr<DistanceWorkspace> ws = std::move(pool_.back());
-            pool_.pop_back();
-            return ws;
-        }
-    }
-    return std::make_unique<DistanceWorkspace>(*model_->robot);
-}
-
-void DistanceQueries::giveBack(std::unique_ptr<DistanceWorkspace> workspace) const
-{
-    const std::lock_guard<std::mutex> lock(poolMutex_);
-    pool_.push_back(std::move(workspace));
-}
-
-void DistanceQueries::distance(const double *q, const DistanceRequest &request, DistanceResult &result) const
-{
-    distance(q, 1, &result, request, 1);
-}
 
 template <class PerState>
 void DistanceQueries::forEachState(std::size_t n, int threads, const PerState &fn) const
@@ -127,19 +107,19 @@ void DistanceQueries::forEachState(std::size_t n, int threads, const PerState &f
     const int workers = batchWorkers(n, threads);
     if (workers == 1 || n < 2)  // no thread team for a single query (OMPL's clearance())
     {
-        std::unique_ptr<DistanceWorkspace> ws = borrow();
+        std::unique_ptr<DistanceWorkspace> ws = workspaces_.borrow();
         for (std::size_t i = 0; i < n; ++i)
             fn(i, *ws);
-        giveBack(std::move(ws));
+        workspaces_.giveBack(std::move(ws));
         return;
     }
 #pragma omp parallel num_threads(workers)
     {
-        std::unique_ptr<DistanceWorkspace> ws = borrow();
+        std::unique_ptr<DistanceWorkspace> ws = workspaces_.borrow();
 #pragma omp for schedule(dynamic, 4)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
             fn(static_cast<std::size_t>(i), *ws);
-        giveBack(std::move(ws));
+        workspaces_.giveBack(std::move(ws));
     }
 }
 

@@ -10,6 +10,7 @@
 
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/collision/CollisionRequest.h"
+#include "rastercheck/core/Pool.h"
 #include "rastercheck/collision/Penetration.h"
 
 namespace rastercheck
@@ -120,12 +121,9 @@ private:
         workspace. */
     template <class PerState>
     void forEachState(std::size_t n, int threads, const PerState &fn) const;
-    std::unique_ptr<DistanceWorkspace> borrow() const;
-    void giveBack(std::unique_ptr<DistanceWorkspace> workspace) const;
 
     CollisionModelConstPtr model_;
     PairPenetration penetration_;
-    mutable std::mutex poolMutex_;
-    mutable std::vector<std::unique_ptr<DistanceWorkspace>> pool_;
+    Pool<DistanceWorkspace> workspaces_;
 };
 }  // namespace rastercheck

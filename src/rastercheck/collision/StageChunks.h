@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rastercheck/core/Pool.h"
 #include "rastercheck/device/BatchPipeline.h"
 
 namespace rastercheck
@@ -32,13 +33,13 @@ template <class Exec>
 class ExecutorPool
 {
 public:
-    explicit ExecutorPool(std::function<std::unique_ptr<Exec>()> make) : make_(std::move(make)) {}
+    explicit ExecutorPool(std::function<std::unique_ptr<Exec>()> make) : executors_(std::move(make)) {}
 
     /** \brief Runs f(executor) on an executor of its own; returns what that executor did. */
     template <class F>
     device::ExecutorCounts run(F &&f)
     {
-        std::unique_ptr<Exec> ex = take();
+        std::unique_ptr<Exec> ex = executors_.borrow();
         ex->counts() = {};
         const auto start = std::chrono::steady_clock::now();
         try
@@ -47,51 +48,21 @@ public:
         }
         catch (...)
         {
-            giveBack(std::move(ex));
+            executors_.giveBack(std::move(ex));
             throw;
         }
         device::ExecutorCounts used = ex->counts();
         used.calls = 1;
         used.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        giveBack(std::move(ex));
+        executors_.giveBack(std::move(ex));
         return used;
     }
 
     /** \brief The executors made so far: the most calls that ran at once. */
-    std::size_t size() const
-    {
-        std::lock_guard<std::mutex> lock(mutex_);
-        return made_;
-    }
+    std::size_t size() const { return executors_.made(); }
 
 private:
-    std::unique_ptr<Exec> take()
-    {
-        {
-            std::lock_guard<std::mutex> lock(mutex_);
-            if (!idle_.empty())
-            {
-                std::unique_ptr<Exec> ex = std::move(idle_.back());
-                idle_.pop_back();
-                return ex;
-            }
-        }
-        std::unique_ptr<Exec> ex = make_();
-        std::lock_guard<std::mutex> lock(mutex_);
-        ++made_;
-        return ex;
-    }
-
-    void giveBack(std::unique_ptr<Exec> ex)
-    {
-        std::lock_guard<std::mutex> lock(mutex_);
-        idle_.push_back(std::move(ex));
-    }
-
-    std::function<std::unique_ptr<Exec>()> make_;
-    mutable std::mutex mutex_;
-    std::vector<std::unique_ptr<Exec>> idle_;
-    std::size_t made_ = 0;
+    Pool<Exec> executors_;
 };
 
 /** \brief The most bytes one scratch buffer may grow to while the others hold \a heldByOthers,

@@ -297,8 +297,21 @@ std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, c
     return std::make_unique<HostStageRunner>(std::move(model), budget, scratch);
 }
 
+/** \brief What one check() keeps on the host besides the executor's buffers: the states' bounds
+    verdicts, the outcomes that came back and where each state's begin. Pooled, so that a steady
+    stream of calls allocates nothing on the host either. */
+struct StagedBackend::CallBuffers
+{
+    std::vector<std::uint8_t> admissible;
+    std::vector<device::PairOutcome> outcomes;
+    std::vector<std::size_t> firstOutcome;
+};
+
 StagedBackend::StagedBackend(CollisionModelConstPtr model, std::unique_ptr<StageRunner> runner)
-    : model_(std::move(model)), exact_(model_), runner_(std::move(runner))
+    : model_(std::move(model)),
+      exact_(model_),
+      runner_(std::move(runner)),
+      callBuffers_([] { return std::make_unique<CallBuffers>(); })
 {
 }
 
@@ -326,7 +339,9 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     const std::size_t dof = model.robot->numCoordinates();
     const int workers = batchWorkers(n, threads);
 
-    std::vector<std::uint8_t> admissible(n);
+    std::unique_ptr<CallBuffers> buffers = callBuffers_.borrow();
+    std::vector<std::uint8_t> &admissible = buffers->admissible;
+    admissible.resize(n);
 #pragma omp parallel for num_threads(workers) schedule(static)
     for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
         admissible[i] = model.configurationAdmissible(q + static_cast<std::size_t>(i) * dof) ? 1 : 0;
@@ -334,9 +349,19 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
     device::StageSettings settings = stageSettings(model, request, contacts != nullptr);
     settings.onlyDecisive = true;  // the reduction below reads no pair settled apart
 
-    std::vector<device::PairOutcome> outcomes;
-    runner_->run(q, admissible.data(), n, settings, outcomes);
-    std::vector<std::size_t> firstOutcome(n + 1, outcomes.size());
+    std::vector<device::PairOutcome> &outcomes = buffers->outcomes;
+    outcomes.clear();
+    try
+    {
+        runner_->run(q, admissible.data(), n, settings, outcomes);
+    }
+    catch (...)
+    {
+        callBuffers_.giveBack(std::move(buffers));
+        throw;
+    }
+    std::vector<std::size_t> &firstOutcome = buffers->firstOutcome;
+    firstOutcome.assign(n + 1, outcomes.size());
     for (std::size_t k = outcomes.size(); k-- > 0;)
         firstOutcome[outcomes[k].state] = k;
     for (std::size_t i = n; i-- > 0;)
@@ -388,5 +413,6 @@ void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, C
         }
         exact_.giveBack(std::move(ws));
     }
+    callBuffers_.giveBack(std::move(buffers));
 }
 }  // namespace rastercheck

@@ -8,6 +8,7 @@
 
 #include "rastercheck/collision/Backend.h"
 #include "rastercheck/collision/CpuBackend.h"
+#include "rastercheck/core/Pool.h"
 #include "rastercheck/collision/StageRunner.h"
 
 namespace rastercheck
@@ -58,8 +59,10 @@ public:
     std::size_t executors() const { return runner_->executors(); }
 
 private:
+    struct CallBuffers;
     CollisionModelConstPtr model_;
     CpuBackend exact_;
     std::unique_ptr<StageRunner> runner_;  // thread-safe: an executor per concurrent pass
+    Pool<CallBuffers> callBuffers_;         // a call's host-side arrays, kept for later calls
 };
 }  // namespace rastercheck
