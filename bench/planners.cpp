@@ -13,7 +13,7 @@
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
 //                                   [range_fraction=0] [lazy_limit=300] [backend=cpu] [threads=1]
-//                                   [edge_sizing=clearance|bisection]
+//                                   [edge_sizing=bisection|clearance]
 // (backend and threads: the rastercheck checker's, CheckerOptions; threads 0 = every core; FCL
 // always runs on one core)
 // (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
@@ -133,7 +133,7 @@ int main(int argc, char **argv)
     const unsigned int lazyLimit = argc > 9 ? static_cast<unsigned int>(std::atoi(argv[9])) : 300u;
     const BackendChoice backend = parseBackendChoice(argc > 10 ? argv[10] : "cpu");
     // Certified edges' intervals: "clearance" (the default) or "bisection" (CertifiedMotionOptions).
-    const std::string sizing = argc > 12 ? argv[12] : "clearance";
+    const std::string sizing = argc > 12 ? argv[12] : "bisection";
     if (sizing != "clearance" && sizing != "bisection")
     {
         std::fprintf(stderr, "edge sizing must be clearance or bisection, got '%s'\n", sizing.c_str());
@@ -150,9 +150,9 @@ int main(int argc, char **argv)
     std::printf(
         "Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
         "seeded runs), time limit %g s; rastercheck's checker: backend %s, threads %d (0: every core), FCL one core; "
-        "BatchRRTConnect batch_size %u, lazy_samples %u, lazy_limit %u; range %s.\n",
+        "BatchRRTConnect batch_size %u, lazy_samples %u, lazy_limit %u; certified edges sized by %s; range %s.\n",
         firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, argc > 10 ? argv[10] : "cpu", checkerThreads,
-        batchSize, lazySamples, lazyLimit,
+        batchSize, lazySamples, lazyLimit, sizing.c_str(),
         rangeFraction > 0.0 ? (std::to_string(rangeFraction) + " of the maximum extent, every planner").c_str()
                             : "each planner's default");
     std::printf(
