@@ -13,6 +13,9 @@
 #       scripts/gpu-check.sh run tests bench sanitize [plan] [profile] [baseline]
 #   (all three took 86 s on an H200 on 2026-11-26, each step well inside its limit below; a step
 #   may also run alone)
+#   On the build machine, no GPU needed:  scripts/gpu-check.sh registers
+#       compiles build-gpu's CUDA file again with ptxas's report and prints registers per thread,
+#       stack frame and spills of every stage kernel, largest first (what limits occupancy).
 #   The script sets LD_LIBRARY_PATH, RASTERCHECK_DATA and RASTERCHECK_SOURCE to the bundle and this
 #   checkout unless they are set, and RASTERCHECK_REQUIRE_GPU, so a GPU test fails rather than
 #   skips when the backend cannot use the device. Every step writes its log under $OUT (else
@@ -120,9 +123,48 @@ run() {
     printf '%s\n' "${summary[@]}" >"$out/summary.txt"
 }
 
+registers() {
+    set -e
+    [[ -f build-gpu/build.ninja ]] || { echo "gpu-check: configure build-gpu first (scripts/gpu-check.sh bundle)" >&2; exit 1; }
+    local command report
+    # The object's own compile command, without ccache (its hit would print nothing) and writing elsewhere.
+    command=$(ninja -C build-gpu -t commands rastercheck | grep -m1 'CudaStageRunner\.cu\.o')
+    command=${command#ccache }
+    command=$(sed -E 's# -MD -MT [^ ]+ -MF [^ ]+##; s# -o [^ ]+# -o /dev/null -Xptxas -v#' <<<"$command")
+    report=$(mktemp)
+    (cd build-gpu && eval "$command") >"$report" 2>&1
+    python3 - "$report" <<'PY'
+import re, subprocess, sys
+rows, entry, frame = [], None, None
+for line in open(sys.argv[1]):
+    m = re.search(r"Compiling entry function '(\S+)'", line)
+    if m:
+        entry, frame = m.group(1), None
+        continue
+    m = re.search(r"(\d+) bytes stack frame, (\d+) bytes spill stores, (\d+) bytes spill loads", line)
+    if m and entry:
+        frame = m.groups()
+    m = re.search(r"Used (\d+) registers", line)
+    if m and entry:
+        name = subprocess.run(["c++filt", entry], capture_output=True, text=True).stdout.strip()
+        stage = re.search(r"device::(\w+)<", name)
+        lam = re.search(r"\{lambda\(unsigned long\)#(\d+)\}", name)
+        if stage and "cub::" not in name:
+            label = stage.group(1) + (" lambda #" + lam.group(1) if lam else "")
+            rows.append((int(m.group(1)), label, frame or ("?", "?", "?")))
+        entry = None
+print("| kernel (stage, lambda in source order) | registers | stack frame B | spill stores B | spill loads B |")
+print("|---|---:|---:|---:|---:|")
+for registers, label, (stack, stores, loads) in sorted(rows, reverse=True):
+    print(f"| {label} | {registers} | {stack} | {stores} | {loads} |")
+PY
+    rm -f "$report"
+}
+
 case ${1:-} in
     bundle) bundle ;;
+    registers) registers ;;
     baseline) shift; baseline "$@" ;;
     run) shift; run "$@" ;;
-    *) sed -n '2,19p' "$0"; exit 2 ;;
+    *) sed -n '2,22p' "$0"; exit 2 ;;
 esac

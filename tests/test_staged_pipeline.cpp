@@ -276,6 +276,58 @@ TEST(StagedPipeline, TheStagesSettleEveryPairAndNeverContradictTheOracle)
     EXPECT_GT(exactPairs, 0u) << "the exact phase never ran in the stages";
 }
 
+TEST(StagedPipeline, TheTwoProofKernelsSettleWhatOneFullProofPerPairSettles)
+{
+    // The stages prove pairs apart or overlapping in two kernels: the whole hulls first, then the
+    // full proof (scans, shells, patches) for the pairs the first leaves. In exact mode every pair
+    // they leave goes to the exact phase, so that phase must take exactly the pairs past the box
+    // culls that one relateSolids per pair leaves Unknown: a second kernel skipped or cut short
+    // sends it more.
+    std::size_t suites = 0;
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(100)))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::device::ModelArrays arrays = rc::hostModelArrays(*model);
+        const std::unique_ptr<rc::StageRunner> runner = poisonedStages(model);
+        runner->countStages(true);
+        rc::CollisionRequest request;
+        request.mode = rc::CollisionMode::Exact;
+        const rc::device::StageSettings settings = rc::stageSettings(*model, request, false);
+        ASSERT_FALSE(settings.onlyDecisive) << "every pair past the culls must come back";
+        const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
+        std::vector<std::uint8_t> admissible(n);
+        for (std::size_t i = 0; i < n; ++i)
+            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        std::vector<rc::device::PairOutcome> outcomes;
+        runner->run(suite.states.data(), admissible.data(), n, settings, outcomes);
+        const std::uint32_t m = static_cast<std::uint32_t>(arrays.numComponents);
+        const std::uint32_t environmentPairs = static_cast<std::uint32_t>(arrays.numObjects) * m;
+        std::vector<double> jointValues(static_cast<std::size_t>(arrays.numJoints) + 1);
+        std::vector<rc::device::Pose<double>> links(static_cast<std::size_t>(arrays.numLinks));
+        unsigned long long exactPairs = 0;  // what one full proof per pair leaves to the exact phase
+        for (const rc::device::PairOutcome &o : outcomes)
+        {
+            const bool meshObstacle = settings.meshObstaclesUnproven && o.pair < environmentPairs &&
+                                      rc::device::hasPatches(arrays.convex, m + o.pair / m);
+            rc::device::linkPoses(arrays.joints, arrays.numJoints, suite.states.data() + o.state * dof,
+                                  jointValues.data(), links.data());
+            const rc::device::HullRelation relation =
+                meshObstacle ? rc::device::HullRelation::Unknown
+                             : rc::device::pairHullRelation(arrays, o.pair, links.data(), settings.padding,
+                                                            settings.proveOverlaps, rc::device::FullProof{});
+            // An overlap of curved primitives' meshes is decided again on the exact shapes.
+            const bool curved = settings.confirmCurvedOverlaps && o.pair < arrays.numCurvedPairFlags &&
+                                arrays.curvedPairs[o.pair];
+            if (relation == rc::device::HullRelation::Unknown ||
+                (curved && relation == rc::device::HullRelation::Overlapping))
+                ++exactPairs;
+        }
+        ++suites;
+        EXPECT_EQ(runner->counts().exactPairs, exactPairs) << suite.name << ": " << outcomes.size() << " pairs past the culls";
+    }
+    EXPECT_GT(suites, 0u);
+}
+
 TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
 {
     // Certified midpoints (CertifiedMotionValidator, BatchRRTConnect) give every (state, pair) its own

@@ -453,23 +453,43 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
     b = component(self[1]);
 }
 
-/** \brief The hull test of a pair (CpuBackend's hullRelation). \a links are the state's link poses
-    (double, world frame), as the CPU backend's. */
+/** \brief \a relate (WholeHullsProof or FullProof) on the
+    two solids of a pair (CpuBackend's hullRelation). \a links are the state's link poses (double,
+    world frame), as the CPU backend's. */
+/** \brief The light proof (relateWholeHulls) and the full one (relateSolids), as pairHullRelation
+    takes them. */
+struct WholeHullsProof
+{
+    RC_HD HullRelation operator()(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
+                                  std::uint32_t b, const Pose<double> &poseB, double padding, bool proveOverlap) const
+    {
+        return relateWholeHulls(arrays, a, poseA, b, poseB, padding, proveOverlap);
+    }
+};
+struct FullProof
+{
+    RC_HD HullRelation operator()(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
+                                  std::uint32_t b, const Pose<double> &poseB, double padding, bool proveOverlap) const
+    {
+        return relateSolids(arrays, a, poseA, b, poseB, padding, proveOverlap);
+    }
+};
+
+template <class Relate>
 RC_HD HullRelation pairHullRelation(const ModelArrays &model, std::uint32_t pair, const Pose<double> *links,
-                                    double padding, bool proveOverlap)
+                                    double padding, bool proveOverlap, Relate &&relate)
 {
     const std::uint32_t m = static_cast<std::uint32_t>(model.numComponents);
     const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
     if (pair < environmentPairs)
     {
         const std::uint32_t c = pair % m, o = pair / m;
-        return relateSolids(model.convex, c, links[model.componentLink[c]], m + o, Pose<double>::identity(), padding,
-                            proveOverlap);
+        return relate(model.convex, c, links[model.componentLink[c]], m + o, Pose<double>::identity(), padding,
+                      proveOverlap);
     }
     const int *self = model.selfPairs + 2 * (pair - environmentPairs);
-    return relateSolids(model.convex, static_cast<std::uint32_t>(self[0]), links[model.componentLink[self[0]]],
-                        static_cast<std::uint32_t>(self[1]), links[model.componentLink[self[1]]], padding,
-                        proveOverlap);
+    return relate(model.convex, static_cast<std::uint32_t>(self[0]), links[model.componentLink[self[0]]],
+                  static_cast<std::uint32_t>(self[1]), links[model.componentLink[self[1]]], padding, proveOverlap);
 }
 
 RC_HD Vec3<float> stageVertex(const StageSolid &solid, std::uint32_t index)
@@ -610,7 +630,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     count, so those slots are written whatever the count (zeros past it); a large one waits for the
     count, which sizes the buffer and the download. */
 template <class Exec>
-const PairOutcome *reduceOutcomes(Exec &ex, const ModelArrays &md, const StageSettings &st, std::uint32_t numStates,
+const PairOutcome *reduceOutcomes(Exec &ex, const StageSettings &st, std::uint32_t numStates,
                                   bool small, Extent survivors, const PairOutcome *decided, std::size_t &download,
                                   unsigned long long *numKept)
 {
@@ -697,7 +717,7 @@ ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     CountGuesses &guesses = ex.guesses();
     std::size_t prefix = bound < numStates * guesses.outcomesPerState ? bound : numStates * guesses.outcomesPerState;
     const PairOutcome *kept =
-        reduceOutcomes(ex, md, st, numStates, small, survivors, decided, prefix, tallies + TallyOutcomes);
+        reduceOutcomes(ex, st, numStates, small, survivors, decided, prefix, tallies + TallyOutcomes);
     if (counts)
     {
         std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, bound + 1);
@@ -846,8 +866,8 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     const std::size_t survivorBound = survivors.bound;
     const std::uint32_t numSegments = static_cast<std::uint32_t>(survivorBound);
 
-    // 3. Per surviving pair: the image window, the grid, and how many triangles to rasterize.
-    // The survivors are in (state, pair) order, so a warp holds different pairs of a few states,
+    // 3. Per surviving pair: the proofs, then the image window, the grid, and how many triangles to
+    // rasterize. The survivors are in (state, pair) order, so a warp holds different pairs of a few states,
     // each proof with its own hulls and loop lengths (GJK over up to 128 points per solid and
     // passes over hundreds of vertices): the threads diverge (an H200, 2026-11-26: this stage was
     // 2/3 of a safe-mode batch's kernel time, at 6 % occupancy). Taken in pair order, a warp runs
@@ -867,11 +887,54 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     std::int32_t *status = ex.template buffer<std::int32_t>(BufferStatus, survivorBound + 1);
     unsigned long long *triangleCount = ex.template buffer<unsigned long long>(BufferTriangleCount, survivorBound + 1);
     std::uint8_t *rasterized = ex.template buffer<std::uint8_t>(BufferRasterized, survivorBound + 1);
+    // The proof in two kernels: the whole hulls for every pair (relateWholeHulls: GJK and the
+    // simplex's own overlap proofs), then relateSolids (scans, shells, patches) for the pairs that
+    // left open. One kernel holding both ran at 255 registers per thread with a 5.8 kB stack frame
+    // (sm_90, ptxas), 6 % occupancy, for proofs most pairs never reach. Same answers as one
+    // relateSolids: the light proof's Apart and Overlapping are its answers too.
+    constexpr std::int32_t kFullProofNeeded = -1;  // status between the two kernels only
+    ex.forEach(survivorBound, [=] RC_LAMBDA(std::size_t k) {
+        const std::size_t c = pairOrdered ? proofOrder[k] : k;
+        if (c >= survivors.size())
+            return;
+        const std::size_t s = candidates[c] / pairs;
+        const std::uint32_t pair = candidates[c] % pairs;
+        const double padding = pairPadding(md, st, s, pair);
+        // A mesh obstacle's proof walks its patches, serially per thread: on FCL's env.obj (an H200,
+        // 2026-11-26) the stages ran at 0.3x the CPU backend on 16 cores, which skips that proof.
+        const bool meshObstacle =
+            st.meshObstaclesUnproven && pair < environmentPairs && hasPatches(md.convex, m + pair / m);
+        StageSolid a, b;
+        pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
+        const Box window = pairWindow(a.bounds, b.bounds, floatPadding(padding));
+        const HullRelation relation =
+            isEmpty(window) ? HullRelation::Apart
+            : meshObstacle  ? HullRelation::Unknown
+                            : pairHullRelation(md, pair, links + s * numLinks, padding, st.proveOverlaps, WholeHullsProof{});
+        status[c] = relation == HullRelation::Apart         ? PairApart
+                    : relation == HullRelation::Overlapping ? PairOverlaps
+                    : meshObstacle                          ? PairOpen
+                                                            : kFullProofNeeded;
+    });
+    ex.forEach(survivorBound, [=] RC_LAMBDA(std::size_t k) {
+        const std::size_t c = pairOrdered ? proofOrder[k] : k;
+        if (c >= survivors.size() || status[c] != kFullProofNeeded)
+            return;
+        const std::size_t s = candidates[c] / pairs;
+        const std::uint32_t pair = candidates[c] % pairs;
+        const HullRelation relation = pairHullRelation(md, pair, links + s * numLinks, pairPadding(md, st, s, pair),
+                                                       st.proveOverlaps, FullProof{});
+        // An overlap proven by the hulls has no triangle or place (the contact is not asked).
+        status[c] = relation == HullRelation::Apart         ? PairApart
+                    : relation == HullRelation::Overlapping ? PairOverlaps
+                                                            : PairOpen;
+    });
+    // The open pairs' images: grid, margin, and how many triangles to rasterize.
     ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = pairOrdered && k < survivorBound ? proofOrder[k] : k;
         triangleCount[c] = 0;
         rasterized[c] = 0;
-        if (c >= survivors.size())
+        if (c >= survivors.size() || status[c] != PairOpen || !st.rasterize)
             return;  // past the survivors: zeros for the scan, whose last output is then the total
         const std::size_t s = candidates[c] / pairs;
         const std::uint32_t pair = candidates[c] % pairs;
@@ -879,22 +942,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
         pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
         const double padding = pairPadding(md, st, s, pair);
         const Box window = pairWindow(a.bounds, b.bounds, floatPadding(padding));
-        // A mesh obstacle's proof walks its patches, serially per thread: on FCL's env.obj (an H200,
-        // 2026-11-26) the stages ran at 0.3x the CPU backend on 16 cores, which skips that proof.
-        const bool meshObstacle =
-            st.meshObstaclesUnproven && pair < environmentPairs && hasPatches(md.convex, m + pair / m);
-        const HullRelation relation = isEmpty(window) ? HullRelation::Apart
-                                      : meshObstacle  ? HullRelation::Unknown
-                                                      : pairHullRelation(md, pair, links + s * numLinks, padding,
-                                                                         st.proveOverlaps);
-        if (relation != HullRelation::Unknown)
-        {
-            // An overlap proven by the hulls has no triangle or place (the contact is not asked).
-            status[c] = relation == HullRelation::Apart ? PairApart : PairOverlaps;
-            return;
-        }
-        status[c] = PairOpen;
-        if (!st.rasterize || !rasterUsable(a.slice.closed, b.slice.closed, window, st.pixel))
+        if (!rasterUsable(a.slice.closed, b.slice.closed, window, st.pixel))
             return;  // the exact phase decides
         grids[c] = makeGrid(window, st.pixel, st.maxImageSide);
         margins[c] = pairMargin(window, grids[c], floatPadding(padding));

@@ -421,6 +421,21 @@ RC_HD HullRelation relatePatches(const ConvexArrays &arrays, std::uint32_t a, co
     return HullRelation::Apart;
 }
 
+/** \brief relateSolids' first test alone: the two solids' whole hulls, without the scans of every
+    vertex and edge (relateHulls' scanSurfaces). Its Apart and Overlapping are relateSolids' answers
+    too: the scans only add overlap proofs where the simplex's own fail, and the shells and patches
+    come after an Unknown. Code small enough to run at a GPU's full occupancy: the stages decide most
+    pairs by it and take relateSolids in a kernel of its own for the pairs it leaves. */
+RC_HD HullRelation relateWholeHulls(const ConvexArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
+                                    std::uint32_t b, const Pose<double> &poseB, double padding, bool proveOverlap)
+{
+    const std::uint32_t a0 = arrays.solidPieces[a], b0 = arrays.solidPieces[b];
+    if (a0 == arrays.solidPieces[a + 1] || b0 == arrays.solidPieces[b + 1])
+        return HullRelation::Unknown;
+    return relateHulls(convexProxy(arrays, a0), poseA, convexProxy(arrays, b0), poseB, padding, proveOverlap, nullptr,
+                       false);
+}
+
 /** \brief Are solids \a a and \a b (ConvexArrays numbering, placed by their poses) provably more
     than \a padding apart, or (with \a proveOverlap) provably overlapping? First their whole hulls;
     when those come too close and either solid is made of several shells, every shell of one
