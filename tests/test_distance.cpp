@@ -441,16 +441,25 @@ TEST(CheckerDistance, BatchOverThreadsEqualsOneAtATime)
     }
 }
 
-TEST(CheckerDistance, CheckCommandWritesTheDistanceColumns)
+namespace
 {
-    RASTERCHECK_REQUIRE_DATA(root);
+/** \brief The CLI's check of \a n random Panda states (box scene) with \a flags: its verdicts file,
+    the header and each row's fields, with the states themselves. */
+struct CheckRun
+{
+    std::vector<double> q;
+    std::string header;
+    std::vector<std::vector<std::string>> rows;
+    std::string output;
+};
+
+CheckRun runCheckCommand(const std::string &root, const rc::Checker &checker, std::size_t n, const std::string &flags)
+{
     const std::string folder = rc::test::makeTempDir("distance_cli");
     const std::string urdf = root + "/mbm/panda/panda.urdf", srdf = root + "/mbm/panda/panda.srdf";
     const std::string scene = root + "/mbm/panda/problems/box_panda/scene0001.yaml";
-    const rc::Problem problem = rc::test::pandaProblem(root, "box");
-    const rc::Checker checker(problem.robot, problem.scene);
-    const std::size_t n = 12;
-    const std::vector<double> q = rc::test::randomStates(checker.robot(), n, 31);
+    CheckRun run;
+    run.q = rc::test::randomStates(checker.robot(), n, 31);
     std::ostringstream csv;
     csv << std::setprecision(17);
     for (std::size_t k = 0; k < checker.dof(); ++k)
@@ -458,38 +467,101 @@ TEST(CheckerDistance, CheckCommandWritesTheDistanceColumns)
     csv << '\n';
     for (std::size_t i = 0; i < n; ++i)
         for (std::size_t k = 0; k < checker.dof(); ++k)
-            csv << q[i * checker.dof() + k] << (k + 1 < checker.dof() ? "," : "\n");
+            csv << run.q[i * checker.dof() + k] << (k + 1 < checker.dof() ? "," : "\n");
     const std::string states = rc::test::writeFile(folder + "/states.csv", csv.str());
-    const rc::test::CommandRun run =
+    const rc::test::CommandRun command =
         rc::test::runCli("check --robot " + urdf + " --srdf " + srdf + " --scene " + scene + " --states " + states +
-                         " --out " + folder + "/out.csv --distance");
-    ASSERT_EQ(run.status, 0) << run.output;
-    EXPECT_NE(run.output.find(" min_distance="), std::string::npos) << run.output;
+                         " --out " + folder + "/out.csv " + flags);
+    EXPECT_EQ(command.status, 0) << command.output;
+    run.output = command.output;
     std::ifstream out(folder + "/out.csv");
-    std::string header;
-    std::getline(out, header);
-    EXPECT_EQ(header,
-              "valid,component,object,triangle,x,y,z,reason,distance,distance_component,distance_other,ax,ay,az,bx,by,"
-              "bz");
-    for (std::size_t i = 0; i < n; ++i)
+    std::getline(out, run.header);
+    for (std::string line; std::getline(out, line);)
     {
-        std::string line;
-        ASSERT_TRUE(std::getline(out, line)) << "row " << i;
         std::vector<std::string> fields;
         std::stringstream row(line);
         for (std::string field; std::getline(row, field, ',');)
             fields.push_back(field);
-        ASSERT_EQ(fields.size(), 17u) << line;
+        if (!line.empty() && line.back() == ',')
+            fields.emplace_back();  // getline drops a trailing empty field
+        run.rows.push_back(fields);
+    }
+    return run;
+}
+}  // namespace
+
+TEST(CheckerDistance, CheckCommandWritesTheDistanceColumns)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rc::test::pandaProblem(root, "box");
+    const rc::Checker checker(problem.robot, problem.scene);
+    const std::size_t n = 12;
+    const CheckRun run = runCheckCommand(root, checker, n, "--distance");
+    EXPECT_NE(run.output.find(" min_distance="), std::string::npos) << run.output;
+    EXPECT_EQ(run.header,
+              "valid,component,object,triangle,x,y,z,reason,distance,distance_component,distance_other,ax,ay,az,bx,by,"
+              "bz");
+    ASSERT_EQ(run.rows.size(), n);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const std::vector<std::string> &fields = run.rows[i];
+        ASSERT_EQ(fields.size(), 17u) << "row " << i;
         rc::DistanceResult expected;
-        checker.distance(q.data() + i * checker.dof(), rc::DistanceRequest{}, &expected);
-        EXPECT_NEAR(std::stod(fields[8]), expected.distance, 1e-8 * std::max(1.0, expected.distance)) << line;
-        EXPECT_EQ(fields[9], checker.robot().components[expected.component].name) << line;
+        checker.distance(run.q.data() + i * checker.dof(), rc::DistanceRequest{}, &expected);
+        EXPECT_NEAR(std::stod(fields[8]), expected.distance, 1e-8 * std::max(1.0, expected.distance)) << "row " << i;
+        EXPECT_EQ(fields[9], checker.robot().components[expected.component].name) << "row " << i;
         const Vector3d a(std::stod(fields[11]), std::stod(fields[12]), std::stod(fields[13]));
         const Vector3d b(std::stod(fields[14]), std::stod(fields[15]), std::stod(fields[16]));
-        EXPECT_NEAR((a - b).norm(), expected.distance, 1e-7) << line;
+        EXPECT_NEAR((a - b).norm(), expected.distance, 1e-7) << "row " << i;
         // A colliding row has distance 0, a free one more.
-        EXPECT_EQ(fields[0] == "1", expected.distance > 0.0) << line;
+        EXPECT_EQ(fields[0] == "1", expected.distance > 0.0) << "row " << i;
     }
+}
+
+TEST(CheckerDistance, CheckCommandWritesThePenetrationColumns)
+{
+    // Colliding rows carry the named pair's depth (an upper bound), a proven lower bound and the way
+    // out, as Checker::distance with DistanceRequest::penetration gives them; free rows leave them
+    // empty.
+    RASTERCHECK_REQUIRE_DATA(root);
+    const rc::Problem problem = rc::test::pandaProblem(root, "box");
+    const rc::Checker checker(problem.robot, problem.scene);
+    const std::size_t n = 24;
+    const CheckRun run = runCheckCommand(root, checker, n, "--penetration");
+    EXPECT_NE(run.output.find(" max_penetration="), std::string::npos) << run.output;
+    EXPECT_EQ(run.header,
+              "valid,component,object,triangle,x,y,z,reason,distance,distance_component,distance_other,ax,ay,az,bx,by,"
+              "bz,penetration,penetration_lower,penetration_exact,px,py,pz");
+    ASSERT_EQ(run.rows.size(), n);
+    rc::DistanceRequest request;
+    request.penetration = true;
+    std::size_t colliding = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const std::vector<std::string> &fields = run.rows[i];
+        ASSERT_EQ(fields.size(), 23u) << "row " << i;
+        rc::DistanceResult expected;
+        checker.distance(run.q.data() + i * checker.dof(), request, &expected);
+        if (!expected.colliding())
+        {
+            for (std::size_t k = 17; k < 23; ++k)
+                EXPECT_EQ(fields[k], "") << "row " << i << ", column " << k;
+            continue;
+        }
+        ++colliding;
+        const double depth = std::stod(fields[17]), lower = std::stod(fields[18]);
+        EXPECT_NEAR(depth, expected.penetration.depth, 1e-8) << "row " << i;
+        EXPECT_NEAR(lower, expected.penetration.lowerBound, 1e-8) << "row " << i;
+        EXPECT_LE(lower, depth + 1e-9) << "row " << i;
+        EXPECT_EQ(fields[19], expected.penetration.exact ? "1" : "0") << "row " << i;
+        const Vector3d way(std::stod(fields[20]), std::stod(fields[21]), std::stod(fields[22]));
+        if (depth > 0.0)
+        {
+            EXPECT_NEAR(way.norm(), 1.0, 1e-6) << "row " << i;
+        }
+    }
+    EXPECT_GT(colliding, 0u) << "no colliding state among the random ones";
+    EXPECT_LT(colliding, n) << "no free state among the random ones";
 }
 
 // A ball (a URDF sphere, measured on its exact shape: CurvedSolids::distance) moved about a U-shaped

@@ -33,6 +33,7 @@ struct CheckOptions
     double boundsTolerance = kDefaultBoundsTolerance;
     std::size_t deviceMemoryMiB = 0;
     bool distance = false;
+    bool penetration = false;
 };
 
 /** \brief Why a state is invalid, for the verdicts file: "bounds:<coordinate>", "environment" or
@@ -72,14 +73,32 @@ void writeDistance(std::ostream &out, const Checker &checker, const DistanceResu
         << a.y() << ',' << a.z() << ',' << b.x() << ',' << b.y() << ',' << b.z();
 }
 
+/** \brief The --penetration columns of one state: the named pair's penetration depth (an upper
+    bound), its lower bound, whether the two meet (exact), and the way out (unit, world frame);
+    empty for a state that does not collide. */
+void writePenetration(std::ostream &out, const DistanceResult &d)
+{
+    const Penetration &p = d.penetration;
+    if (!d.colliding() || std::isnan(p.depth))
+    {
+        out << ",,,,,,";
+        return;
+    }
+    out << ',' << p.depth << ',' << p.lowerBound << ',' << (p.exact ? 1 : 0) << ',' << p.direction.x() << ','
+        << p.direction.y() << ',' << p.direction.z();
+}
+
 /** \brief The verdicts file; with \a distances (one per state), the --distance columns at the end
-    of each row. */
+    of each row, and with \a penetration the --penetration columns after them. */
 void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<std::uint8_t> &valid,
-                   const std::vector<Contact> &contacts, const std::vector<DistanceResult> &distances)
+                   const std::vector<Contact> &contacts, const std::vector<DistanceResult> &distances,
+                   bool penetration)
 {
     out << "valid,component,object,triangle,x,y,z,reason";
     if (!distances.empty())
         out << ",distance,distance_component,distance_other,ax,ay,az,bx,by,bz";
+    if (!distances.empty() && penetration)
+        out << ",penetration,penetration_lower,penetration_exact,px,py,pz";
     out << '\n' << std::setprecision(9);
     const RobotModel &robot = checker.robot();
     for (std::size_t i = 0; i < valid.size(); ++i)
@@ -99,6 +118,8 @@ void writeVerdicts(std::ostream &out, const Checker &checker, const std::vector<
         }
         if (!distances.empty())
             writeDistance(out, checker, distances[i]);
+        if (!distances.empty() && penetration)
+            writePenetration(out, distances[i]);
         out << '\n';
     }
 }
@@ -146,12 +167,13 @@ int runCheck(const CheckOptions &options)
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::vector<DistanceResult> distances;
     double distanceSeconds = 0.0;
-    if (options.distance)
+    if (options.distance || options.penetration)
     {
         distances.resize(states.rows);
         DistanceRequest distanceRequest;
         distanceRequest.checkEnvironment = request.checkEnvironment;
         distanceRequest.checkSelfCollision = request.checkSelfCollision;
+        distanceRequest.penetration = options.penetration;
         const auto distanceStart = std::chrono::steady_clock::now();
         checker.distance(states.values.data(), states.rows, distanceRequest, distances.data());
         distanceSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - distanceStart).count();
@@ -162,7 +184,7 @@ int runCheck(const CheckOptions &options)
         std::ofstream out(options.outPath);
         if (!out)
             throw InputError(options.outPath, "", "cannot write the verdicts file");
-        writeVerdicts(out, checker, valid, contacts, distances);
+        writeVerdicts(out, checker, valid, contacts, distances, options.penetration);
     }
     std::size_t invalid = 0, bounds = 0, environment = 0, self = 0;
     for (std::size_t i = 0; i < states.rows; ++i)
@@ -178,13 +200,22 @@ int runCheck(const CheckOptions &options)
     std::cout << "states=" << states.rows << " invalid=" << invalid << " bounds=" << bounds
               << " environment=" << environment << " self=" << self << " seconds=" << seconds
               << " states_per_s=" << (seconds > 0 ? static_cast<double>(states.rows) / seconds : 0.0);
-    if (options.distance)
+    if (!distances.empty())
     {
         double smallest = std::numeric_limits<double>::infinity();
         for (const DistanceResult &d : distances)
             if (d.kind == Contact::Kind::Environment || d.kind == Contact::Kind::SelfCollision)
                 smallest = std::min(smallest, d.distance);
-        std::cout << " min_distance=" << smallest << " distance_seconds=" << distanceSeconds;
+        std::cout << " min_distance=" << smallest;
+        if (options.penetration)
+        {
+            double deepest = 0.0;  // the largest proven depth: each colliding state's lower bound
+            for (const DistanceResult &d : distances)
+                if (d.colliding() && !std::isnan(d.penetration.lowerBound))
+                    deepest = std::max(deepest, d.penetration.lowerBound);
+            std::cout << " max_penetration=" << deepest;
+        }
+        std::cout << " distance_seconds=" << distanceSeconds;
     }
     std::cout << std::endl;
     return 0;
@@ -202,7 +233,7 @@ void addCheckCommand(CLI::App &app)
         ->required();
     command->add_option("--out", options->outPath,
                         "verdicts CSV: valid,component,object,triangle,x,y,z,reason (reason: bounds:COORDINATE, "
-                        "environment or self), then the --distance columns");
+                        "environment or self), then the --distance and --penetration columns");
     options->checking.addModeAndPadding(*command, "how the states are checked");
     options->checking.addBackendAndThreads(*command, "worker threads");
     command
@@ -222,6 +253,11 @@ void addCheckCommand(CLI::App &app)
                       "not padded): --out gains the columns distance,distance_component,distance_other,ax,ay,az,"
                       "bx,by,bz (a closest point on the component and on the other solid, world frame; 0 and the "
                       "contact for a colliding state), the summary min_distance= and distance_seconds=");
+    command->add_flag("--penetration", options->penetration,
+                      "--distance, and for each colliding state how deep the pair it names overlaps: --out gains "
+                      "penetration,penetration_lower,penetration_exact,px,py,pz (an upper bound on the depth, a "
+                      "proven lower bound, 1 when they meet, the way out as a unit vector in the world frame; "
+                      "empty for a free state), the summary max_penetration= (the largest lower bound)");
     command->callback([options]() { throw CommandResult{runCheck(*options)}; });
 }
 }  // namespace rastercheck::cli
