@@ -46,6 +46,21 @@ __global__ void forEachKernel(std::size_t n, F f)
         f(i);
 }
 
+/** \brief Threads per block of every stage kernel. */
+constexpr unsigned kBlockThreads = 256;
+
+/** \brief forEachKernel for the stages whose per-element code would take every register it can (the
+    full proof, the exact phase: 255 and 246 registers per thread unbounded, 8 warps an SM): held to
+    two blocks an SM, so 128 registers, twice the warps. ptxas spills 4 and 92 bytes a thread there
+    (`scripts/gpu-check.sh registers`, sm_90, 2026-11-26). */
+template <class F>
+__global__ void __launch_bounds__(kBlockThreads, 2) forEachHeavyKernel(std::size_t n, F f)
+{
+    const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i < n)
+        f(i);
+}
+
 /** \brief f(i) for i below the extent's count, which an earlier kernel of the stream wrote. */
 template <class F>
 __global__ void forEachCountedKernel(device::Extent extent, F f)
@@ -199,6 +214,17 @@ public:
         ++counts_.launches;
     }
 
+    /** \brief forEach for a stage whose per-element code is register-heavy (forEachHeavyKernel). */
+    template <class F>
+    void forEachHeavy(std::size_t n, F f)
+    {
+        if (n == 0)
+            return;
+        forEachHeavyKernel<<<blocksFor(n), kThreads, 0, stream_>>>(n, f);
+        check(cudaGetLastError(), "kernel launch");
+        ++counts_.launches;
+    }
+
     /** \brief f(i) for i below the extent's count, read on the device: a thread per element of its
         bound, so that the host need not wait for the count. */
     template <class F>
@@ -305,7 +331,7 @@ public:
     }
 
 private:
-    static constexpr unsigned kThreads = 256;
+    static constexpr unsigned kThreads = kBlockThreads;
 
     static unsigned blocksFor(std::size_t n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 

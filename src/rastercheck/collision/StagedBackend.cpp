@@ -158,6 +158,13 @@ public:
             f(static_cast<std::size_t>(i));
     }
 
+    /** \brief The GPU holds these kernels to fewer registers; here the same loop. */
+    template <class F>
+    void forEachHeavy(std::size_t n, F f)
+    {
+        forEach(n, f);
+    }
+
     /** \brief f(i) for i below the extent's count: one launch over its bound, as on the GPU. */
     template <class F>
     void forEach(device::Extent extent, F f)

@@ -570,7 +570,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     const int numLinks = md.numLinks;
     const std::uint32_t m = static_cast<std::uint32_t>(md.numComponents);
     const std::uint32_t environmentPairs = static_cast<std::uint32_t>(md.numObjects) * m;
-    ex.forEach(survivors.bound, [=] RC_LAMBDA(std::size_t k) {
+    ex.forEachHeavy(survivors.bound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = order ? order[k] : k;
         exactFlags[c] = 0;
         if (c >= survivors.size() || !items.fits() || !fragments.fits())
@@ -916,7 +916,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                     : meshObstacle                          ? PairOpen
                                                             : kFullProofNeeded;
     });
-    ex.forEach(survivorBound, [=] RC_LAMBDA(std::size_t k) {
+    ex.forEachHeavy(survivorBound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = pairOrdered ? proofOrder[k] : k;
         if (c >= survivors.size() || status[c] != kFullProofNeeded)
             return;
@@ -1106,7 +1106,8 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     The executor provides (the host's in collision/StagedBackend.cpp, the GPU's in cuda/):
     buffer(slot, n) (scratch in its memory, kept and grown), upload(slot, host, n) and
     download(slot, its, n) (copies through host mirrors; downloaded data is read after wait()),
-    wait() (the host waits for it: counted), forEach(n or Extent, f) (a kernel),
+    wait() (the host waits for it: counted), forEach(n or Extent, f) (a kernel), forEachHeavy(n, f)
+    (a kernel whose per-element code is register-heavy: the GPU holds it to fewer registers),
     selectFlagged, exclusiveSum (their counts and totals written to its memory, not waited for),
     orderByKey, sortSegments, counts() (ExecutorCounts) and guesses() (CountGuesses). */
 template <class Exec>
