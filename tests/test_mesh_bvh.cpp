@@ -17,6 +17,7 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
+#include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/MeshTree.h"
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
@@ -24,6 +25,7 @@
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/geometry/TriangleTests.h"
+#include "rastercheck/model/Kinematics.h"
 #include "NonConvex.h"
 
 namespace rc = rastercheck;
@@ -461,6 +463,55 @@ TEST(SurfacesWithin, MatchesBruteForceOverAllTrianglePairs)
         std::printf("[ info     ] %s: %d of 120 poses touch, %d within 0.05\n", s.name, hits[0], hits[1]);
         EXPECT_GT(hits[0], 20);
         EXPECT_LT(hits[0], 100);
+    }
+}
+
+TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
+{
+    // The stages share one pair's walk among threads (splitSurfaceWalk): walked one after the other,
+    // the parts must decide as the whole walk does, and the first part that finds a contact must find
+    // the whole walk's first contact (the CPU backend's), whatever the number of parts.
+    std::mt19937_64 rng(5);
+    for (const Scenario &s : scenarios())
+    {
+        const rc::MeshBvh a(s.a), b(s.b);
+        const rc::device::ExactTree ta = a.exactTree(), tb = b.exactTree();
+        int split = 0, touching = 0;
+        for (int trial = 0; trial < 60; ++trial)
+        {
+            const rc::device::Pose<double> poseA = rc::toDevicePose(randomPose(rng, s.reach)),
+                                           poseB = rc::toDevicePose(randomPose(rng, s.reach));
+            for (double padding : {0.0, 0.05})
+            {
+                rc::device::ExactContact whole;
+                const bool meet = rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, &whole);
+                touching += meet;
+                for (std::uint32_t capacity : {1u, 2u, 3u, 8u, rc::device::kMaxWalkParts})
+                {
+                    rc::device::NodePair parts[rc::device::kMaxWalkParts], scratch[rc::device::kMaxWalkParts];
+                    const std::uint32_t n =
+                        rc::device::splitSurfaceWalk(ta, poseA, tb, poseB, padding, parts, scratch, capacity);
+                    ASSERT_LE(n, capacity);
+                    split += n > 1;
+                    bool found = false;
+                    for (std::uint32_t j = 0; j < n && !found; ++j)
+                    {
+                        rc::device::ExactContact contact;
+                        found = rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, &contact, nullptr, parts[j]);
+                        if (found)
+                        {
+                            EXPECT_EQ(contact.triangleA, whole.triangleA) << s.name << " trial " << trial;
+                            EXPECT_EQ(contact.triangleB, whole.triangleB) << s.name << " trial " << trial;
+                            EXPECT_EQ(contact.position.x, whole.position.x) << s.name << " trial " << trial;
+                            EXPECT_EQ(contact.position.z, whole.position.z) << s.name << " trial " << trial;
+                        }
+                    }
+                    ASSERT_EQ(found, meet) << s.name << " trial " << trial << ", " << n << " parts of " << capacity;
+                }
+            }
+        }
+        EXPECT_GT(split, 0) << s.name << ": no walk was ever split";
+        EXPECT_GT(touching, 0) << s.name;
     }
 }
 

@@ -249,6 +249,11 @@ struct StageBudget
         launches have the counts' sizes; only they take the proofs in pair order (orderedProofsFrom),
         which needs the survivors' count. At 2^18, 1 000 Panda states make one wait. */
     std::size_t waitForCountsFrom = std::size_t(1) << 18;
+    /** Threads that share each open pair's exact walk in a chunk below waitForCountsFrom (at most
+        kMaxWalkParts; decideOpenPairs): there the slowest pair's walk is the call's latency, and a
+        few hundred pairs leave most of a device idle. Larger chunks walk each pair in one thread:
+        they have pairs enough to fill it. */
+    std::uint32_t exactWalkParts = kMaxWalkParts;
 };
 
 /** \brief What the stages did, summed over the chunks of a runner's passes: how much work the
@@ -393,6 +398,10 @@ enum StageBuffer : int
     BufferHit,
     BufferOutcomes,
     BufferExactFlags,
+    BufferWalkParts,
+    BufferWalkPartCount,
+    BufferFirstPart,
+    BufferPartContacts,
     BufferFirstSettled,
     BufferKeep,
     BufferKept,
@@ -561,21 +570,37 @@ std::size_t waitFor(Exec &ex, const unsigned long long *tally)
     \a order when given (pair order: the same trees in a warp; only with the survivors' count
     known, so that order holds exactly the survivors). \a exactFlags (survivors.bound) gets 1 per
     pair decided here, 0 elsewhere. Nothing is decided when the raster's \a items or \a fragments
-    outgrew their bounds: that pass runs again. */
+    outgrew their bounds: that pass runs again.
+
+    A pair's walk of both trees is serial, and in a small batch the slowest pair's walk is the
+    call's latency, so each pair's walk is split into up to \a walkParts parts (splitSurfaceWalk),
+    one thread each; the first part in walk order that finds a contact gives the pair's first
+    contact, the one the whole walk finds. Then one thread per pair ends it: the contact, or the
+    containment test (solidsContain), and curved shapes. Three kernels; with \a walkParts 1, the
+    pair's whole walk in one thread, as a large batch takes it. */
 template <class Exec>
 void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
                      Extent survivors, Extent items, Extent fragments, const std::uint32_t *order,
-                     PairOutcome *decided, std::uint8_t *exactFlags)
+                     std::uint32_t walkParts, PairOutcome *decided, std::uint8_t *exactFlags)
 {
     const int numLinks = md.numLinks;
     const std::uint32_t m = static_cast<std::uint32_t>(md.numComponents);
     const std::uint32_t environmentPairs = static_cast<std::uint32_t>(md.numObjects) * m;
-    ex.forEachHeavy(survivors.bound, [=] RC_LAMBDA(std::size_t k) {
+    const std::size_t bound = survivors.bound;
+    const std::uint32_t parts = walkParts < 1 ? 1 : (walkParts > kMaxWalkParts ? kMaxWalkParts : walkParts);
+    NodePair *partStarts = ex.template buffer<NodePair>(BufferWalkParts, bound * parts + 1);
+    std::uint32_t *partCount = ex.template buffer<std::uint32_t>(BufferWalkPartCount, bound + 1);
+    unsigned long long *firstPart = ex.template buffer<unsigned long long>(BufferFirstPart, bound + 1);
+    ExactContact *partContacts = ex.template buffer<ExactContact>(BufferPartContacts, bound * parts + 1);
+    // 1. Which pairs the exact phase decides, and their walks' parts.
+    ex.forEach(bound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = order ? order[k] : k;
         exactFlags[c] = 0;
+        partCount[c] = 0;
+        firstPart[c] = parts;  // no part found a contact
         if (c >= survivors.size() || !items.fits() || !fragments.fits())
             return;
-        PairOutcome &out = decided[c];
+        const PairOutcome &out = decided[c];
         // The stages see curved primitives as their meshes, which lie outside the exact shapes: an
         // overlap of such a pair, however found, is decided again here, as the CPU backend decides it.
         const bool curved = st.confirmCurvedOverlaps && out.pair < md.numCurvedPairFlags && md.curvedPairs[out.pair];
@@ -584,19 +609,54 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         const bool meshObstacle = out.pair < environmentPairs && hasPatches(md.convex, m + out.pair / m);
         if (out.status == PairOpen && st.unprovenCollides && !(st.meshObstaclesUnproven && meshObstacle))
             return;
+        exactFlags[c] = 1;
+        ExactTree a, b;
+        Pose<double> poseA, poseB;
+        bool closedA = false, closedB = false;
+        exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
+                    closedB);
+        NodePair scratch[kMaxWalkParts];
+        partCount[c] = splitSurfaceWalk(a, poseA, b, poseB, pairPadding(md, st, out.state, out.pair),
+                                        partStarts + c * parts, scratch, parts);
+    });
+    // 2. The parts' walks, a thread each; the first contact in walk order wins.
+    ex.forEachHeavy(bound * parts, [=] RC_LAMBDA(std::size_t t) {
+        const std::size_t c = order ? order[t / parts] : t / parts;
+        const std::uint32_t j = static_cast<std::uint32_t>(t % parts);
+        if (c >= survivors.size() || j >= partCount[c])
+            return;
+        const PairOutcome &out = decided[c];
+        ExactTree a, b;
+        Pose<double> poseA, poseB;
+        bool closedA = false, closedB = false;
+        exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
+                    closedB);
+        if (surfacesWithin(a, poseA, b, poseB, pairPadding(md, st, out.state, out.pair),
+                           &partContacts[c * parts + j], nullptr, partStarts[c * parts + j]))
+            atomicMinimum(&firstPart[c], j);
+    });
+    // 3. Each pair's end: the surfaces' first contact, or containment; curved shapes.
+    ex.forEachHeavy(bound, [=] RC_LAMBDA(std::size_t k) {
+        const std::size_t c = order ? order[k] : k;
+        if (c >= survivors.size() || !exactFlags[c])
+            return;
+        PairOutcome &out = decided[c];
+        const bool curved = st.confirmCurvedOverlaps && out.pair < md.numCurvedPairFlags && md.curvedPairs[out.pair];
         ExactTree a, b;
         Pose<double> poseA, poseB;
         bool closedA = false, closedB = false;
         exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
                     closedB);
         ExactContact contact;
-        exactFlags[c] = 1;
-        const double padding = pairPadding(md, st, out.state, out.pair);
-        if (!solidsOverlap(a, poseA, closedA, b, poseB, closedB, padding, &contact))
+        const bool surfacesMeet = firstPart[c] < parts;
+        if (surfacesMeet)
+            contact = partContacts[c * parts + firstPart[c]];
+        if (!surfacesMeet && !solidsContain(a, poseA, closedA, b, poseB, closedB, &contact))
         {
             out.status = PairApart;
             return;
         }
+        const double padding = pairPadding(md, st, out.state, out.pair);
         if (curved)
         {
             // Solids in CurvedArrays' numbering: the components, then the objects.
@@ -713,7 +773,8 @@ ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, c
 {
     const std::size_t bound = survivors.bound;
     std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, bound + 1);
-    decideOpenPairs(ex, md, st, links, survivors, items, fragments, order, decided, exactFlags);
+    decideOpenPairs(ex, md, st, links, survivors, items, fragments, order, small ? budget.exactWalkParts : 1, decided,
+                    exactFlags);
     CountGuesses &guesses = ex.guesses();
     std::size_t prefix = bound < numStates * guesses.outcomesPerState ? bound : numStates * guesses.outcomesPerState;
     const PairOutcome *kept =

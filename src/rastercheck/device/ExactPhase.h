@@ -405,33 +405,17 @@ struct ExactContact
     std::int32_t triangleB = -1;
 };
 
-/** \brief Do the surfaces of A (placed by \a poseA) and B (placed by \a poseB) come within
-    \a padding (metres; 0 = intersect or touch; negative counts as 0)? Simultaneous traversal of
-    both trees, descending the larger node first; node pairs are culled by their bounding spheres,
-    then by boxesMayMeet(), both grown by \a padding plus a rounding slack (kNodeRounding of the
-    coordinates' magnitude), and leaf pairs decided by trianglesIntersect() (padding 0) or
-    trianglesWithin() (padding > 0) with the smaller tree's triangles placed in the other's frame.
-    So the answer is exact for the coordinates after that one rigid transform. Stops at the first
-    contact found, which \a contact (when not null) receives: for padding > 0 the midpoint of a
-    close-enough pair. With a leaf hint in \a scratch and without \a contact the query first tests
-    the leaf pair where the last query of the same two trees touched or came nearest; that may
-    change which contact is found first, never the answer, so a query with \a contact skips it and
-    its first contact does not depend on earlier queries. A tree too deep for the walk's stack
-    (which MeshBvh's builder rules out) answers true, with no triangles named. */
-RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b,
-                               const Pose<double> &poseB, double padding, ExactContact *contact = nullptr,
-                               ExactScratch *scratch = nullptr)
+/** \brief The surface query of A (placed by \a poseA) and B (placed by \a poseB) within \a padding
+    (negative counts as 0): the tree with fewer nodes is the one moved (its nodes placed once per
+    query); the other's frame is the working frame, where the moved tree's triangles are placed by
+    one transform before the exact tests. \a point receives a contact's point (working frame). */
+RC_HD SurfaceQuery surfaceQuery(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b,
+                                const Pose<double> &poseB, double padding, ExactScratch *scratch, Vec3<double> *point)
 {
-    if (a.empty() || b.empty())
-        return false;
     padding = padding > 0.0 ? padding : 0.0;
-    // The tree with fewer nodes is the one moved (its nodes placed once per query); the other's
-    // frame is the working frame, where the moved tree's triangles are placed by one transform
-    // before the exact tests.
     const bool movingIsA = a.tree.numNodes <= b.tree.numNodes;
     const ExactTree &fixed = movingIsA ? b : a, &moving = movingIsA ? a : b;
-    const Pose<double> &fixedPose = movingIsA ? poseB : poseA, &movingPose = movingIsA ? poseA : poseB;
-    const Pose<double> place = relativePose(fixedPose, movingPose);
+    const Pose<double> place = relativePose(movingIsA ? poseB : poseA, movingIsA ? poseA : poseB);
     const Vec3<double> shift{place.m[3], place.m[7], place.m[11]};
     // The node tests must never drop a pair the triangle test would accept: the slack covers the
     // nodes' float storage (kNodeRounding) and the rounding of the transform and the projections.
@@ -444,8 +428,35 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
                          reinterpret_cast<unsigned long long>(moving.tree.nodes) * 0xC2B2AE3D27D4EB4Full;
         hint = scratch->hints + (key >> 32) % scratch->numHints;
     }
+    return SurfaceQuery{fixed, moving, place, movingIsA, padding, reach, scratch, cached, hint, point};
+}
+
+/** \brief Do the surfaces of A (placed by \a poseA) and B (placed by \a poseB) come within
+    \a padding (metres; 0 = intersect or touch; negative counts as 0)? Simultaneous traversal of
+    both trees, descending the larger node first; node pairs are culled by their bounding spheres,
+    then by boxesMayMeet(), both grown by \a padding plus a rounding slack (kNodeRounding of the
+    coordinates' magnitude), and leaf pairs decided by trianglesIntersect() (padding 0) or
+    trianglesWithin() (padding > 0) with the smaller tree's triangles placed in the other's frame.
+    So the answer is exact for the coordinates after that one rigid transform. Stops at the first
+    contact found, which \a contact (when not null) receives: for padding > 0 the midpoint of a
+    close-enough pair. With a leaf hint in \a scratch and without \a contact the query first tests
+    the leaf pair where the last query of the same two trees touched or came nearest; that may
+    change which contact is found first, never the answer, so a query with \a contact skips it and
+    its first contact does not depend on earlier queries. A tree too deep for the walk's stack
+    (which MeshBvh's builder rules out) answers true, with no triangles named. \a start: walk only
+    from that pair of nodes (a part from splitSurfaceWalk), in the query's numbering; the roots by
+    default. */
+RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b,
+                               const Pose<double> &poseB, double padding, ExactContact *contact = nullptr,
+                               ExactScratch *scratch = nullptr, NodePair start = NodePair{0, 0})
+{
+    if (a.empty() || b.empty())
+        return false;
     Vec3<double> point{0.0, 0.0, 0.0};
-    SurfaceQuery query{fixed, moving, place, movingIsA, padding, reach, scratch, cached, hint, &point};
+    SurfaceQuery query = surfaceQuery(a, poseA, b, poseB, padding, scratch, &point);
+    const ExactTree &fixed = query.fixed, &moving = query.moving;
+    const bool movingIsA = query.movingIsA;
+    LeafHint *hint = query.hint;
     // A caller that asks for the contact gets the walk's own first one, independent of what this
     // scratch saw before (the backends promise the same first contacts); the others may start
     // from the remembered leaf pair.
@@ -457,9 +468,10 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
         if (query.triangles(hint->slotFixed, placedTriangle))
             return true;
     }
-    const WalkEnd end = walkPairs(fixed.tree.nodes, moving.tree.nodes, query);
+    const WalkEnd end = walkPairs(fixed.tree.nodes, moving.tree.nodes, query, start);
     if (end == WalkEnd::Finished)
         return false;
+    const Pose<double> &fixedPose = movingIsA ? poseB : poseA;
     if (contact && end == WalkEnd::Overflow)  // the safe answer, with no triangle to name
     {
         contact->position = transformPoint(fixedPose, nodeCentreOf(fixed.tree.nodes[0]));
@@ -475,6 +487,21 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
         contact->triangleB = movingIsA ? triangleFixed : triangleMoving;
     }
     return true;
+}
+
+/** \brief surfacesWithin's walk (no scratch) split into up to \a capacity parts for as many threads
+    (splitWalk): surfacesWithin from each part as its start decides the same, and the first part in
+    order that finds a contact finds surfacesWithin's own first contact. \a parts and \a scratch: room
+    for \a capacity pairs. 0 parts: the surfaces cannot meet. */
+RC_HD std::uint32_t splitSurfaceWalk(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b,
+                                     const Pose<double> &poseB, double padding, NodePair *parts, NodePair *scratch,
+                                     std::uint32_t capacity)
+{
+    if (a.empty() || b.empty())
+        return 0;
+    Vec3<double> point{0.0, 0.0, 0.0};
+    SurfaceQuery query = surfaceQuery(a, poseA, b, poseB, padding, nullptr, &point);
+    return splitWalk(query.fixed.tree.nodes, query.moving.tree.nodes, query, parts, scratch, capacity);
 }
 
 /** \brief Is some shell of \a inner (placed by \a innerPose) inside the closed solid \a outer (placed
@@ -512,6 +539,18 @@ RC_HD_CALL bool shellInside(const ExactTree &inner, const Pose<double> &innerPos
     return false;
 }
 
+/** \brief The containment half of solidsOverlap, for solids whose surfaces do not meet: does a shell
+    of one lie inside the other (tested for closed meshes only: \a closedA / \a closedB)? On
+    containment \a contact gets the inner shell's probe (world frame) and triangles -1. */
+RC_HD bool solidsContain(const ExactTree &a, const Pose<double> &poseA, bool closedA, const ExactTree &b,
+                         const Pose<double> &poseB, bool closedB, ExactContact *contact)
+{
+    if (a.empty() || b.empty())
+        return false;
+    return (closedB && shellInside(a, poseA, b, poseB, contact)) ||
+           (closedA && shellInside(b, poseB, a, poseA, contact));
+}
+
 /** \brief The exact oracle for two solids: true when their surfaces come within \a padding or one
     contains the other (tested for closed meshes only: \a closedA / \a closedB). On containment
     \a contact gets the inner shell's probe (world frame) and triangles -1. */
@@ -519,11 +558,7 @@ RC_HD bool solidsOverlap(const ExactTree &a, const Pose<double> &poseA, bool clo
                          const Pose<double> &poseB, bool closedB, double padding, ExactContact *contact = nullptr,
                          ExactScratch *scratch = nullptr)
 {
-    if (surfacesWithin(a, poseA, b, poseB, padding, contact, scratch))
-        return true;
-    if (a.empty() || b.empty())
-        return false;
-    return (closedB && shellInside(a, poseA, b, poseB, contact)) ||
-           (closedA && shellInside(b, poseB, a, poseA, contact));
+    return surfacesWithin(a, poseA, b, poseB, padding, contact, scratch) ||
+           solidsContain(a, poseA, closedA, b, poseB, closedB, contact);
 }
 }  // namespace rastercheck::device

@@ -23,6 +23,10 @@ constexpr int kMaxTreeDepth = 60;
     pops one, so it never holds more than depthA + depthB + 1. */
 constexpr int kPairStackSize = 2 * kMaxTreeDepth + 2;
 
+/** \brief Most parts one walk is split into for as many threads (splitWalk; the stages' exact phase,
+    StageBudget::exactWalkParts). */
+constexpr std::uint32_t kMaxWalkParts = 32;
+
 /** \brief How a walk ended. */
 enum class WalkEnd : std::uint8_t
 {
@@ -46,7 +50,8 @@ RC_HD bool isLeafNode(const Node &node)
     return node.first < 0;
 }
 
-/** \brief Depth-first walk of the node pairs of two trees (root index 0 in each; both non-empty).
+/** \brief Depth-first walk of the node pairs of two trees (root index 0 in each; both non-empty),
+    from the pair \a start (the roots; a pair below them walks that pair's part of the trees alone).
     \a visitor provides:
     - `bool test(NodePair)`: may the pair hold what the query looks for? Called when a pair is
       popped, so a query whose reach shrinks as it goes (a distance query's best distance so far,
@@ -58,11 +63,11 @@ RC_HD bool isLeafNode(const Node &node)
       before the one with the first (the nearer first: a colliding query stops at the first
       contact, a distance query's reach shrinks sooner). */
 template <class NodeA, class NodeB, class Visitor>
-RC_HD WalkEnd walkPairs(const NodeA *nodesA, const NodeB *nodesB, Visitor &visitor)
+RC_HD WalkEnd walkPairs(const NodeA *nodesA, const NodeB *nodesB, Visitor &visitor, NodePair start = NodePair{0, 0})
 {
     NodePair stack[kPairStackSize];
     int top = 0;
-    stack[top++] = NodePair{0, 0};
+    stack[top++] = start;
     while (top > 0)
     {
         const NodePair pair = stack[--top];
@@ -91,6 +96,64 @@ RC_HD WalkEnd walkPairs(const NodeA *nodesA, const NodeB *nodesB, Visitor &visit
         stack[top++] = first;  // popped next
     }
     return WalkEnd::Finished;
+}
+
+/** \brief The walk of walkPairs split into parts: up to \a capacity node pairs (at least 1) into
+    \a parts, in walk order, whose walks from each (walkPairs' \a start), one after the other, visit
+    the same leaf pairs in the same order as one walk from the roots. The roots' pair is split level
+    by level, each pair the visitor's test keeps into its two children in walkPairs' order, while
+    the parts fit; a pair of leaves stays a part; a pair the test drops is left out. So many threads
+    can share one walk, the first to stop in walk order being the one walk's stop. \a scratch: room
+    for \a capacity pairs. Returns the number of parts (0: the test dropped the roots). */
+template <class NodeA, class NodeB, class Visitor>
+RC_HD std::uint32_t splitWalk(const NodeA *nodesA, const NodeB *nodesB, Visitor &visitor, NodePair *parts,
+                              NodePair *scratch, std::uint32_t capacity)
+{
+    std::uint32_t count = 1;
+    parts[0] = NodePair{0, 0};
+    for (bool changed = capacity > 1; changed;)
+    {
+        changed = false;
+        std::uint32_t n = 0;
+        for (std::uint32_t i = 0; i < count; ++i)
+        {
+            const NodePair pair = parts[i];
+            const bool leafA = isLeafNode(nodesA[pair.a]), leafB = isLeafNode(nodesB[pair.b]);
+            if (leafA && leafB)
+            {
+                scratch[n++] = pair;
+                continue;
+            }
+            if (!visitor.test(pair))
+            {
+                changed = true;  // dropped: room for another split
+                continue;
+            }
+            if (n + 2 + (count - i - 1) > capacity)  // no room for both children and the parts after
+            {
+                scratch[n++] = pair;
+                continue;
+            }
+            const bool descendA = leafB || (!leafA && visitor.splitA(pair));
+            const std::int32_t child = descendA ? nodesA[pair.a].first : nodesB[pair.b].first;
+            NodePair first = descendA ? NodePair{child, pair.b} : NodePair{pair.a, child};
+            NodePair second = descendA ? NodePair{child + 1, pair.b} : NodePair{pair.a, child + 1};
+            if (visitor.secondFirst(first, second))
+            {
+                const NodePair swapped = first;
+                first = second;
+                second = swapped;
+            }
+            scratch[n++] = first;
+            scratch[n++] = second;
+            changed = true;
+        }
+        for (std::uint32_t i = 0; i < n; ++i)
+            parts[i] = scratch[i];
+        count = n;
+        changed = changed && n > 0;
+    }
+    return count;
 }
 
 /** \brief Depth-first walk of one tree (\a numNodes nodes, root first): \a visit(leaf) for every leaf
