@@ -355,6 +355,9 @@ private:
     std::size_t size_ = 0, capacity_ = kInline;
 };
 
+// Node pairs whose radii are within this ratio are split together (walkNearestFirst).
+constexpr float kSplitBothRatio = 1.5f;
+
 // Walks the trees for query.best (the caller's bound, or the hint's distance below it), which then
 // holds the nearest pair below it, if any: best first (as FCL's distance traversal with a queue,
 // qsize > 2), each node pair in the order of its lower bound, so the walk ends when the nearest
@@ -383,26 +386,35 @@ void walkNearestFirst(DistanceQuery &query)
             }
             else
             {
-                // Descend into the bigger node, so both trees shrink at a similar pace.
-                const bool splitF = leafM || (!leafF && nf.radius >= nm.radius);
-                PendingPair near = current, far = current;
-                if (splitF)
-                {
-                    near.fixed = nf.first;
-                    far.fixed = nf.first + 1;
-                }
-                else
-                {
-                    near.moving = nm.first;
-                    far.moving = nm.first + 1;
-                }
-                // One bound at a time: placed() may reuse its scratch.
-                near.bound = query.bound(near.fixed, near.moving);
-                far.bound = query.bound(far.fixed, far.moving);
-                if (far.bound < near.bound)
-                    std::swap(near, far);
-                if (far.bound < query.best)
-                    pending.push(far);
+                // Descend into the bigger node, so both trees shrink at a similar pace, or into both
+                // at once where they are of a size (radii within kSplitBothRatio): one step and one
+                // heap visit for what two steps would bound, and the grandchildren's bounds prune
+                // pairs that the children's would have kept (OMPL.app alpha-1.5, two trees of 1 008
+                // triangles: 98 -> 90 us per query; bugtrap and Easy, a small tree against a large
+                // one, unchanged).
+                const bool similar = !leafF && !leafM &&
+                                     std::max(nf.radius, nm.radius) < kSplitBothRatio * std::min(nf.radius, nm.radius);
+                const bool splitF = !leafF && (leafM || similar || nf.radius >= nm.radius);
+                const bool splitM = !leafM && (leafF || similar || nm.radius > nf.radius);
+                PendingPair children[4];
+                int count = 0;
+                for (int i = 0; i < (splitF ? 2 : 1); ++i)
+                    for (int j = 0; j < (splitM ? 2 : 1); ++j)
+                    {
+                        PendingPair &child = children[count++];
+                        child.fixed = splitF ? nf.first + i : current.fixed;
+                        child.moving = splitM ? nm.first + j : current.moving;
+                        // One bound at a time: placed() may reuse its scratch.
+                        child.bound = query.bound(child.fixed, child.moving);
+                    }
+                int nearest = 0;
+                for (int k = 1; k < count; ++k)
+                    if (children[k].bound < children[nearest].bound)
+                        nearest = k;
+                for (int k = 0; k < count; ++k)
+                    if (k != nearest && children[k].bound < query.best)
+                        pending.push(children[k]);
+                const PendingPair &near = children[nearest];
                 if (near.bound < query.best && (pending.empty() || near.bound <= pending.top().bound))
                 {
                     current = near;
