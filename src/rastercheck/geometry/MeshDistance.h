@@ -34,8 +34,8 @@ struct SurfaceHint
 /** \brief Lower bound on the distance between a fixed tree's node and a moving tree's node placed in
     the fixed frame (its axes the columns of \a axesM, its centre at \a between from the fixed node's
     centre): the larger of the bounding spheres' gap, the widest gap between the boxes along any of
-    the 15 separating axes (each axis normalised, so its gap is a Euclidean lower bound) and each box
-    against the other's centre. 0 when the boxes overlap. Not grown by any rounding slack: the caller
+    the six axes of their faces and each box against the other's centre. 0 when the boxes overlap
+    (or come apart only across an edge of each). Not grown by any rounding slack: the caller
     subtracts it. Returns as soon as the bound reaches \a reach (then a value at least \a reach, not
     necessarily the largest): a walk that prunes at its best distance needs no more. */
 double nodeDistanceLowerBound(const MeshBvh::Node &fixed, const Eigen::Matrix3d &axesM, const MeshBvh::Node &moving,
