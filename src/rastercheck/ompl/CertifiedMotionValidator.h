@@ -35,6 +35,10 @@ struct CertifiedMotionOptions
         a clearance costs about fifty checks there (7x the time per edge), so it is off by default
         (docs/benchmarks.md, "Edges sized by clearance"). */
     bool sizeByClearance = false;
+    /** \brief How sizeByClearance measures a midpoint's clearance (Checker::freeRadius): the exact
+        distances, or the hulls' lower bounds (ClearanceMeasure::HullBound), which certify a
+        little less of each interval for far less time. */
+    ClearanceMeasure clearanceMeasure = ClearanceMeasure::Exact;
 };
 
 /** \brief A motion validator whose accepted edges are collision-free at every point, not only at
@@ -125,6 +129,7 @@ private:
     unsigned int levels_;
     unsigned int rakeWidth_;
     bool sizeByClearance_;
+    ClearanceMeasure clearanceMeasure_;
     ::ompl::base::StateSpace *space_;
     mutable std::atomic<std::uint64_t> states_{0};
     mutable std::atomic<std::uint64_t> clearances_{0};
