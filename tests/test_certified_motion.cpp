@@ -197,23 +197,28 @@ TEST(CertifiedMotion, ASlideCloserThanTheFinestMarginIsRejectedWithinItsBudget)
     // The cube slides 0.8 m along the plate's face 1 um away: free, but no margin down to
     // 0.1 m / 2^12 = 24 um can certify it. It is rejected (a documented false alarm) after a
     // bounded number of checks: 4 coarse intervals, at most 16 x 4 + 64 x 12 refined midpoints,
-    // each failing one checked once more at the padding.
+    // each failing one checked once more at the padding (or its clearance measured, exactly or by
+    // the hulls' bound, of 1 um).
     const Context context = makeContext(cubeAndPlate());
-    rco::CertifiedMotionOptions options;
-    options.margin = 0.1;
-    const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
-    ob::ScopedState<> from(context.si), to(context.si), last(context.si);
-    const double x = -0.051 - 1e-6;
-    setPosition(context, from.get(), x, -0.4, 0.0);
-    setPosition(context, to.get(), x, 0.4, 0.0);
-    ASSERT_TRUE(denselyFree(context, certified, from.get(), to.get(), 1.0, 0.002));
-    EXPECT_FALSE(certified.checkMotion(from.get(), to.get()));
-    EXPECT_LE(certified.getCheckedStateCount(), 2u * (4 + 16 * 4 + 64 * 12));
-    EXPECT_GT(certified.getCheckedStateCount(), 100u);  // it did refine before giving up
-    std::pair<ob::State *, double> lastValid(last.get(), -1.0);
-    EXPECT_FALSE(certified.checkMotion(from.get(), to.get(), lastValid));
-    EXPECT_GE(lastValid.second, 0.0);
-    EXPECT_LT(lastValid.second, 1.0);
+    for (const Sizing &sizing : kSizings)
+    {
+        rco::CertifiedMotionOptions options = sizing.options();
+        options.margin = 0.1;
+        const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
+        ob::ScopedState<> from(context.si), to(context.si), last(context.si);
+        const double x = -0.051 - 1e-6;
+        setPosition(context, from.get(), x, -0.4, 0.0);
+        setPosition(context, to.get(), x, 0.4, 0.0);
+        ASSERT_TRUE(denselyFree(context, certified, from.get(), to.get(), 1.0, 0.002));
+        EXPECT_FALSE(certified.checkMotion(from.get(), to.get())) << sizing.name;
+        const std::uint64_t spent = certified.getCheckedStateCount() + certified.getClearanceCount();
+        EXPECT_LE(spent, 2u * (4 + 16 * 4 + 64 * 12)) << sizing.name;
+        EXPECT_GT(spent, 100u) << sizing.name;  // it did refine before giving up
+        std::pair<ob::State *, double> lastValid(last.get(), -1.0);
+        EXPECT_FALSE(certified.checkMotion(from.get(), to.get(), lastValid));
+        EXPECT_GE(lastValid.second, 0.0);
+        EXPECT_LT(lastValid.second, 1.0);
+    }
 }
 
 TEST(CertifiedMotion, APassNearAnEdgeSizedByClearanceNeedsFewerChecks)
@@ -244,33 +249,6 @@ TEST(CertifiedMotion, APassNearAnEdgeSizedByClearanceNeedsFewerChecks)
         std::printf("bisection: %llu states; %s: %llu states and %llu clearances\n",
                     static_cast<unsigned long long>(states[0]), kSizings[k].name,
                     static_cast<unsigned long long>(states[k]), static_cast<unsigned long long>(clearances[k]));
-    }
-}
-
-TEST(CertifiedMotion, ASlideSizedByClearanceIsRejectedWithinItsBudget)
-{
-    // The slide of the test above, its intervals sized by the clearance of 1 um (exact, and the
-    // hulls' bound): it ends, rejected.
-    const Context context = makeContext(cubeAndPlate());
-    for (int k = 1; k < 3; ++k)
-    {
-        rco::CertifiedMotionOptions options = kSizings[k].options();
-        options.margin = 0.1;
-        const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
-        ob::ScopedState<> from(context.si), to(context.si), last(context.si);
-        const double x = -0.051 - 1e-6;
-        setPosition(context, from.get(), x, -0.4, 0.0);
-        setPosition(context, to.get(), x, 0.4, 0.0);
-        EXPECT_FALSE(certified.checkMotion(from.get(), to.get()));
-        EXPECT_LE(certified.getCheckedStateCount() + certified.getClearanceCount(), 2u * (4 + 16 * 4 + 64 * 12));
-        std::pair<ob::State *, double> lastValid(last.get(), -1.0);
-        EXPECT_FALSE(certified.checkMotion(from.get(), to.get(), lastValid));
-        EXPECT_GE(lastValid.second, 0.0);
-        EXPECT_LT(lastValid.second, 1.0);
-        if (lastValid.second > 0)
-        {
-            EXPECT_TRUE(denselyFree(context, certified, from.get(), to.get(), lastValid.second, 0.002));
-        }
     }
 }
 

@@ -40,10 +40,12 @@ enum class ClearanceMeasure
         longest step the motion allows. */
     Exact,
     /** \brief A lower bound from the convex hulls (device::hullDistanceLowerBound: GJK over each
-        solid's hull points, less its hull slack), refined by the patches of a solid that has them
-        (device::patchesLowerBound); the exact walk only where the hulls meet (bound 0). A bound is
-        as sound a proof as the distance (a step it allows is one the distance allows), shorter
-        where a hull stands far out of its solid, and takes a few microseconds per pair. */
+        solid's hull points, less its hull slack); where the whole hulls meet, the least bound over
+        the solids' shells or patches (device::patchesLowerBound); 0 where those meet too, so that
+        the state gets no step (a certified edge then halves the interval, as bisection does). A
+        bound is as sound a proof as the distance (a step it allows is one the distance allows),
+        shorter where a hull stands far out of its solid, and takes a few microseconds per pair.
+        Pairs with curved primitives keep their exact (GJK) distance. */
     HullBound
 };
 
