@@ -7,10 +7,12 @@
 // edges and states, and the verdict digest must not change when only speed does.
 // Prints per scenario and in all: edges accepted, states the checker decided, time per edge, per
 // certified state and per free state (the thread's CPU time, the fastest of the repeats: the
-// machine may be shared), and a digest of every verdict. The edges are decided twice, side by side
-// in one run: with intervals sized by the midpoints' clearance (the default) and by bisection alone
-// (CertifiedMotionOptions::sizeByClearance = false); "clearances per edge" counts the
-// Checker::freeRadius queries, which are not among the states.
+// machine may be shared), and a digest of every verdict and state count per sizing. The edges are
+// decided three times, side by side in one run: with intervals sized by the midpoints' exact
+// clearance (CertifiedMotionOptions::sizeByClearance), by its lower bound from the hulls
+// (clearanceMeasure = HullBound), and by bisection alone (the default); "clearances per edge"
+// counts the Checker::freeRadius queries, which are not among the states. A second digest, of the
+// verdicts alone, must be the same for every sizing.
 //
 // usage: rastercheck_bench_edges [robot=panda] [problems_per_scenario=3] [edges_per_problem=400]
 //                                [batch_size=8] [repeats=3]
@@ -48,8 +50,12 @@ struct Sizing
 {
     const char *name;
     bool byClearance;
+    ClearanceMeasure measure;
 };
-constexpr Sizing kSizings[] = {{"clearance", true}, {"bisection", false}};
+constexpr Sizing kSizings[] = {{"clearance", true, ClearanceMeasure::Exact},
+                               {"hull bound", true, ClearanceMeasure::HullBound},
+                               {"bisection", false, ClearanceMeasure::Exact}};
+constexpr int kNumSizings = 3;
 
 std::uint64_t mix(std::uint64_t digest, std::uint64_t value)
 {
@@ -68,9 +74,11 @@ int main(int argc, char **argv)
     const std::string root = bench::sharedDataOrExit();
     const RobotModelConstPtr robot = bench::loadMbmRobot(root, robotName);
 
-    std::map<std::string, Totals> perScenario[2];
-    Totals all[2];
-    std::uint64_t digest[2] = {1469598103934665603ull, 1469598103934665603ull};
+    std::map<std::string, Totals> perScenario[kNumSizings];
+    Totals all[kNumSizings];
+    std::uint64_t digest[kNumSizings], verdictDigest[kNumSizings];
+    std::fill_n(digest, kNumSizings, 1469598103934665603ull);
+    std::fill_n(verdictDigest, kNumSizings, 1469598103934665603ull);
     for (const std::string &scenario : bench::mbmScenarios())
         for (int index = 1; index <= problemsPerScenario; ++index)
         {
@@ -89,11 +97,12 @@ int main(int argc, char **argv)
                 std::fprintf(stderr, "the setup's motion validator is not certified\n");
                 return 1;
             }
-            std::shared_ptr<rastercheck::ompl::CertifiedMotionValidator> validators[2];
-            for (int m = 0; m < 2; ++m)
+            std::shared_ptr<rastercheck::ompl::CertifiedMotionValidator> validators[kNumSizings];
+            for (int m = 0; m < kNumSizings; ++m)
             {
                 rastercheck::ompl::CertifiedMotionOptions sizing;
                 sizing.sizeByClearance = kSizings[m].byClearance;
+                sizing.clearanceMeasure = kSizings[m].measure;
                 validators[m] = std::make_shared<rastercheck::ompl::CertifiedMotionValidator>(si, *validity, sizing);
             }
             const Checker &checker = validity->getChecker();
@@ -134,7 +143,7 @@ int main(int argc, char **argv)
                 batch[i] = {from[i], to[i]};
 
             std::vector<std::uint8_t> free(edgesPerProblem);
-            for (int m = 0; m < 2; ++m)
+            for (int m = 0; m < kNumSizings; ++m)
             {
                 rastercheck::ompl::CertifiedMotionValidator &edges = *validators[m];
                 Totals &t = perScenario[m][scenario];
@@ -171,7 +180,10 @@ int main(int argc, char **argv)
                     sum->freeSeconds += freeSeconds;
                 }
                 for (std::size_t i = 0; i < edgesPerProblem; ++i)
+                {
                     digest[m] = mix(digest[m], static_cast<std::uint64_t>(verdicts[i]) * 2 + free[i]);
+                    verdictDigest[m] = mix(verdictDigest[m], static_cast<std::uint64_t>(verdicts[i]) * 2 + free[i]);
+                }
                 digest[m] = mix(digest[m], edges.getCheckedStateCount());
             }
             for (std::size_t i = 0; i < edgesPerProblem; ++i)
@@ -195,12 +207,13 @@ int main(int argc, char **argv)
                     1e6 * t.edgeSeconds / static_cast<double>(t.states), 1e6 * t.freeSeconds / t.freeStates);
     };
     for (const std::string &scenario : bench::mbmScenarios())
-        for (int m = 0; m < 2; ++m)
+        for (int m = 0; m < kNumSizings; ++m)
             row(scenario, kSizings[m].name, perScenario[m][scenario]);
-    for (int m = 0; m < 2; ++m)
+    for (int m = 0; m < kNumSizings; ++m)
         row("all", kSizings[m].name, all[m]);
-    for (int m = 0; m < 2; ++m)
-        std::printf("\nverdict digest (%s) %016llx", kSizings[m].name, static_cast<unsigned long long>(digest[m]));
+    for (int m = 0; m < kNumSizings; ++m)
+        std::printf("\nverdict digest (%s) %016llx, verdicts alone %016llx", kSizings[m].name,
+                    static_cast<unsigned long long>(digest[m]), static_cast<unsigned long long>(verdictDigest[m]));
     std::printf("\n");
     return 0;
 }

@@ -13,7 +13,7 @@
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
 //                                   [range_fraction=0] [lazy_limit=300] [backend=cpu] [threads=1]
-//                                   [edge_sizing=bisection|clearance]
+//                                   [edge_sizing=bisection|clearance|hullbound]
 // (backend and threads: the rastercheck checker's, CheckerOptions; threads 0 = every core; FCL
 // always runs on one core)
 // (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
@@ -132,11 +132,12 @@ int main(int argc, char **argv)
     const double rangeFraction = argc > 8 ? std::atof(argv[8]) : 0.0;
     const unsigned int lazyLimit = argc > 9 ? static_cast<unsigned int>(std::atoi(argv[9])) : 300u;
     const BackendChoice backend = parseBackendChoice(argc > 10 ? argv[10] : "cpu");
-    // Certified edges' intervals: "clearance" (the default) or "bisection" (CertifiedMotionOptions).
+    // Certified edges' intervals: "bisection" (the library's default), "clearance" (exact
+    // clearances) or "hullbound" (the hulls' lower bounds, ClearanceMeasure::HullBound).
     const std::string sizing = argc > 12 ? argv[12] : "bisection";
-    if (sizing != "clearance" && sizing != "bisection")
+    if (sizing != "clearance" && sizing != "hullbound" && sizing != "bisection")
     {
-        std::fprintf(stderr, "edge sizing must be clearance or bisection, got '%s'\n", sizing.c_str());
+        std::fprintf(stderr, "edge sizing must be clearance, hullbound or bisection, got '%s'\n", sizing.c_str());
         return 2;
     }
     const int checkerThreads = argc > 11 ? std::atoi(argv[11]) : 1;
@@ -169,7 +170,9 @@ int main(int argc, char **argv)
             rastercheck::ompl::SetupOptions options;  // certified edges: the default
             options.checker.backend = backend;
             options.checker.threads = checkerThreads;
-            options.certified.sizeByClearance = sizing == "clearance";
+            options.certified.sizeByClearance = sizing != "bisection";
+            options.certified.clearanceMeasure =
+                sizing == "hullbound" ? ClearanceMeasure::HullBound : ClearanceMeasure::Exact;
             if (backend == BackendChoice::Cuda)
                 options.checker.minDeviceBatch = 32;  // planning on the device: every batch it can take
             og::SimpleSetupPtr ours = rastercheck::ompl::makeSimpleSetup(problem, options);

@@ -59,6 +59,24 @@ void setPosition(const Context &context, ob::State *state, double x, double y, d
 
 /** \brief Whether every state from fraction 0 to \a upTo of the edge passes the exact oracle, checked
     at steps over which no point of the robot moves more than \a step (MotionBound). */
+/** \brief One way of sizing a certified edge's intervals (CertifiedMotionOptions). */
+struct Sizing
+{
+    const char *name;
+    bool byClearance;
+    rc::ClearanceMeasure measure;
+    rco::CertifiedMotionOptions options() const
+    {
+        rco::CertifiedMotionOptions options;
+        options.sizeByClearance = byClearance;
+        options.clearanceMeasure = measure;
+        return options;
+    }
+};
+constexpr Sizing kSizings[] = {{"bisection", false, rc::ClearanceMeasure::Exact},
+                               {"sized by clearance", true, rc::ClearanceMeasure::Exact},
+                               {"sized by the hulls' bound", true, rc::ClearanceMeasure::HullBound}};
+
 bool denselyFree(const Context &context, const rco::CertifiedMotionValidator &certified, const ob::State *from,
                  const ob::State *to, double upTo, double step)
 {
@@ -179,23 +197,28 @@ TEST(CertifiedMotion, ASlideCloserThanTheFinestMarginIsRejectedWithinItsBudget)
     // The cube slides 0.8 m along the plate's face 1 um away: free, but no margin down to
     // 0.1 m / 2^12 = 24 um can certify it. It is rejected (a documented false alarm) after a
     // bounded number of checks: 4 coarse intervals, at most 16 x 4 + 64 x 12 refined midpoints,
-    // each failing one checked once more at the padding.
+    // each failing one checked once more at the padding (or its clearance measured, exactly or by
+    // the hulls' bound, of 1 um).
     const Context context = makeContext(cubeAndPlate());
-    rco::CertifiedMotionOptions options;
-    options.margin = 0.1;
-    const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
-    ob::ScopedState<> from(context.si), to(context.si), last(context.si);
-    const double x = -0.051 - 1e-6;
-    setPosition(context, from.get(), x, -0.4, 0.0);
-    setPosition(context, to.get(), x, 0.4, 0.0);
-    ASSERT_TRUE(denselyFree(context, certified, from.get(), to.get(), 1.0, 0.002));
-    EXPECT_FALSE(certified.checkMotion(from.get(), to.get()));
-    EXPECT_LE(certified.getCheckedStateCount(), 2u * (4 + 16 * 4 + 64 * 12));
-    EXPECT_GT(certified.getCheckedStateCount(), 100u);  // it did refine before giving up
-    std::pair<ob::State *, double> lastValid(last.get(), -1.0);
-    EXPECT_FALSE(certified.checkMotion(from.get(), to.get(), lastValid));
-    EXPECT_GE(lastValid.second, 0.0);
-    EXPECT_LT(lastValid.second, 1.0);
+    for (const Sizing &sizing : kSizings)
+    {
+        rco::CertifiedMotionOptions options = sizing.options();
+        options.margin = 0.1;
+        const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
+        ob::ScopedState<> from(context.si), to(context.si), last(context.si);
+        const double x = -0.051 - 1e-6;
+        setPosition(context, from.get(), x, -0.4, 0.0);
+        setPosition(context, to.get(), x, 0.4, 0.0);
+        ASSERT_TRUE(denselyFree(context, certified, from.get(), to.get(), 1.0, 0.002));
+        EXPECT_FALSE(certified.checkMotion(from.get(), to.get())) << sizing.name;
+        const std::uint64_t spent = certified.getCheckedStateCount() + certified.getClearanceCount();
+        EXPECT_LE(spent, 2u * (4 + 16 * 4 + 64 * 12)) << sizing.name;
+        EXPECT_GT(spent, 100u) << sizing.name;  // it did refine before giving up
+        std::pair<ob::State *, double> lastValid(last.get(), -1.0);
+        EXPECT_FALSE(certified.checkMotion(from.get(), to.get(), lastValid));
+        EXPECT_GE(lastValid.second, 0.0);
+        EXPECT_LT(lastValid.second, 1.0);
+    }
 }
 
 TEST(CertifiedMotion, APassNearAnEdgeSizedByClearanceNeedsFewerChecks)
@@ -207,47 +230,25 @@ TEST(CertifiedMotion, APassNearAnEdgeSizedByClearanceNeedsFewerChecks)
     ob::ScopedState<> from(context.si), to(context.si);
     setPosition(context, from.get(), -1.0, 0.5 + 0.05 + 0.005, 0.0);
     setPosition(context, to.get(), 1.0, 0.5 + 0.05 + 0.005, 0.0);
-    std::uint64_t states[2], clearances[2];
-    for (const bool byClearance : {false, true})
+    std::uint64_t states[3], clearances[3];
+    for (int k = 0; k < 3; ++k)
     {
-        rco::CertifiedMotionOptions options;
+        rco::CertifiedMotionOptions options = kSizings[k].options();
         options.margin = 0.1;
-        options.sizeByClearance = byClearance;
         const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
-        EXPECT_TRUE(certified.checkMotion(from.get(), to.get())) << byClearance;
+        EXPECT_TRUE(certified.checkMotion(from.get(), to.get())) << kSizings[k].name;
         EXPECT_TRUE(denselyFree(context, certified, from.get(), to.get(), 1.0, 0.002));
-        states[byClearance] = certified.getCheckedStateCount();
-        clearances[byClearance] = certified.getClearanceCount();
+        states[k] = certified.getCheckedStateCount();
+        clearances[k] = certified.getClearanceCount();
     }
     EXPECT_EQ(clearances[0], 0u);
-    EXPECT_GT(clearances[1], 0u);
-    EXPECT_LT(states[1] + clearances[1], states[0]);
-    std::printf("bisection: %llu states; by clearance: %llu states and %llu clearances\n",
-                static_cast<unsigned long long>(states[0]), static_cast<unsigned long long>(states[1]),
-                static_cast<unsigned long long>(clearances[1]));
-}
-
-TEST(CertifiedMotion, ASlideSizedByClearanceIsRejectedWithinItsBudget)
-{
-    // The slide of the test above, its intervals sized by the clearance of 1 um: it ends, rejected.
-    const Context context = makeContext(cubeAndPlate());
-    rco::CertifiedMotionOptions options;
-    options.margin = 0.1;
-    options.sizeByClearance = true;
-    const rco::CertifiedMotionValidator certified(context.si, *context.validity, options);
-    ob::ScopedState<> from(context.si), to(context.si), last(context.si);
-    const double x = -0.051 - 1e-6;
-    setPosition(context, from.get(), x, -0.4, 0.0);
-    setPosition(context, to.get(), x, 0.4, 0.0);
-    EXPECT_FALSE(certified.checkMotion(from.get(), to.get()));
-    EXPECT_LE(certified.getCheckedStateCount() + certified.getClearanceCount(), 2u * (4 + 16 * 4 + 64 * 12));
-    std::pair<ob::State *, double> lastValid(last.get(), -1.0);
-    EXPECT_FALSE(certified.checkMotion(from.get(), to.get(), lastValid));
-    EXPECT_GE(lastValid.second, 0.0);
-    EXPECT_LT(lastValid.second, 1.0);
-    if (lastValid.second > 0)
+    for (int k = 1; k < 3; ++k)
     {
-        EXPECT_TRUE(denselyFree(context, certified, from.get(), to.get(), lastValid.second, 0.002));
+        EXPECT_GT(clearances[k], 0u) << kSizings[k].name;
+        EXPECT_LT(states[k] + clearances[k], states[0]) << kSizings[k].name;
+        std::printf("bisection: %llu states; %s: %llu states and %llu clearances\n",
+                    static_cast<unsigned long long>(states[0]), kSizings[k].name,
+                    static_cast<unsigned long long>(states[k]), static_cast<unsigned long long>(clearances[k]));
     }
 }
 
@@ -275,17 +276,15 @@ TEST(CertifiedMotion, EveryAcceptedPandaEdgeIsCollisionFreeAtEveryPoint)
     for (const char *scenario : {"cage", "bookshelf_thin"})
     {
         const Context context = makeContext(rc::test::pandaProblem(root, scenario));
-        for (const bool byClearance : {false, true})
+        for (const Sizing &sizing : kSizings)
         {
-            rco::CertifiedMotionOptions options;
-            options.sizeByClearance = byClearance;
             // RRT-Connect's default range: a fifth of the space's extent.
             const std::array<int, 3> counts =
-                checkRandomEdges(context, 60, 0.2 * context.si->getMaximumExtent(), 3, options);
+                checkRandomEdges(context, 60, 0.2 * context.si->getMaximumExtent(), 3, sizing.options());
             EXPECT_GT(counts[0], 5) << scenario;  // both answers occur
             EXPECT_GT(counts[1], 5) << scenario;
             std::printf("%s, %s: %d edges certified, %d not (%d of them accepted by the discrete validator)\n",
-                        scenario, byClearance ? "sized by clearance" : "bisection", counts[0], counts[1], counts[2]);
+                        scenario, sizing.name, counts[0], counts[1], counts[2]);
         }
     }
 }
@@ -294,15 +293,13 @@ TEST(CertifiedMotion, EveryAcceptedCraneEdgeIsCollisionFreeAtEveryPoint)
 {
     const rc::Problem &plant = rc::test::plant();
     const Context context = makeContext(plant);
-    for (const bool byClearance : {false, true})
+    for (const Sizing &sizing : kSizings)
     {
-        rco::CertifiedMotionOptions options;
-        options.sizeByClearance = byClearance;
         const std::array<int, 3> counts =
-            checkRandomEdges(context, 20, 0.1 * context.si->getMaximumExtent(), 5, options);
+            checkRandomEdges(context, 20, 0.1 * context.si->getMaximumExtent(), 5, sizing.options());
         EXPECT_GT(counts[0], 2);
         std::printf("crane, %s: %d edges certified, %d not (%d of them accepted by the discrete validator)\n",
-                    byClearance ? "sized by clearance" : "bisection", counts[0], counts[1], counts[2]);
+                    sizing.name, counts[0], counts[1], counts[2]);
     }
 }
 

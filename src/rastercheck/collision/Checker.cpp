@@ -206,13 +206,13 @@ std::vector<Contact> Checker::contacts(const double *q, const CollisionRequest &
 }
 
 void Checker::freeRadius(const double *q, std::size_t n, const CollisionRequest &request, const PairPadding &rates,
-                         const double *caps, double *radii) const
+                         const double *caps, double *radii, ClearanceMeasure measure) const
 {
     validateRequest(request, n);
     validateEntries(rates, "Checker::freeRadius: the rates");
     validateRows(rates, "Checker::freeRadius: the rates", n);
     warnOnceIfNotFinite(q, n);
-    distances_.freeRadius(q, n, request, rates, caps, radii, n > 1 ? threads_ : 1);
+    distances_.freeRadius(q, n, request, rates, caps, radii, n > 1 ? threads_ : 1, measure);
 }
 
 void Checker::distance(const double *q, const DistanceRequest &request, DistanceResult *result) const

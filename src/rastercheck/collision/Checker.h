@@ -115,11 +115,12 @@ public:
     /** \brief Conservative advancement's step at \a n states (DistanceQueries::freeRadius): per
         state the largest t up to caps[i] for which every pair the request checks, closing in at its
         rate (\a rates, laid out as a PairPadding: one row or one per state) for t, stays farther
-        apart than its padding; 0 for a state within its padding or outside the bounds. Exact, over
+        apart than its padding; 0 for a state within its padding or outside the bounds. Exact
+        (\a measure Exact), or a step no longer sized by the hulls' lower bounds (HullBound), over
         the checker's CPU threads. Throws ConfigurationError for a bad request or rates (negative,
         not finite, or not one row or n rows of the model's components and self pairs). */
     void freeRadius(const double *q, std::size_t n, const CollisionRequest &request, const PairPadding &rates,
-                    const double *caps, double *radii) const;
+                    const double *caps, double *radii, ClearanceMeasure measure = ClearanceMeasure::Exact) const;
 
     /** \brief "panda_link5 vs object 'box_3' at 0.0421 (0.41, 0.02, 0.33) - (0.43, 0.05, 0.33)". */
     std::string describe(const DistanceResult &result) const;

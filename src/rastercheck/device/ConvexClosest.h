@@ -29,6 +29,21 @@ struct GjkSimplex
     bool overlap = false;
 };
 
+/** \brief A lower bound closestPoints() keeps (optional), and when it may stop for it. */
+struct GjkLowerBound
+{
+    /** \brief Out: the largest gap a support plane showed. Every step's v . w / |v| (w the
+        difference's point extreme along -v, so every point x of A - B has v . x >= v . w) bounds
+        the distance from below however GJK ends, to the rounding of the support points; 0 when
+        none showed a gap. */
+    double value = 0.0;
+    /** \brief In: stop once the bound reaches this (a caller that needs no more). */
+    double enough = HUGE_VAL;
+    /** \brief In: stop once the bound is within this fraction of the upper bound |v| (the
+        distance's own stop, 1e-12, when smaller). */
+    double tolerance = 1e-12;
+};
+
 /** \brief Distance between the convex solids given by the support functions \a a and \a b (each
     callable on a world direction, returning the solid's point farthest along it; 0 when they touch
     or overlap), with \a onA / \a onB a closest pair of points (world frame; one point of both when
@@ -37,10 +52,12 @@ struct GjkSimplex
     when the upper bound |v| and the support plane's lower bound meet within 1e-12 of |v|^2 (so the
     distance is exact to about 1e-6 of itself at worst, far better in practice), when the origin is
     enclosed, or when the simplex stops shrinking (rounding); at most 128 steps. \a terminal
-    (optional) receives the last simplex. */
+    (optional) receives the last simplex. \a lower (optional) keeps the support planes' lower
+    bound and may stop GJK early for it (GjkLowerBound): the distance and points returned are then
+    those of the last step, an upper bound. */
 template <class SupportA, class SupportB>
 RC_HD double closestPoints(const SupportA &a, const SupportB &b, Vec3<double> &onA, Vec3<double> &onB,
-                           GjkSimplex *terminal = nullptr)
+                           GjkSimplex *terminal = nullptr, GjkLowerBound *lower = nullptr)
 {
     Vec3<double> simplex[4], pointsOfA[4];
     double weights[4] = {1.0, 0.0, 0.0, 0.0};
@@ -60,6 +77,13 @@ RC_HD double closestPoints(const SupportA &a, const SupportB &b, Vec3<double> &o
         }
         const Vec3<double> pointOfA = a(Vec3<double>{-v.x, -v.y, -v.z});
         const Vec3<double> w = pointOfA - b(v);
+        if (lower)
+        {
+            const double length = sqrt(vv);
+            lower->value = fmax(lower->value, dot(v, w) / length);
+            if (lower->value >= lower->enough || length - lower->value <= lower->tolerance * length)
+                break;
+        }
         if (vv - dot(v, w) <= 1e-12 * vv)
             break;  // the support plane along v is as far as the simplex's nearest point
         size = fmax(size, sqrt(dot(w, w)));
@@ -131,6 +155,50 @@ RC_HD double closestPoints(const SupportA &a, const SupportB &b, Vec3<double> &o
     }
     onB = p - v;
     return sqrt(dot(v, v));
+}
+
+/** \brief A convex piece's hull points (ConvexProxy) placed by a pose, as the support function
+    closestPoints() reads. */
+struct HullSupport
+{
+    const ConvexProxy *piece;
+    const Pose<double> *pose;
+    RC_HD Vec3<double> operator()(const Vec3<double> &d) const { return detail::worldSupport(*piece, *pose, d); }
+};
+
+/** \brief How close to the hulls' distance hullDistanceLowerBound() takes its bound by default: a
+    step sized by it is at most this fraction shorter than one sized by the hulls' distance. */
+constexpr double kHullBoundTolerance = 1e-3;
+
+/** \brief A lower bound on the distance between the solids of pieces \a a and \a b (placed by their
+    poses, world frame), from their hulls: a few GJK steps over the hull points, where the exact
+    distance walks two triangle trees. 0 when the hulls may touch or overlap. GJK stops once the
+    bound reaches \a enough (a caller that needs no more) or comes within \a tolerance of the
+    hulls' distance.
+
+    Why it is a proof: each piece (its triangles, and the inside of a closed one) lies in the convex
+    hull of its vertices, and no vertex lies farther than the piece's hull slack from the hull of its
+    hull points, so the vertices' hull lies within that slack of the hull points' hull (the points
+    within a distance of a convex set form a convex set). GJK's support planes bound the distance
+    between the hull points' hulls from below (GjkLowerBound: v . w / |v| for its every v), up to the rounding of the
+   support search and of the placed points, which kSeparationSlack of the coordinates' magnitudes covers (as
+   relateHulls' proofs). So the solids are at least that bound less both slacks less the rounding apart; in particular a
+    positive bound shows that neither solid lies inside the other. */
+RC_HD double hullDistanceLowerBound(const ConvexProxy &a, const Pose<double> &poseA, const ConvexProxy &b,
+                                    const Pose<double> &poseB, double enough = HUGE_VAL,
+                                    double tolerance = kHullBoundTolerance)
+{
+    if (a.numHullPoints == 0 || b.numHullPoints == 0)
+        return 0.0;
+    const Vec3<double> ta = translationOf(poseA), tb = translationOf(poseB);
+    const double rounding = kSeparationSlack * (a.radius + b.radius + sqrt(dot(ta, ta)) + sqrt(dot(tb, tb)));
+    const double slack = a.hullSlack + b.hullSlack + rounding;
+    Vec3<double> onA, onB;
+    GjkLowerBound lower;
+    lower.enough = enough + slack;
+    lower.tolerance = tolerance;
+    closestPoints(HullSupport{&a, &poseA}, HullSupport{&b, &poseB}, onA, onB, nullptr, &lower);
+    return fmax(0.0, lower.value - slack);
 }
 
 /** \brief closestPoints() of two ConvexShapes. */

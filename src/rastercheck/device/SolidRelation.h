@@ -11,6 +11,7 @@
 
 #include <cstdint>
 
+#include "rastercheck/device/ConvexClosest.h"
 #include "rastercheck/device/MeshTree.h"
 #include "rastercheck/device/Separation.h"
 #include "rastercheck/device/Traversal.h"
@@ -328,6 +329,54 @@ RC_HD bool patchesApart(const ConvexArrays &arrays, std::uint32_t solid, const P
 RC_HD bool hasPatches(const ConvexArrays &arrays, std::uint32_t solid)
 {
     return arrays.solidPatchNodes[solid + 1] > arrays.solidPatchNodes[solid];
+}
+
+/** \brief A lower bound on the distance between \a piece (placed by \a pose) and the surface of
+    solid \a solid (placed by \a solidPose) by the solid's patch tree, when it is below \a reach:
+    the least hullDistanceLowerBound() of the piece against the patches whose boxes come within
+    that bound of the piece's box (boundsInFrame), the bound shrinking as patches are measured;
+    \a reach when none comes nearer. Each patch's triangles lie in its hull and below its nodes'
+    boxes, and the piece's solid in its box, so a skipped node holds nothing nearer than the bound
+    so far. Where the piece's hull meets a patch's, \a onMeeting(patch, bound) gives that patch's
+    bound instead (the piece's own patches against it, or 0). The surfaces only: a solid inside
+    the other is the caller's to rule out. 0 when the solid has no patches or the tree is too deep
+    for the walk's stack (which proves nothing). */
+template <class OnMeeting>
+RC_HD double patchesLowerBound(const ConvexArrays &arrays, std::uint32_t solid, const Pose<double> &solidPose,
+                               const ConvexProxy &piece, const Pose<double> &pose, double reach, OnMeeting &&onMeeting)
+{
+    const PatchNode *nodes = arrays.patchNodes + arrays.solidPatchNodes[solid];
+    const std::uint32_t numNodes = arrays.solidPatchNodes[solid + 1] - arrays.solidPatchNodes[solid];
+    if (numNodes == 0)
+        return 0.0;
+    const Vec3<double> ts = translationOf(solidPose), tp = translationOf(pose);
+    const double rounding = kSeparationSlack * (piece.radius + arrays.pieces[arrays.solidPieces[solid]].radius +
+                                                std::sqrt(dot(ts, ts)) + std::sqrt(dot(tp, tp)));
+    double lower[3], upper[3];
+    boundsInFrame(piece, pose, solidPose, rounding, lower, upper);
+    double bound = reach;
+    const WalkEnd end = walkTree(
+        nodes, numNodes,
+        [&](const PatchNode &node)
+        {
+            double gap = 0.0;  // squared distance between the node's box and the piece's
+            for (int k = 0; k < 3; ++k)
+            {
+                const double g = fmax(0.0, fmax(node.min[k] - upper[k], lower[k] - node.max[k]));
+                gap += g * g;
+            }
+            return gap < bound * bound;
+        },
+        [&](const PatchNode &leaf)
+        {
+            const ConvexProxy patch = convexProxy(arrays, arrays.patchPieces[-(leaf.first + 1)]);
+            double d = hullDistanceLowerBound(piece, pose, patch, solidPose, bound);
+            if (!(d > 0.0))
+                d = onMeeting(patch, bound);
+            bound = fmin(bound, d);
+            return bound > 0.0;
+        });
+    return end == WalkEnd::Finished ? bound : 0.0;
 }
 
 /** \brief A point of \a piece's surface (its first vertex), world frame. */

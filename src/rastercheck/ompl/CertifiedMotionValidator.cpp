@@ -112,6 +112,7 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
       levels_(options.levels),
       rakeWidth_(options.rakeWidth),
       sizeByClearance_(options.sizeByClearance),
+      clearanceMeasure_(options.clearanceMeasure),
       space_(si->getStateSpace().get())
 {
     detail::requireMatchingParts(si, mapping_, checker_, "CertifiedMotionValidator");
@@ -337,7 +338,8 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
                               rates->self.begin() + static_cast<std::ptrdiff_t>(row * selfPairs));
                     w.caps[row++] = 0.5 * interval.length;
                 }
-            checker_->freeRadius(w.rows.data(), closeCount, request_, *rates, w.caps.data(), w.radii.data());
+            checker_->freeRadius(w.rows.data(), closeCount, request_, *rates, w.caps.data(), w.radii.data(),
+                                 clearanceMeasure_);
             clearances_.fetch_add(closeCount, std::memory_order_relaxed);
         }
 

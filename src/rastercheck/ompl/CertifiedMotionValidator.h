@@ -32,9 +32,14 @@ struct CertifiedMotionOptions
         (Checker::freeRadius: each pair's exact distance against what it can close in along the
         edge) instead of halving the interval: conservative advancement. It checks fewer states
         (Panda MotionBenchMaker edges, bench/edges: 24.7 -> 19.6 per edge, plus 3 clearances) but
-        a clearance costs about fifty checks there (7x the time per edge), so it is off by default
-        (docs/benchmarks.md, "Edges sized by clearance"). */
+        an exact clearance costs about fifty checks there (6.6x the time per edge; 1.4x with
+        clearanceMeasure HullBound, 20.3 states), so it is off by default (docs/benchmarks.md,
+        "Edges sized by clearance"). */
     bool sizeByClearance = false;
+    /** \brief How sizeByClearance measures a midpoint's clearance (Checker::freeRadius): the exact
+        distances, or the hulls' lower bounds (ClearanceMeasure::HullBound), which certify a
+        little less of each interval for far less time. */
+    ClearanceMeasure clearanceMeasure = ClearanceMeasure::Exact;
 };
 
 /** \brief A motion validator whose accepted edges are collision-free at every point, not only at
@@ -125,6 +130,7 @@ private:
     unsigned int levels_;
     unsigned int rakeWidth_;
     bool sizeByClearance_;
+    ClearanceMeasure clearanceMeasure_;
     ::ompl::base::StateSpace *space_;
     mutable std::atomic<std::uint64_t> states_{0};
     mutable std::atomic<std::uint64_t> clearances_{0};
