@@ -748,7 +748,9 @@ std::array<int, 2> compareHullBound(const rc::Problem &problem, std::size_t n, d
         }
         ++counts[1];
         if (bound > 0.0)
+        {
             EXPECT_TRUE(checker.isValid(state, advanced(request, rates, bound * (1.0 - 1e-6)))) << "state " << i;
+        }
         if (1.01 * bound > exact)
             ++counts[0];
     }
