@@ -583,7 +583,7 @@ TEST(Separation, TheClusteredSupportSearchFindsWhatReadingEveryHullPointFinds)
     rc::ConvexSolids convex;
     convex.add(rc::MeshBvh(rc::makeBox(Vec(0.4, 0.1, 0.25))), true);  // 8 hull points: searched one by one
     convex.add(rc::MeshBvh(rc::makeSphere(1.0, 1e-4)), true);         // 128 hull points in clusters
-    rc::Mesh rod = rc::makeCylinder(0.05, 2.0, 1e-4);    // long and thin, far from its frame's origin
+    rc::Mesh rod = rc::makeCylinder(0.05, 2.0, 1e-4);                 // long and thin, far from its frame's origin
     rod.transform(Eigen::Isometry3d(Eigen::Translation3d(30.0, -20.0, 50.0)));
     convex.add(rc::MeshBvh(rod), true);
     std::vector<std::string> names = {"box", "sphere", "cylinder"};
