@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "NonConvex.h"
 #include "TestSupport.h"
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/geometry/MeshBvh.h"
@@ -28,8 +29,8 @@ public:
     std::size_t add(const rc::Mesh &mesh, bool closed = true)
     {
         meshes_.push_back(std::make_unique<rc::Mesh>(mesh));  // the BVH reads the mesh it was built on
-        convex_.add(mesh, closed);
         bvhs_.push_back(std::make_unique<rc::MeshBvh>(*meshes_.back()));
+        convex_.add(*bvhs_.back(), closed);  // the patches are a cut of the oracle's tree
         closed_.push_back(closed);
         return convex_.numSolids() - 1;
     }
@@ -546,7 +547,7 @@ void addPandaLinks(rc::ConvexSolids &convex, std::vector<std::string> &names)
     const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
     for (const rc::Component &component : problem.robot->components)
     {
-        convex.add(component.mesh, component.topology.closed);
+        convex.add(rc::MeshBvh(component.mesh), component.topology.closed);
         names.push_back(component.name);
     }
 }
@@ -555,8 +556,8 @@ void addPandaLinks(rc::ConvexSolids &convex, std::vector<std::string> &names)
 TEST(Separation, TheHullSlackBoundsHowFarVerticesStickOutOfTheHullPointsHull)
 {
     rc::ConvexSolids convex;
-    convex.add(rc::makeBox(Vec(0.4, 0.1, 0.25)), true);  // 8 vertices: all hull points, no slack
-    convex.add(rc::makeSphere(1.0, 1e-4), true);         // 60 000 vertices on the unit sphere
+    convex.add(rc::MeshBvh(rc::makeBox(Vec(0.4, 0.1, 0.25))), true);  // 8 vertices: all hull points, no slack
+    convex.add(rc::MeshBvh(rc::makeSphere(1.0, 1e-4)), true);         // 60 000 vertices on the unit sphere
     std::vector<std::string> names = {"box", "sphere"};
     addPandaLinks(convex, names);
     const rc::device::ConvexArrays arrays = convex.arrays();
@@ -580,11 +581,11 @@ TEST(Separation, TheHullSlackBoundsHowFarVerticesStickOutOfTheHullPointsHull)
 TEST(Separation, TheClusteredSupportSearchFindsWhatReadingEveryHullPointFinds)
 {
     rc::ConvexSolids convex;
-    convex.add(rc::makeBox(Vec(0.4, 0.1, 0.25)), true);  // 8 hull points: searched one by one
-    convex.add(rc::makeSphere(1.0, 1e-4), true);         // 128 hull points in clusters
-    rc::Mesh rod = rc::makeCylinder(0.05, 2.0, 1e-4);    // long and thin, far from its frame's origin
+    convex.add(rc::MeshBvh(rc::makeBox(Vec(0.4, 0.1, 0.25))), true);  // 8 hull points: searched one by one
+    convex.add(rc::MeshBvh(rc::makeSphere(1.0, 1e-4)), true);         // 128 hull points in clusters
+    rc::Mesh rod = rc::makeCylinder(0.05, 2.0, 1e-4);                 // long and thin, far from its frame's origin
     rod.transform(Eigen::Isometry3d(Eigen::Translation3d(30.0, -20.0, 50.0)));
-    convex.add(rod, true);
+    convex.add(rc::MeshBvh(rod), true);
     std::vector<std::string> names = {"box", "sphere", "cylinder"};
     addPandaLinks(convex, names);
     const rc::device::ConvexArrays arrays = convex.arrays();
@@ -701,4 +702,125 @@ TEST(Separation, GjksSimplexStepFindsTheNearestPointOfTheHullFromTheFacesOfTheNe
     }
     EXPECT_GT(steps, 20000);
     EXPECT_GT(origins, 100);
+}
+
+namespace
+{
+/** \brief Checks that solid \a solid's patch tree in \a arrays is a cut of \a tree (the solid's
+    triangle tree): its root stands for the tree's root, an inner patch node for an inner tree node
+    whose two children its two children stand for, in order, and a patch holds exactly the triangles
+    under its tree node, in slot order, with its box around them; every triangle of the mesh lies in
+    exactly one patch. Returns the number of patches (0: the solid has no patch tree). */
+std::size_t expectPatchesCutTheTree(const rc::device::ConvexArrays &arrays, std::size_t solid, const rc::MeshBvh &tree,
+                                    const std::string &name)
+{
+    const rc::device::PatchNode *nodes = arrays.patchNodes + arrays.solidPatchNodes[solid];
+    const std::uint32_t numNodes = arrays.solidPatchNodes[solid + 1] - arrays.solidPatchNodes[solid];
+    if (numNodes == 0)
+        return 0;
+    const rc::Mesh &mesh = tree.mesh();
+    const std::vector<rc::MeshBvh::SlotRange> slots = tree.nodeSlotRanges();
+    std::vector<int> inPatches(mesh.numTriangles(), 0);
+    std::vector<int> visited(numNodes, 0);
+    std::size_t patches = 0;
+    EXPECT_EQ(nodes[0].treeNode, 0u) << name;
+    std::vector<std::uint32_t> pending{0};
+    while (!pending.empty())
+    {
+        const std::uint32_t i = pending.back();
+        pending.pop_back();
+        ++visited[i];
+        const rc::device::PatchNode &node = nodes[i];
+        EXPECT_LT(node.treeNode, tree.numNodes()) << name;
+        if (node.treeNode >= tree.numNodes())
+            continue;
+        const rc::MeshBvh::Node &treeNode = tree.nodes()[node.treeNode];
+        if (node.first >= 0)
+        {
+            EXPECT_FALSE(treeNode.isLeaf()) << name << ": patch node " << i << " is inner, its tree node a leaf";
+            EXPECT_EQ(nodes[node.first].treeNode, static_cast<std::uint32_t>(treeNode.first)) << name;
+            EXPECT_EQ(nodes[node.first + 1].treeNode, static_cast<std::uint32_t>(treeNode.first + 1)) << name;
+            pending.push_back(static_cast<std::uint32_t>(node.first));
+            pending.push_back(static_cast<std::uint32_t>(node.first + 1));
+            continue;
+        }
+        ++patches;
+        const rc::device::ConvexPiece &patch = arrays.patchPieces[-(node.first + 1)];
+        const rc::MeshBvh::SlotRange range = slots[node.treeNode];
+        EXPECT_TRUE(treeNode.isLeaf() || range.end - range.begin <= rc::kPatchTriangles) << name;
+        EXPECT_EQ(patch.numTriangles, range.end - range.begin) << name << ": patch node " << i;
+        if (patch.numTriangles != range.end - range.begin)
+            continue;
+        const double *vertices = arrays.vertices + 3 * std::size_t{patch.firstVertex};
+        const std::uint32_t *triangles = arrays.patchTriangles + 3 * std::size_t{patch.firstTriangle};
+        for (std::uint32_t t = 0; t < patch.numTriangles; ++t)
+        {
+            const std::uint32_t triangle = tree.triangleOrder()[range.begin + t];
+            ++inPatches[triangle];
+            for (int k = 0; k < 3; ++k)
+            {
+                const Vec &expected = mesh.vertices[mesh.triangles[triangle][k]];
+                const double *corner = vertices + 3 * std::size_t{triangles[3 * t + k]};
+                EXPECT_EQ(Vec(corner[0], corner[1], corner[2]), expected)
+                    << name << ": patch node " << i << " triangle " << t << " corner " << k;
+                for (int d = 0; d < 3; ++d)
+                {
+                    EXPECT_LE(node.min[d], expected[d]) << name;
+                    EXPECT_GE(node.max[d], expected[d]) << name;
+                }
+            }
+        }
+    }
+    for (std::uint32_t i = 0; i < numNodes; ++i)
+        EXPECT_EQ(visited[i], 1) << name << ": patch node " << i << " reached " << visited[i] << " times";
+    for (std::size_t t = 0; t < inPatches.size(); ++t)
+        EXPECT_EQ(inPatches[t], 1) << name << ": triangle " << t << " in " << inPatches[t] << " patches";
+    return patches;
+}
+}  // namespace
+
+TEST(Separation, EveryPatchIsTheSubtreeOfOneNodeOfTheSolidsTriangleTree)
+{
+    const std::vector<std::pair<std::string, rc::Mesh>> meshes = {{"room", rc::test::roomWithDoorway()},
+                                                                  {"u_shape", rc::test::uShape()},
+                                                                  {"maze", rc::test::mazeOnSlab()},
+                                                                  {"bookshelf", rc::test::bookshelf()}};
+    for (const unsigned leafTriangles : {1u, 2u, 4u})
+    {
+        rc::ConvexSolids convex;
+        std::vector<std::unique_ptr<rc::MeshBvh>> trees;
+        for (const auto &[name, mesh] : meshes)
+        {
+            trees.push_back(std::make_unique<rc::MeshBvh>(mesh, leafTriangles));
+            convex.add(*trees.back(), true);
+        }
+        for (std::size_t s = 0; s < meshes.size(); ++s)
+        {
+            const std::string name = meshes[s].first + " (" + std::to_string(leafTriangles) + " per leaf)";
+            const std::size_t patches = expectPatchesCutTheTree(convex.arrays(), s, *trees[s], name);
+            // Non-convex, so cut into patches, some of several triangles (flat pieces of walls).
+            EXPECT_GT(patches, 4u) << name;
+            EXPECT_LT(patches, meshes[s].second.numTriangles() * 2 / 3) << name;
+        }
+    }
+}
+
+TEST(Separation, TheModelsPatchesAreCutsOfTheTreesItsExactPhaseWalks)
+{
+    const std::string root = rc::test::sharedData();
+    if (root.empty())
+        GTEST_SKIP() << "shared data not found (set RASTERCHECK_DATA): the Panda's meshes are needed";
+    const rc::Problem problem = rc::test::pandaProblem(root, "bookshelf_small");
+    auto scene = std::make_shared<rc::Scene>(*problem.scene);
+    scene->addObject("bookshelf", rc::test::bookshelf());
+    scene->addObject("room", rc::test::roomWithDoorway());
+    const rc::CollisionModel model(problem.robot, scene);
+    const rc::device::ConvexArrays arrays = model.convex.arrays();
+    std::size_t patched = 0;
+    for (std::size_t k = 0; k < model.numComponents(); ++k)
+        patched += expectPatchesCutTheTree(arrays, k, *model.componentBvhs[k], problem.robot->components[k].name) > 0;
+    for (std::size_t o = 0; o < model.numObjects(); ++o)
+        patched += expectPatchesCutTheTree(arrays, model.numComponents() + o, *model.objectBvhs[o],
+                                           scene->objects[o].name) > 0;
+    EXPECT_GE(patched, 3u);  // the open link6, the bookshelf and the room at least
 }

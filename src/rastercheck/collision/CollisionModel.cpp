@@ -205,8 +205,7 @@ void appendTriangle(const Mesh &mesh, std::size_t t, Mesh &part, std::vector<std
 /** \brief True when the triangles order[begin, end) of \a mesh lie in a slab, normal to their mean
     normal, no thicker than \a thickness: a patch whose hull hugs its surface (a piece of a wall, of
     a gently curved shell), not one that wraps a corner. */
-bool patchIsFlat(const Mesh &mesh, const std::vector<std::uint32_t> &order, std::size_t begin, std::size_t end,
-                 double thickness)
+bool patchIsFlat(const Mesh &mesh, const std::uint32_t *order, std::size_t begin, std::size_t end, double thickness)
 {
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     for (std::size_t i = begin; i < end; ++i)
@@ -348,54 +347,49 @@ device::ConvexPiece ConvexSolids::makePiece(const Mesh &mesh, bool closedShell)
     return piece;
 }
 
-void ConvexSolids::addPatches(const Mesh &mesh, double patchThickness)
+void ConvexSolids::addPatches(const MeshBvh &tree, double patchThickness)
 {
-    const std::size_t n = mesh.numTriangles();
-    std::vector<Eigen::Vector3d> centroids(n);
-    for (std::size_t t = 0; t < n; ++t)
-        centroids[t] = (mesh.vertices[mesh.triangles[t][0]] + mesh.vertices[mesh.triangles[t][1]] +
-                        mesh.vertices[mesh.triangles[t][2]]) /
-                       3.0;
-    std::vector<std::uint32_t> order(n);
-    for (std::size_t t = 0; t < n; ++t)
-        order[t] = static_cast<std::uint32_t>(t);
+    const Mesh &mesh = tree.mesh();
+    const MeshBvh::Node *treeNodes = tree.nodes();
+    const std::uint32_t *order = tree.triangleOrder();
+    const std::vector<MeshBvh::SlotRange> slots = tree.nodeSlotRanges();
     const std::size_t root = patchNodes_.size();
     std::vector<std::uint32_t> renumbered(mesh.numVertices(), ~0u);
-    // Depth-first with an explicit list of (node, begin, end, depth), children stored in pairs.
+    // Depth-first down the triangle tree with an explicit list of (patch node, tree node); the
+    // patch tree's inner nodes mirror the tree's, children stored in pairs.
     struct Pending
     {
-        std::size_t node, begin, end;
-        int depth;
+        std::size_t node;
+        std::int32_t treeNode;
     };
-    std::vector<Pending> pending{{root, 0, n, 0}};
+    std::vector<Pending> pending{{root, 0}};
     patchNodes_.emplace_back();
     while (!pending.empty())
     {
         const Pending job = pending.back();
         pending.pop_back();
-        Aabb box, centroidBox;
-        for (std::size_t i = job.begin; i < job.end; ++i)
-        {
-            for (std::uint32_t v : mesh.triangles[order[i]])
+        const MeshBvh::SlotRange range = slots[job.treeNode];
+        Aabb box;
+        for (std::uint32_t slot = range.begin; slot < range.end; ++slot)
+            for (std::uint32_t v : mesh.triangles[order[slot]])
                 box.extend(mesh.vertices[v]);
-            centroidBox.extend(centroids[order[i]]);
-        }
         device::PatchNode &node = patchNodes_[job.node];
         for (int k = 0; k < 3; ++k)
         {
             node.min[k] = box.min[k];
             node.max[k] = box.max[k];
         }
-        node.reserved = 0;
-        if (job.end - job.begin == 1 || job.depth >= device::kMaxTreeDepth ||
-            (job.end - job.begin <= kPatchTriangles && patchIsFlat(mesh, order, job.begin, job.end, patchThickness)))
+        node.treeNode = static_cast<std::uint32_t>(job.treeNode);
+        const MeshBvh::Node &treeNode = treeNodes[job.treeNode];
+        if (treeNode.isLeaf() || (range.end - range.begin <= kPatchTriangles &&
+                                  patchIsFlat(mesh, order, range.begin, range.end, patchThickness)))
         {
-            // A patch: its triangles as a mesh of their own (vertices renumbered).
+            // A patch: its triangles as a mesh of their own (vertices renumbered), in slot order.
             Mesh patch;
-            for (std::size_t i = job.begin; i < job.end; ++i)
-                appendTriangle(mesh, order[i], patch, renumbered);
-            for (std::size_t i = job.begin; i < job.end; ++i)
-                for (std::uint32_t v : mesh.triangles[order[i]])
+            for (std::uint32_t slot = range.begin; slot < range.end; ++slot)
+                appendTriangle(mesh, order[slot], patch, renumbered);
+            for (std::uint32_t slot = range.begin; slot < range.end; ++slot)
+                for (std::uint32_t v : mesh.triangles[order[slot]])
                     renumbered[v] = ~0u;
             device::ConvexPiece piece = makePiece(patch, false);
             piece.firstTriangle = static_cast<std::uint32_t>(patchTriangles_.size() / 3);
@@ -406,19 +400,12 @@ void ConvexSolids::addPatches(const Mesh &mesh, double patchThickness)
             patchPieces_.push_back(piece);
             continue;
         }
-        int axis = 0;
-        centroidBox.halfExtents().maxCoeff(&axis);
-        const std::size_t middle = job.begin + (job.end - job.begin) / 2;
-        std::nth_element(
-            order.begin() + static_cast<std::ptrdiff_t>(job.begin), order.begin() + static_cast<std::ptrdiff_t>(middle),
-            order.begin() + static_cast<std::ptrdiff_t>(job.end),
-            [&centroids, axis](std::uint32_t i, std::uint32_t j) { return centroids[i][axis] < centroids[j][axis]; });
         const std::size_t child = patchNodes_.size();
         patchNodes_[job.node].first = static_cast<std::int32_t>(child - root);
         patchNodes_.emplace_back();
         patchNodes_.emplace_back();
-        pending.push_back({child + 1, middle, job.end, job.depth + 1});
-        pending.push_back({child, job.begin, middle, job.depth + 1});
+        pending.push_back({child + 1, treeNode.first + 1});
+        pending.push_back({child, treeNode.first});
     }
 }
 
@@ -432,8 +419,9 @@ std::size_t ConvexSolids::bytes() const
            solidPatches_.size() * sizeof(std::uint32_t) + patchTriangles_.size() * sizeof(std::uint32_t);
 }
 
-void ConvexSolids::add(const Mesh &mesh, bool closed, double patchThickness)
+void ConvexSolids::add(const MeshBvh &tree, bool closed, double patchThickness)
 {
+    const Mesh &mesh = tree.mesh();
     std::size_t shells = 0;
     const std::vector<std::uint32_t> shellOf = triangleShells(mesh, shells);
     // The whole mesh proves overlaps only as a single shell: the region behind every face of
@@ -461,7 +449,7 @@ void ConvexSolids::add(const Mesh &mesh, bool closed, double patchThickness)
     }
     solidPieces_.push_back(static_cast<std::uint32_t>(pieces_.size()));
     if (!nearConvex && mesh.numTriangles() > kMinPatchedTriangles)
-        addPatches(mesh, patchThickness >= 0.0 ? patchThickness
+        addPatches(tree, patchThickness >= 0.0 ? patchThickness
                                                : kPatchFlatness * (mesh.bounds().max - mesh.bounds().min).norm());
     solidPatchNodes_.push_back(static_cast<std::uint32_t>(patchNodes_.size()));
     solidPatches_.push_back(static_cast<std::uint32_t>(patchPieces_.size()));
@@ -498,7 +486,8 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         componentBvhs.push_back(
             std::make_unique<MeshBvh>(component.mesh, kComponentLeafTriangles, component.topology.closed));
         diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
-        convex.add(component.mesh, component.topology.closed, kPatchFlatness * diagonals.back());
+        // The component's own tree: its patches are a cut of it (one tree per mesh).
+        convex.add(*componentBvhs.back(), component.topology.closed, kPatchFlatness * diagonals.back());
     }
     // Objects' patches are held to the robot's scale: a patch as thick as a link hides gaps
     // the size of one.
@@ -529,7 +518,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         fitted.halfExtents.array() += 1e-5 * fitted.halfExtents.norm() + 1e-6 * distance + 1e-9;
         objectOrientedBoxes.push_back(toDeviceBox(fitted));
         objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh, 1, object.topology.closed));
-        convex.add(object.mesh, object.topology.closed,
+        convex.add(*objectBvhs.back(), object.topology.closed,
                    kPatchFlatness * (robotScale > 0.0 ? robotScale : (object.bounds.max - object.bounds.min).norm()));
     }
 

@@ -28,9 +28,10 @@ constexpr std::size_t kConvexHullDirections = 128;
     product, and a solid of more shells (a scene mesh of loose parts) is tried whole only. */
 constexpr std::size_t kMaxConvexShells = 8;
 
-/** \brief Most triangles in a patch (device::PatchNode): small enough that a patch of a wall or a
-    curved surface is close to flat (its hull hugs it), large enough that the tree stays shallow
-    and each patch's hull test amortises the box tests above it. */
+/** \brief Most triangles in a patch (device::PatchNode) that is not a leaf of the triangle tree:
+    small enough that a patch of a wall or a curved surface is close to flat (its hull hugs it),
+    large enough that the patch tree stays shallow and each patch's hull test amortises the box
+    tests above it. */
 constexpr std::size_t kPatchTriangles = 32;
 
 /** \brief A patch of more than one triangle is split further while its triangles are thicker,
@@ -52,11 +53,13 @@ constexpr std::size_t kMinPatchedTriangles = 4;
 class ConvexSolids
 {
 public:
-    /** \brief Appends \a mesh as the next solid; \a closed: its topology is closed (MeshTopology,
-        outward-oriented), without which its pieces keep no face planes (an open mesh has no
-        inside; its vertices can still prove an overlap with a closed solid). A solid that is
-        not close to convex gets patches no thicker than \a patchThickness (kPatchFlatness). */
-    void add(const Mesh &mesh, bool closed, double patchThickness = kOwnScale);
+    /** \brief Appends the mesh of \a tree (its triangle tree, MeshBvh) as the next solid; \a closed:
+        its topology is closed (MeshTopology, outward-oriented), without which its pieces keep no
+        face planes (an open mesh has no inside; its vertices can still prove an overlap with a
+        closed solid). A solid that is not close to convex gets patches no thicker than
+        \a patchThickness (kPatchFlatness), cut from \a tree (addPatches). The tree is read during
+        the call only. */
+    void add(const MeshBvh &tree, bool closed, double patchThickness = kOwnScale);
     /** \brief add()'s default patch thickness: kPatchFlatness of the mesh's own box diagonal. */
     static constexpr double kOwnScale = -1.0;
     std::size_t numSolids() const { return solidPieces_.size() - 1; }
@@ -86,9 +89,13 @@ public:
 private:
     /** \brief \a closedShell: the piece is one closed, outward-oriented shell (it may keep planes). */
     device::ConvexPiece makePiece(const Mesh &mesh, bool closedShell);
-    /** \brief The patch tree of \a mesh (device::PatchNode): median splits of the triangles'
-        centroids down to leaves of at most kPatchTriangles no thicker than \a patchThickness. */
-    void addPatches(const Mesh &mesh, double patchThickness);
+    /** \brief The patch tree of \a tree's mesh (device::PatchNode): a cut of the triangle tree
+        itself. From the root down, a node becomes a patch when it is a leaf, or holds at most
+        kPatchTriangles triangles that are no thicker than \a patchThickness; else its two
+        children are visited. So every patch is the subtree of one triangle-tree node
+        (PatchNode::treeNode), every triangle lies in exactly one patch, and the patch tree is
+        as deep as the triangle tree at most (MeshBvh::kMaxDepth). */
+    void addPatches(const MeshBvh &tree, double patchThickness);
 
     std::vector<double> vertices_;    // n_piece_vertices x 3
     std::vector<double> hullPoints_;  // n_hull_points x 3

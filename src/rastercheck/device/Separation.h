@@ -67,10 +67,13 @@ struct ConvexPiece
     std::uint32_t closed;
 };
 
-/** \brief A node of a solid's patch tree (ConvexArrays::patchNodes): the top levels of a bounding-
-    volume hierarchy over the solid's triangles, whose leaves are patches, pieces of a few dozen
-    triangles with hulls of their own (ConvexArrays::patchPieces). The box bounds every vertex
-    below the node, in the solid's own frame. */
+/** \brief A node of a solid's patch tree (ConvexArrays::patchNodes): the top of the solid's one
+    triangle tree (MeshBvh, device::TreeNode), cut where a subtree is small and flat enough to be
+    one patch, a piece of up to a few dozen triangles with a hull of its own
+    (ConvexArrays::patchPieces). Node for node it mirrors the triangle tree above the cut (same
+    splits, same child order), so a patch holds exactly the triangles under its tree node. The
+    box bounds every vertex below the node, in the solid's own frame, in double: the separation
+    proofs run in double and test it against a piece's exact bounds. */
 struct PatchNode
 {
     double min[3];
@@ -78,7 +81,9 @@ struct PatchNode
     /** \brief Inner node: index of the first child (the second follows it) within the solid's
         nodes, >= 1. Leaf: -(1 + the patch's index in ConvexArrays::patchPieces). */
     std::int32_t first;
-    std::uint32_t reserved;
+    /** \brief The node of the solid's triangle tree this node stands for (its index within that
+        mesh's tree, MeshSlice::firstNode onwards in CollisionModel's tree arrays). */
+    std::uint32_t treeNode;
 };
 
 /** \brief The separation cull's view of every solid (CollisionModel::convex): solid s owns pieces

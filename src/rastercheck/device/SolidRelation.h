@@ -3,11 +3,11 @@
 // What the proofs can settle about a pair of solids (relateSolids): their whole hulls first, then
 // their shells, then, for a large non-convex mesh, its patches. A non-convex solid's hull holds
 // most of what comes near it (a robot in a room is inside the room's hull), so the whole-hull test
-// settles little there; the patch tree (the top of a BVH over the solid's triangles, whose leaves
-// are patches of a few dozen triangles with hulls of their own) lets the same plane and point
-// proofs work on the few patches near the other solid, culled by boxes, with the cost growing
-// with what is near rather than with the mesh. Runs on the host (CpuBackend) and on the device
-// (BatchPipeline) alike.
+// settles little there; the patch tree (the top of the solid's one triangle tree, MeshBvh, cut
+// where a subtree is a patch of a few dozen flat triangles with a hull of its own) lets the same
+// plane and point proofs work on the few patches near the other solid, culled by boxes, with the
+// cost growing with what is near rather than with the mesh. Runs on the host (CpuBackend) and on
+// the device (BatchPipeline) alike.
 
 #include <cstdint>
 

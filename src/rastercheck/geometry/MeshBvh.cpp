@@ -92,6 +92,20 @@ void MeshBvh::useSharedArrays(const Arrays &arrays)
     ownGridCells_ = {};
 }
 
+std::vector<MeshBvh::SlotRange> MeshBvh::nodeSlotRanges() const
+{
+    // Children come after their parent in the array (build() appends them), so one pass from the
+    // last node up has both children's ranges ready at every inner node.
+    std::vector<SlotRange> ranges(numNodes_);
+    for (std::size_t i = numNodes_; i-- > 0;)
+    {
+        const Node &node = nodes_[i];
+        ranges[i] = node.isLeaf() ? SlotRange{node.firstSlot(), node.firstSlot() + node.count}
+                                  : SlotRange{ranges[node.first].begin, ranges[node.first + 1].end};
+    }
+    return ranges;
+}
+
 std::size_t MeshBvh::bytes() const
 {
     return numNodes_ * sizeof(Node) + mesh_->triangles.size() * sizeof(std::uint32_t) +

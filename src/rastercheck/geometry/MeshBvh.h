@@ -85,6 +85,16 @@ public:
     /** \brief Corners of the triangle in slot \a slot of triangleOrder (mesh frame): 9 doubles,
         x y z of each corner, stored in traversal order so that leaves read contiguous memory. */
     const double *slotCorners(std::uint32_t slot) const { return corners_ + 9 * static_cast<std::size_t>(slot); }
+    /** \brief The triangles under a node: slots [begin, end) of triangleOrder (every node's
+        triangles are contiguous there, since a split partitions its parent's range). */
+    struct SlotRange
+    {
+        std::uint32_t begin, end;
+    };
+    /** \brief Every node's SlotRange, indexed like nodes(): computed on demand (inner nodes store
+        no range), for walks that need how many triangles a subtree holds (the patch cut,
+        ConvexSolids::add). */
+    std::vector<SlotRange> nodeSlotRanges() const;
     /** \brief Levels below the root (0 for a single leaf, -1 when empty). */
     int depth() const { return depth_; }
     bool empty() const { return numNodes_ == 0; }
