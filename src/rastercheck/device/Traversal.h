@@ -50,6 +50,25 @@ RC_HD bool isLeafNode(const Node &node)
     return node.first < 0;
 }
 
+/** \brief The two pairs a pair of nodes (not both leaves) splits into, in walk order (\a first is
+    walked first): the children of A's node or of B's (the visitor's splitA; never a leaf's),
+    swapped when the visitor's secondFirst says so. */
+template <class NodeA, class NodeB, class Visitor>
+RC_HD void childPairs(const NodeA *nodesA, const NodeB *nodesB, Visitor &visitor, NodePair pair, bool leafA,
+                      bool leafB, NodePair &first, NodePair &second)
+{
+    const bool descendA = leafB || (!leafA && visitor.splitA(pair));
+    const std::int32_t child = descendA ? nodesA[pair.a].first : nodesB[pair.b].first;
+    first = descendA ? NodePair{child, pair.b} : NodePair{pair.a, child};
+    second = descendA ? NodePair{child + 1, pair.b} : NodePair{pair.a, child + 1};
+    if (visitor.secondFirst(first, second))
+    {
+        const NodePair swapped = first;
+        first = second;
+        second = swapped;
+    }
+}
+
 /** \brief Depth-first walk of the node pairs of two trees (root index 0 in each; both non-empty),
     from the pair \a start (the roots; a pair below them walks that pair's part of the trees alone).
     \a visitor provides:
@@ -82,16 +101,8 @@ RC_HD WalkEnd walkPairs(const NodeA *nodesA, const NodeB *nodesB, Visitor &visit
         }
         if (top + 2 > kPairStackSize)
             return WalkEnd::Overflow;
-        const bool descendA = leafB || (!leafA && visitor.splitA(pair));
-        const std::int32_t child = descendA ? nodesA[pair.a].first : nodesB[pair.b].first;
-        NodePair first = descendA ? NodePair{child, pair.b} : NodePair{pair.a, child};
-        NodePair second = descendA ? NodePair{child + 1, pair.b} : NodePair{pair.a, child + 1};
-        if (visitor.secondFirst(first, second))
-        {
-            const NodePair swapped = first;
-            first = second;
-            second = swapped;
-        }
+        NodePair first, second;
+        childPairs(nodesA, nodesB, visitor, pair, leafA, leafB, first, second);
         stack[top++] = second;
         stack[top++] = first;  // popped next
     }
@@ -134,16 +145,8 @@ RC_HD std::uint32_t splitWalk(const NodeA *nodesA, const NodeB *nodesB, Visitor 
                 scratch[n++] = pair;
                 continue;
             }
-            const bool descendA = leafB || (!leafA && visitor.splitA(pair));
-            const std::int32_t child = descendA ? nodesA[pair.a].first : nodesB[pair.b].first;
-            NodePair first = descendA ? NodePair{child, pair.b} : NodePair{pair.a, child};
-            NodePair second = descendA ? NodePair{child + 1, pair.b} : NodePair{pair.a, child + 1};
-            if (visitor.secondFirst(first, second))
-            {
-                const NodePair swapped = first;
-                first = second;
-                second = swapped;
-            }
+            NodePair first, second;
+            childPairs(nodesA, nodesB, visitor, pair, leafA, leafB, first, second);
             scratch[n++] = first;
             scratch[n++] = second;
             changed = true;
