@@ -563,6 +563,13 @@ std::size_t waitFor(Exec &ex, const unsigned long long *tally)
     return static_cast<std::size_t>(*host);
 }
 
+/** \brief Whether an overlap of \a pair is decided again on its curved primitives' exact shapes
+    (StageSettings::confirmCurvedOverlaps, and the pair has such a primitive). */
+RC_HD bool curvedOverlapDecidedAgain(const ModelArrays &md, const StageSettings &st, std::uint32_t pair)
+{
+    return st.confirmCurvedOverlaps && pair < md.numCurvedPairFlags && md.curvedPairs[pair];
+}
+
 /** \brief The exact phase in the stages: every pair still open after the raster (or without one) is
     decided on the executor by the exact test (solidsOverlap, what the CPU backend decides it by),
     with its first contact: the triangle of B and the place. Not conservative mode's unproven pairs
@@ -603,7 +610,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         const PairOutcome &out = decided[c];
         // The stages see curved primitives as their meshes, which lie outside the exact shapes: an
         // overlap of such a pair, however found, is decided again here, as the CPU backend decides it.
-        const bool curved = st.confirmCurvedOverlaps && out.pair < md.numCurvedPairFlags && md.curvedPairs[out.pair];
+        const bool curved = curvedOverlapDecidedAgain(md, st, out.pair);
         if (out.status != PairOpen && !(curved && out.status == PairOverlaps))
             return;
         const bool meshObstacle = out.pair < environmentPairs && hasPatches(md.convex, m + out.pair / m);
@@ -641,7 +648,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         if (c >= survivors.size() || !exactFlags[c])
             return;
         PairOutcome &out = decided[c];
-        const bool curved = st.confirmCurvedOverlaps && out.pair < md.numCurvedPairFlags && md.curvedPairs[out.pair];
+        const bool curved = curvedOverlapDecidedAgain(md, st, out.pair);
         ExactTree a, b;
         Pose<double> poseA, poseB;
         bool closedA = false, closedB = false;
