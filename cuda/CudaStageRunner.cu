@@ -415,49 +415,49 @@ const T *uploadOnce(std::vector<DeviceAllocation> &keep, const T *source, std::s
     return static_cast<const T *>(p);
 }
 
-class CudaStageRunner : public StageRunner
+class CudaStageRunner : public PooledStageRunner<CudaExecutor>
 {
 public:
     CudaStageRunner(const device::ModelArrays &host, std::string deviceName, std::size_t memoryLimit)
-      : deviceName_(std::move(deviceName)),
-        executors_([this] {
+      : PooledStageRunner([this] {
             auto ex = std::make_unique<CudaExecutor>();
             ex->limitScratch(budget_.maxScratchBytes);
             return ex;
-        })
+        }),
+        deviceName_(std::move(deviceName))
     {
         const std::size_t m = static_cast<std::size_t>(host.numComponents);
         const std::size_t o = static_cast<std::size_t>(host.numObjects);
-        model_ = host;
-        model_.joints = uploadOnce(model_memory_, host.joints, static_cast<std::size_t>(host.numJoints));
-        model_.componentVertices = uploadOnce(model_memory_, host.componentVertices, host.numComponentVertexFloats);
-        model_.componentTriangles = uploadOnce(model_memory_, host.componentTriangles, host.numComponentTriangleIndices);
-        model_.components = uploadOnce(model_memory_, host.components, m);
-        model_.componentLocalBoxes = uploadOnce(model_memory_, host.componentLocalBoxes, m);
-        model_.componentLink = uploadOnce(model_memory_, host.componentLink, m);
-        model_.componentSubtreeEnd = uploadOnce(model_memory_, host.componentSubtreeEnd, m);
-        model_.objectVertices = uploadOnce(model_memory_, host.objectVertices, host.numObjectVertexFloats);
-        model_.objectTriangles = uploadOnce(model_memory_, host.objectTriangles, host.numObjectTriangleIndices);
-        model_.objects = uploadOnce(model_memory_, host.objects, o);
-        model_.objectBoxes = uploadOnce(model_memory_, host.objectBoxes, o);
-        model_.objectOrientedBoxes = uploadOnce(model_memory_, host.objectOrientedBoxes, o);
-        model_.selfPairs = uploadOnce(model_memory_, host.selfPairs, 2 * static_cast<std::size_t>(host.numSelfPairs));
-        model_.convex.vertices = uploadOnce(model_memory_, host.convex.vertices, host.numConvexVertexDoubles);
-        model_.convex.hullPoints = uploadOnce(model_memory_, host.convex.hullPoints, host.numConvexHullDoubles);
-        model_.convex.pieces = uploadOnce(model_memory_, host.convex.pieces, host.numConvexPieces);
-        model_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
-        model_.convex.planes = uploadOnce(model_memory_, host.convex.planes, host.numConvexPlaneDoubles);
-        model_.convex.edges = uploadOnce(model_memory_, host.convex.edges, host.numConvexEdgeIndices);
-        model_.convex.hullGroups = uploadOnce(model_memory_, host.convex.hullGroups, host.numConvexHullGroups);
-        model_.convex.patchNodes = uploadOnce(model_memory_, host.convex.patchNodes, host.numPatchNodes);
-        model_.convex.solidPatchNodes = uploadOnce(model_memory_, host.convex.solidPatchNodes, m + o + 1);
-        model_.convex.patchPieces = uploadOnce(model_memory_, host.convex.patchPieces, host.numPatches);
-        model_.convex.patchTriangles = uploadOnce(model_memory_, host.convex.patchTriangles, host.numPatchTriangleIndices);
-        model_.componentTreeNodes = uploadOnce(model_memory_, host.componentTreeNodes, host.numComponentTreeNodes);
-        model_.componentTriangleOrder =
+        arrays_ = host;
+        arrays_.joints = uploadOnce(model_memory_, host.joints, static_cast<std::size_t>(host.numJoints));
+        arrays_.componentVertices = uploadOnce(model_memory_, host.componentVertices, host.numComponentVertexFloats);
+        arrays_.componentTriangles = uploadOnce(model_memory_, host.componentTriangles, host.numComponentTriangleIndices);
+        arrays_.components = uploadOnce(model_memory_, host.components, m);
+        arrays_.componentLocalBoxes = uploadOnce(model_memory_, host.componentLocalBoxes, m);
+        arrays_.componentLink = uploadOnce(model_memory_, host.componentLink, m);
+        arrays_.componentSubtreeEnd = uploadOnce(model_memory_, host.componentSubtreeEnd, m);
+        arrays_.objectVertices = uploadOnce(model_memory_, host.objectVertices, host.numObjectVertexFloats);
+        arrays_.objectTriangles = uploadOnce(model_memory_, host.objectTriangles, host.numObjectTriangleIndices);
+        arrays_.objects = uploadOnce(model_memory_, host.objects, o);
+        arrays_.objectBoxes = uploadOnce(model_memory_, host.objectBoxes, o);
+        arrays_.objectOrientedBoxes = uploadOnce(model_memory_, host.objectOrientedBoxes, o);
+        arrays_.selfPairs = uploadOnce(model_memory_, host.selfPairs, 2 * static_cast<std::size_t>(host.numSelfPairs));
+        arrays_.convex.vertices = uploadOnce(model_memory_, host.convex.vertices, host.numConvexVertexDoubles);
+        arrays_.convex.hullPoints = uploadOnce(model_memory_, host.convex.hullPoints, host.numConvexHullDoubles);
+        arrays_.convex.pieces = uploadOnce(model_memory_, host.convex.pieces, host.numConvexPieces);
+        arrays_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
+        arrays_.convex.planes = uploadOnce(model_memory_, host.convex.planes, host.numConvexPlaneDoubles);
+        arrays_.convex.edges = uploadOnce(model_memory_, host.convex.edges, host.numConvexEdgeIndices);
+        arrays_.convex.hullGroups = uploadOnce(model_memory_, host.convex.hullGroups, host.numConvexHullGroups);
+        arrays_.convex.patchNodes = uploadOnce(model_memory_, host.convex.patchNodes, host.numPatchNodes);
+        arrays_.convex.solidPatchNodes = uploadOnce(model_memory_, host.convex.solidPatchNodes, m + o + 1);
+        arrays_.convex.patchPieces = uploadOnce(model_memory_, host.convex.patchPieces, host.numPatches);
+        arrays_.convex.patchTriangles = uploadOnce(model_memory_, host.convex.patchTriangles, host.numPatchTriangleIndices);
+        arrays_.componentTreeNodes = uploadOnce(model_memory_, host.componentTreeNodes, host.numComponentTreeNodes);
+        arrays_.componentTriangleOrder =
             uploadOnce(model_memory_, host.componentTriangleOrder, host.numComponentTriangleIndices / 3);
-        model_.objectTreeNodes = uploadOnce(model_memory_, host.objectTreeNodes, host.numObjectTreeNodes);
-        model_.objectTriangleOrder = uploadOnce(model_memory_, host.objectTriangleOrder, host.numObjectTriangleIndices / 3);
+        arrays_.objectTreeNodes = uploadOnce(model_memory_, host.objectTreeNodes, host.numObjectTreeNodes);
+        arrays_.objectTriangleOrder = uploadOnce(model_memory_, host.objectTriangleOrder, host.numObjectTriangleIndices / 3);
         const auto uploadExact = [&](const device::ExactArrays &in, std::size_t triangles, std::size_t cells,
                                      std::size_t probeDoubles, std::size_t shellStarts, std::size_t meshes) {
             return device::ExactArrays{uploadOnce(model_memory_, in.corners, 9 * triangles),
@@ -466,14 +466,14 @@ public:
                                        uploadOnce(model_memory_, in.shellProbeStart, shellStarts),
                                        uploadOnce(model_memory_, in.meshes, meshes)};
         };
-        model_.componentExact = uploadExact(host.componentExact, host.numComponentTriangleIndices / 3,
+        arrays_.componentExact = uploadExact(host.componentExact, host.numComponentTriangleIndices / 3,
                                             host.numComponentGridCells, host.numComponentProbeDoubles,
                                             host.numComponentShellStarts, m);
-        model_.curvedPairs = uploadOnce(model_memory_, host.curvedPairs, host.numCurvedPairFlags);
-        model_.curvedShapes.shapes = uploadOnce(model_memory_, host.curvedShapes.shapes, host.numCurvedShapes);
-        model_.curvedShapes.reach = uploadOnce(model_memory_, host.curvedShapes.reach, host.numCurvedShapes);
-        model_.curvedShapes.solidShapes = uploadOnce(model_memory_, host.curvedShapes.solidShapes, m + o + 1);
-        model_.objectExact = uploadExact(host.objectExact, host.numObjectTriangleIndices / 3, host.numObjectGridCells,
+        arrays_.curvedPairs = uploadOnce(model_memory_, host.curvedPairs, host.numCurvedPairFlags);
+        arrays_.curvedShapes.shapes = uploadOnce(model_memory_, host.curvedShapes.shapes, host.numCurvedShapes);
+        arrays_.curvedShapes.reach = uploadOnce(model_memory_, host.curvedShapes.reach, host.numCurvedShapes);
+        arrays_.curvedShapes.solidShapes = uploadOnce(model_memory_, host.curvedShapes.solidShapes, m + o + 1);
+        arrays_.objectExact = uploadExact(host.objectExact, host.numObjectTriangleIndices / 3, host.numObjectGridCells,
                                          host.numObjectProbeDoubles, host.numObjectShellStarts, o);
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
@@ -504,26 +504,12 @@ public:
     }
 
     std::string name() const override { return "cuda (" + deviceName_ + ")"; }
-    std::size_t executors() const override { return executors_.size(); }
-
-    void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
-             std::vector<device::PairOutcome> &outcomes) override
-    {
-        device::StageCounts stages;
-        device::StageCounts *counted = countingStages() ? &stages : nullptr;
-        const device::ExecutorCounts used = executors_.run(
-            [&](CudaExecutor &ex) { runStagesInChunks(ex, model_, settings, budget_, q, admissible, n, outcomes, counted); });
-        record(counted, used);
-    }
 
 private:
     std::string deviceName_;
-    std::vector<DeviceAllocation> model_memory_;
-    device::ModelArrays model_{};
-    // Each concurrent pass has its own stream and scratch within the budget; a pass that finds the
+    std::vector<DeviceAllocation> model_memory_;  // what arrays_ point into
+    // Each concurrent pass has its own stream and scratch within budget_; a pass that finds the
     // device full (another executor holds the memory) splits its chunk (StageMemoryExhausted).
-    device::StageBudget budget_;
-    ExecutorPool<CudaExecutor> executors_;
 };
 }  // namespace
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rastercheck/collision/StageRunner.h"
 #include "rastercheck/core/Pool.h"
 #include "rastercheck/device/BatchPipeline.h"
 
@@ -151,4 +152,36 @@ void runStagesInChunks(Exec &ex, const device::ModelArrays &model, const device:
         start += count;
     }
 }
+/** \brief A StageRunner whose passes run the stages in chunks (runStagesInChunks) on executors of
+    one kind, each pass on one of its own from a pool: the host's (collision/StagedBackend.cpp) and
+    the GPU's (cuda/). The subclass sets arrays_ (the model as the executor reads it) and budget_
+    before the first run. */
+template <class Exec>
+class PooledStageRunner : public StageRunner
+{
+public:
+    std::size_t executors() const override { return executors_.size(); }
+
+    void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
+             std::vector<device::PairOutcome> &outcomes) override
+    {
+        device::StageCounts stages;
+        device::StageCounts *counted = countingStages() ? &stages : nullptr;
+        const device::ExecutorCounts used = executors_.run(
+            [&](Exec &ex) { runStagesInChunks(ex, arrays_, settings, budget_, q, admissible, n, outcomes, counted); });
+        record(counted, used);
+    }
+
+protected:
+    explicit PooledStageRunner(std::function<std::unique_ptr<Exec>()> makeExecutor)
+        : executors_(std::move(makeExecutor))
+    {
+    }
+
+    device::ModelArrays arrays_{};
+    device::StageBudget budget_;
+
+private:
+    ExecutorPool<Exec> executors_;
+};
 }  // namespace rastercheck

@@ -266,35 +266,21 @@ private:
     std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
 };
 
-class HostStageRunner : public StageRunner
+class HostStageRunner : public PooledStageRunner<HostExecutor>
 {
 public:
     HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch)
-        : model_(std::move(model)),
-          arrays_(hostModelArrays(*model_)),
-          budget_(budget),
-          executors_([scratch, budget] { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes); })
+        : PooledStageRunner([scratch, budget] { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes); }),
+          model_(std::move(model))
     {
+        arrays_ = hostModelArrays(*model_);
+        budget_ = budget;
     }
 
     std::string name() const override { return "cpu-staged"; }
-    std::size_t executors() const override { return executors_.size(); }
-
-    void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
-             std::vector<device::PairOutcome> &outcomes) override
-    {
-        device::StageCounts stages;
-        device::StageCounts *counted = countingStages() ? &stages : nullptr;
-        const device::ExecutorCounts used = executors_.run(
-            [&](HostExecutor &ex) { runStagesInChunks(ex, arrays_, settings, budget_, q, admissible, n, outcomes, counted); });
-        record(counted, used);
-    }
 
 private:
-    CollisionModelConstPtr model_;
-    device::ModelArrays arrays_;
-    device::StageBudget budget_;
-    ExecutorPool<HostExecutor> executors_;
+    CollisionModelConstPtr model_;  // what arrays_ point into
 };
 }  // namespace
 

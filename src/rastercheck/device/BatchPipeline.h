@@ -211,6 +211,12 @@ enum PairStatus : std::int32_t
     PairOverlaps = 2   ///< a ray found the solids overlapping (triangle and position set), or the hulls did (neither)
 };
 
+/** \brief A hull proof's answer as a pair's status; \a unknown where the proof settled nothing. */
+RC_HD std::int32_t pairStatusOf(HullRelation relation, std::int32_t unknown)
+{
+    return relation == HullRelation::Apart ? PairApart : relation == HullRelation::Overlapping ? PairOverlaps : unknown;
+}
+
 /** \brief One pair that survived the culls. Outcomes come sorted by (state, pair). */
 struct PairOutcome
 {
@@ -979,10 +985,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             isEmpty(window) ? HullRelation::Apart
             : meshObstacle  ? HullRelation::Unknown
                             : pairHullRelation(md, pair, links + s * numLinks, padding, st.proveOverlaps, WholeHullsProof{});
-        status[c] = relation == HullRelation::Apart         ? PairApart
-                    : relation == HullRelation::Overlapping ? PairOverlaps
-                    : meshObstacle                          ? PairOpen
-                                                            : kFullProofNeeded;
+        status[c] = pairStatusOf(relation, meshObstacle ? PairOpen : kFullProofNeeded);
     });
     ex.forEachHeavy(survivorBound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = pairOrdered ? proofOrder[k] : k;
@@ -993,9 +996,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
         const HullRelation relation = pairHullRelation(md, pair, links + s * numLinks, pairPadding(md, st, s, pair),
                                                        st.proveOverlaps, FullProof{});
         // An overlap proven by the hulls has no triangle or place (the contact is not asked).
-        status[c] = relation == HullRelation::Apart         ? PairApart
-                    : relation == HullRelation::Overlapping ? PairOverlaps
-                                                            : PairOpen;
+        status[c] = pairStatusOf(relation, PairOpen);
     });
     // The open pairs' images: grid, margin, and how many triangles to rasterize.
     ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t k) {
