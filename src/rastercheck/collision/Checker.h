@@ -32,7 +32,11 @@ constexpr std::size_t kDeviceBatchPerCpuThread = 4096;
 struct CheckerOptions
 {
     BackendChoice backend = BackendChoice::Auto;
-    /** \brief Worker threads of batch calls on the CPU backend; 0 = all cores. */
+    /** \brief Worker threads of batch calls on the CPU backend; 0 = all cores. Batches run on
+        OpenMP, whose threads spin at each batch's end (libgomp's default): processes that share
+        cores should each take fewer threads, or run with OMP_WAIT_POLICY=passive (two programs of
+        all cores each on two cores decided small batches up to 15x slower, spinning for threads
+        the other held). */
     int threads = 0;
     /** \brief Smallest batch sent to the GPU backend: a smaller one (a single isValid, a short
         motion, a planner's round) runs on the CPU backend, where it does not pay the GPU pass's
