@@ -173,6 +173,11 @@ int main(int argc, char **argv)
             const rastercheck::ompl::StateValidityCheckerPtr oracle = rastercheck::ompl::getStateValidityChecker(*fcl);
             fcl->setStateValidityChecker(std::make_shared<bench::FclStateValidityChecker>(
                 fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
+            // What a setup makes on its first setup() is made before the seeded runs, so that run k
+            // of every checker draws the same seeds (bench/planners.cpp).
+            for (auto &entry : setups)
+                entry.second->setup();
+            fcl->setup();
 
             for (int run = 0; run < runsPerProblem; ++run)
             {
