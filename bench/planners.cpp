@@ -13,9 +13,10 @@
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
 //                                   [range_fraction=0] [lazy_limit=300] [backend=cpu] [threads=1]
-//                                   [edge_sizing=bisection|clearance|hullbound]
+//                                   [edge_sizing=bisection|clearance|hullbound] [margin=0]
 // (backend and threads: the rastercheck checker's, CheckerOptions; threads 0 = every core; FCL
 // always runs on one core)
+// (margin: CertifiedMotionOptions::margin, scene units; 0: its default, a tenth of the robot's size)
 // (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
 // 0: each planner's default, OMPL's fifth of the extent)
 // (a subset of planners: for profiling one of them; the others' rows stay empty; "eager" is
@@ -141,6 +142,7 @@ int main(int argc, char **argv)
         return 2;
     }
     const int checkerThreads = argc > 11 ? std::atoi(argv[11]) : 1;
+    const double margin = argc > 13 ? std::atof(argv[13]) : 0.0;
     auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
@@ -151,9 +153,11 @@ int main(int argc, char **argv)
     std::printf(
         "Problems %d..%d of each of the 7 MotionBenchMaker scenarios (OMPL.app problems: that many "
         "seeded runs), time limit %g s; rastercheck's checker: backend %s, threads %d (0: every core), FCL one core; "
-        "BatchRRTConnect batch_size %u, lazy_samples %u, lazy_limit %u; certified edges sized by %s; range %s.\n",
+        "BatchRRTConnect batch_size %u, lazy_samples %u, lazy_limit %u; certified edges sized by %s, margin %s; range "
+        "%s.\n",
         firstProblem, firstProblem + problemsPerScenario - 1, timeLimit, argc > 10 ? argv[10] : "cpu", checkerThreads,
         batchSize, lazySamples, lazyLimit, sizing.c_str(),
+        margin > 0.0 ? std::to_string(margin).c_str() : "the default (a tenth of the robot's size)",
         rangeFraction > 0.0 ? (std::to_string(rangeFraction) + " of the maximum extent, every planner").c_str()
                             : "each planner's default");
     std::printf(
@@ -170,6 +174,7 @@ int main(int argc, char **argv)
             rastercheck::ompl::SetupOptions options;  // certified edges: the default
             options.checker.backend = backend;
             options.checker.threads = checkerThreads;
+            options.certified.margin = margin;
             options.certified.sizeByClearance = sizing != "bisection";
             options.certified.clearanceMeasure =
                 sizing == "hullbound" ? ClearanceMeasure::HullBound : ClearanceMeasure::Exact;

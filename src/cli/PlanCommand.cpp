@@ -274,8 +274,14 @@ int runPlan(const PlanOptions &options)
 
     ot::Benchmark::Request request(timeLimit, memoryLimit, static_cast<unsigned int>(runs), 0.05, false, false,
                                    !options.noSimplify);
+    // The margin in use (--margin or its default, a tenth of the robot's size): it sets how finely
+    // certified edges are refined near obstacles, and with it much of a solve's time.
+    std::ostringstream margin;
+    if (const auto *certified = dynamic_cast<const ompl::CertifiedMotionValidator *>(
+            setup->getSpaceInformation()->getMotionValidator().get()))
+        margin << " (margin " << certified->getMargin() << ")";
     std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.checking.mode << ", "
-              << edges << " edges, " << runs << " run(s) of " << timeLimit << " s per planner\n";
+              << edges << " edges" << margin.str() << ", " << runs << " run(s) of " << timeLimit << " s per planner\n";
     benchmark.benchmark(request);
     if (!options.logPath.empty() && !benchmark.saveResultsToFile(options.logPath.c_str()))
         throw InputError(options.logPath, "", "cannot write the benchmark log");
