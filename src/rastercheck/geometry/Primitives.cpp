@@ -160,12 +160,12 @@ Mesh makeSphere(double radius, double maxError)
     // plane); scaled by radius / h it contains the sphere and its vertices lie radius (1 / h - 1) out.
     // Start from the equatorial cell estimate and refine until the bound holds.
     const double cellAngle = std::acos(radius / (radius + maxError));
-    int bands = std::clamp(static_cast<int>(std::floor(M_PI / (2.0 * cellAngle))), 2, kMaxPrimitiveSegments / 2);
+    int bands = std::clamp(static_cast<int>(std::floor(M_PI / (2.0 * cellAngle))), 2, kMaxSphereBands);
     Mesh mesh = unitUvSphere(bands);
     double h = closestFacePlane(mesh);
-    while (radius / h - radius > maxError && bands < kMaxPrimitiveSegments / 2)
+    while (radius / h - radius > maxError && bands < kMaxSphereBands)
     {
-        bands = std::min(kMaxPrimitiveSegments / 2, bands + std::max(1, bands / 8));
+        bands = std::min(kMaxSphereBands, bands + std::max(1, bands / 8));
         mesh = unitUvSphere(bands);
         h = closestFacePlane(mesh);
     }

@@ -16,8 +16,9 @@ namespace rastercheck
     (safe and exact mode then decide the pair on the exact shapes: PrimitiveShape, CurvedSolids).
 
     Segment counts follow from maxError (the smallest that meet it for cylinders and cones), capped at
-   kMaxPrimitiveSegments around the circumference; only a maxError below about 5e-6 of the radius reaches the cap, and
-   then the deviation is radius * (1 / cos(pi / kMaxPrimitiveSegments) - 1) instead. Sizes and maxError must be positive
+   kMaxPrimitiveSegments around the circumference (a sphere at kMaxSphereBands); only a maxError below about 5e-6 of
+   the radius reaches the cap (a sphere's: 1.5e-4), and then the deviation is radius * (1 / cos(pi /
+   kMaxPrimitiveSegments) - 1) instead (a sphere's: about 1.5e-4 of its radius). Sizes and maxError must be positive
    and finite (ConfigurationError otherwise); loaders check them first and report the file and element. */
 Mesh makeBox(const Eigen::Vector3d &size);
 Mesh makeCylinder(double radius, double length, double maxError);
@@ -46,8 +47,17 @@ struct PrimitiveShape
     bool curved() const { return kind != Kind::Box; }
 };
 
-/** \brief Upper bound on polygon sides around a circle (sphere: meridians; half as many bands). */
+/** \brief Upper bound on polygon sides around a circle (cylinders and cones). */
 constexpr int kMaxPrimitiveSegments = 1024;
+
+/** \brief Upper bound on a sphere's bands (it has twice as many meridians, and 4 bands^2 - 4 bands
+    triangles: 65 024 at the bound). A sphere's triangles grow with the square of its bands: at 1 024
+    meridians, a MoveIt scene with one sphere of radius 605 m (1 mm error asked) took 9.3 s and
+    855 MB to load (found by fuzz_scene; 0.65 s and 97 MB at this bound). A maxError below about
+    1.5e-4 of the radius (a sphere over about 6 m at the default 1 mm) reaches the bound; the mesh
+    still contains the sphere, its vertices then up to 1.5e-4 of the radius outside it, and safe and
+    exact mode decide the sphere's pairs on the exact shape anyway (CurvedSolids). */
+constexpr int kMaxSphereBands = 128;
 
 /** \brief Default tessellation error of primitives: 1 mm. */
 constexpr double kDefaultPrimitiveError = 1e-3;
