@@ -202,7 +202,7 @@ int main(int argc, char **argv)
                 fcl->getSpaceInformation(), oracle->getStateMappingPtr(), oracle->getCheckerPtr()));
             // What the setups make on their first setup() (the space information's parts, the
             // simplifier) is made here, before the seeded runs: else the first run of a setup draws
-            // seeds for them and every later planner's seeds depended on which planners ran before.
+            // seeds for them, and a planner's seeds would depend on which planners ran before it.
             ours->setup();
             fcl->setup();
 
