@@ -415,6 +415,9 @@ const T *uploadOnce(std::vector<DeviceAllocation> &keep, const T *source, std::s
     return static_cast<const T *>(p);
 }
 
+/** \brief The stages on the device: the model uploaded once; each concurrent pass has its own
+    stream and scratch within budget_ (PooledStageRunner), and a pass that finds the device full
+    (another executor holds the memory) splits its chunk (StageMemoryExhausted). */
 class CudaStageRunner : public PooledStageRunner<CudaExecutor>
 {
 public:
@@ -467,14 +470,14 @@ public:
                                        uploadOnce(model_memory_, in.meshes, meshes)};
         };
         arrays_.componentExact = uploadExact(host.componentExact, host.numComponentTriangleIndices / 3,
-                                            host.numComponentGridCells, host.numComponentProbeDoubles,
-                                            host.numComponentShellStarts, m);
+                                             host.numComponentGridCells, host.numComponentProbeDoubles,
+                                             host.numComponentShellStarts, m);
         arrays_.curvedPairs = uploadOnce(model_memory_, host.curvedPairs, host.numCurvedPairFlags);
         arrays_.curvedShapes.shapes = uploadOnce(model_memory_, host.curvedShapes.shapes, host.numCurvedShapes);
         arrays_.curvedShapes.reach = uploadOnce(model_memory_, host.curvedShapes.reach, host.numCurvedShapes);
         arrays_.curvedShapes.solidShapes = uploadOnce(model_memory_, host.curvedShapes.solidShapes, m + o + 1);
         arrays_.objectExact = uploadExact(host.objectExact, host.numObjectTriangleIndices / 3, host.numObjectGridCells,
-                                         host.numObjectProbeDoubles, host.numObjectShellStarts, o);
+                                          host.numObjectProbeDoubles, host.numObjectShellStarts, o);
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
         // non-blocking stream that does not wait for the legacy one: wait here.
@@ -508,8 +511,6 @@ public:
 private:
     std::string deviceName_;
     std::vector<DeviceAllocation> model_memory_;  // what arrays_ point into
-    // Each concurrent pass has its own stream and scratch within budget_; a pass that finds the
-    // device full (another executor holds the memory) splits its chunk (StageMemoryExhausted).
 };
 }  // namespace
 

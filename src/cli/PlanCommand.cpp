@@ -280,8 +280,9 @@ int runPlan(const PlanOptions &options)
     if (const auto *certified = dynamic_cast<const ompl::CertifiedMotionValidator *>(
             setup->getSpaceInformation()->getMotionValidator().get()))
         margin << " (margin " << certified->getMargin() << ")";
-    std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.checking.mode << ", "
-              << edges << " edges" << margin.str() << ", " << runs << " run(s) of " << timeLimit << " s per planner\n";
+    std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.checking.mode
+              << ", " << edges << " edges" << margin.str() << ", " << runs << " run(s) of " << timeLimit
+              << " s per planner\n";
     benchmark.benchmark(request);
     if (!options.logPath.empty() && !benchmark.saveResultsToFile(options.logPath.c_str()))
         throw InputError(options.logPath, "", "cannot write the benchmark log");

@@ -270,7 +270,8 @@ class HostStageRunner : public PooledStageRunner<HostExecutor>
 {
 public:
     HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch)
-        : PooledStageRunner([scratch, budget] { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes); }),
+        : PooledStageRunner([scratch, budget]
+                            { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes); }),
           model_(std::move(model))
     {
         arrays_ = hostModelArrays(*model_);
