@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "BackendSuites.h"
 #include "BlindSpots.h"
 #include "Reference.h"
 #include "TestSupport.h"
@@ -384,6 +385,80 @@ TEST(Checker, SafeModeMatchesTheOracleOnPandaScenes)
         // The proofs settle almost every free Panda state (docs/accuracy.md): false alarms stay rare.
         EXPECT_LE(falseAlarms, (n - colliding) / 10) << scenario;
     }
+}
+
+TEST(Checker, TwoPaddingsInOnePassGiveTheVerdictsOfTwoChecks)
+{
+    // checkTwoPaddings must say what check() says at the wider paddings and then at the request's
+    // own: the blind spots (meshes, primitives, non-convex shapes), the Panda's scenes and the
+    // crane, every mode that can certify (one pass on the CPU backend) and raster mode (two
+    // passes), with and without pair paddings of the request's own, per state.
+    std::size_t kinds[3] = {0, 0, 0};
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(120))
+    {
+        const rc::Checker checker(suite.robot, suite.scene, rc::CheckerOptions{rc::BackendChoice::Cpu, 1});
+        const rc::CollisionModel &model = checker.collisionModel();
+        const std::size_t n = suite.numStates();
+        const std::shared_ptr<rc::PairPadding> wider = rc::test::randomPairPaddings(model, n, 5);
+        for (const rc::CollisionMode mode :
+             {rc::CollisionMode::Safe, rc::CollisionMode::Exact, rc::CollisionMode::Conservative, rc::CollisionMode::Raster})
+            for (const bool ownPairPaddings : {false, true})
+            {
+                rc::CollisionRequest request;
+                request.mode = mode;
+                request.padding = 0.002;
+                if (ownPairPaddings)
+                    request.pairPadding = rc::test::randomPairPaddings(model, n, 9);
+                // The wider paddings as one request: the request's own plus wider's, per state.
+                rc::CollisionRequest wide = request;
+                auto sum = std::make_shared<rc::PairPadding>(*wider);
+                if (ownPairPaddings)
+                {
+                    for (std::size_t k = 0; k < sum->environment.size(); ++k)
+                        sum->environment[k] += request.pairPadding->environment[k];
+                    for (std::size_t k = 0; k < sum->self.size(); ++k)
+                        sum->self[k] += request.pairPadding->self[k];
+                }
+                wide.pairPadding = sum;
+                std::vector<std::uint8_t> verdicts(n), clear(n), valid(n);
+                checker.checkTwoPaddings(suite.states.data(), n, verdicts.data(), request, *wider);
+                checker.check(suite.states.data(), n, clear.data(), wide);
+                checker.check(suite.states.data(), n, valid.data(), request);
+                for (std::size_t i = 0; i < n; ++i)
+                {
+                    const rc::PaddedVerdict expected = clear[i]   ? rc::PaddedVerdict::Clear
+                                                       : valid[i] ? rc::PaddedVerdict::Near
+                                                                  : rc::PaddedVerdict::Collides;
+                    EXPECT_EQ(verdicts[i], static_cast<std::uint8_t>(expected))
+                        << suite.name << ", mode " << rc::toString(mode) << (ownPairPaddings ? ", own pair paddings" : "")
+                        << ", state " << i;
+                    ++kinds[verdicts[i] < 3 ? verdicts[i] : 0];
+                }
+            }
+    }
+    // Every verdict occurs, or the comparison above proves little.
+    EXPECT_GT(kinds[0], 100u);
+    EXPECT_GT(kinds[1], 100u);
+    EXPECT_GT(kinds[2], 100u);
+}
+
+TEST(Checker, TwoPaddingsRefuseWiderPaddingsThatDoNotFit)
+{
+    const rc::Checker checker(cubeRobot(0.2), tableScene());
+    const rc::CollisionModel &model = checker.collisionModel();
+    std::vector<double> q(3 * checker.dof(), 0.0);
+    std::vector<std::uint8_t> verdicts(3);
+    rc::PairPadding wider;
+    wider.rows = 2;  // neither 1 nor the batch's 3
+    wider.environment.assign(2 * model.numComponents(), 0.0);
+    wider.self.assign(2 * model.selfPairs.size(), 0.0);
+    EXPECT_THROW(checker.checkTwoPaddings(q.data(), 3, verdicts.data(), {}, wider), rc::ConfigurationError);
+    wider.rows = 1;
+    wider.environment.assign(model.numComponents(), -0.1);  // a negative padding
+    wider.self.assign(model.selfPairs.size(), 0.0);
+    EXPECT_THROW(checker.checkTwoPaddings(q.data(), 3, verdicts.data(), {}, wider), rc::ConfigurationError);
+    wider.environment.assign(model.numComponents(), std::numeric_limits<double>::quiet_NaN());
+    EXPECT_THROW(checker.checkTwoPaddings(q.data(), 3, verdicts.data(), {}, wider), rc::ConfigurationError);
 }
 
 TEST(Checker, VerdictsAndContactsAreIdenticalAcrossThreadCounts)

@@ -23,5 +23,15 @@ public:
         bad states: those are invalid (Contact::Kind::OutOfBounds). */
     virtual void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
                        const CollisionRequest &request, int threads) const = 0;
+    /** \brief Decides \a n states at two paddings in one pass: the request's, and the request's
+        plus row i of \a wider (PairPadding: 1 row or n, entries >= 0) for state i; \a verdicts: n
+        PaddedVerdict values. Returns false, deciding nothing, where the backend has no such pass
+        (Checker::checkTwoPaddings then runs two). */
+    virtual bool checkTwoPaddings(const double * /*q*/, std::size_t /*n*/, std::uint8_t * /*verdicts*/,
+                                  const CollisionRequest & /*request*/, const PairPadding & /*wider*/,
+                                  int /*threads*/) const
+    {
+        return false;
+    }
 };
 }  // namespace rastercheck

@@ -144,6 +144,70 @@ void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const C
     nameCoordinatesOutOfBounds(q, n, contacts);
 }
 
+void Checker::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *verdicts,
+                               const CollisionRequest &request, const PairPadding &wider) const
+{
+    validateRequest(request, n);
+    validateRows(wider, "checkTwoPaddings' wider paddings", n);
+    validateEntries(wider, "checkTwoPaddings' wider paddings");
+    warnOnceIfNotFinite(q, n);
+    const Backend &backend = n >= minDeviceBatch_ ? *backend_ : static_cast<const Backend &>(reference_);
+    if (backend.checkTwoPaddings(q, n, verdicts, request, wider, threads_))
+        return;
+
+    // Two passes: every state at the wider paddings (the request's pair paddings plus wider's, row
+    // by row), then the states that missed them at the request's own.
+    const std::size_t components = model_->numComponents(), selfPairs = model_->selfPairs.size();
+    const PairPadding *own = request.pairPadding.get();
+    const bool rowPerState = wider.rows > 1 || (own && own->rows > 1);
+    auto rowOf = [](const PairPadding &rows, std::size_t i) { return rows.rows == 1 ? 0 : i; };
+    auto outer = std::make_shared<PairPadding>();
+    outer->rows = rowPerState ? n : 1;
+    outer->environment.resize(outer->rows * components);
+    outer->self.resize(outer->rows * selfPairs);
+    for (std::size_t r = 0; r < outer->rows; ++r)
+    {
+        for (std::size_t c = 0; c < components; ++c)
+            outer->environment[r * components + c] = wider.environment[rowOf(wider, r) * components + c] +
+                                                     (own ? own->environment[rowOf(*own, r) * components + c] : 0.0);
+        for (std::size_t p = 0; p < selfPairs; ++p)
+            outer->self[r * selfPairs + p] =
+                wider.self[rowOf(wider, r) * selfPairs + p] + (own ? own->self[rowOf(*own, r) * selfPairs + p] : 0.0);
+    }
+    CollisionRequest wide = request;
+    wide.pairPadding = std::move(outer);
+    check(q, n, verdicts, wide);
+
+    std::vector<std::size_t> missed;
+    for (std::size_t i = 0; i < n; ++i)
+        if (!verdicts[i])
+            missed.push_back(i);
+    if (missed.empty())
+        return;
+    const std::size_t coordinates = dof();
+    std::vector<double> rows(missed.size() * coordinates);
+    for (std::size_t k = 0; k < missed.size(); ++k)
+        std::copy_n(q + missed[k] * coordinates, coordinates, rows.begin() + static_cast<std::ptrdiff_t>(k * coordinates));
+    CollisionRequest narrow = request;
+    if (own && own->rows > 1)
+    {
+        auto picked = std::make_shared<PairPadding>();
+        picked->rows = missed.size();
+        for (const std::size_t i : missed)
+        {
+            picked->environment.insert(picked->environment.end(), own->environment.begin() + static_cast<std::ptrdiff_t>(i * components),
+                                       own->environment.begin() + static_cast<std::ptrdiff_t>((i + 1) * components));
+            picked->self.insert(picked->self.end(), own->self.begin() + static_cast<std::ptrdiff_t>(i * selfPairs),
+                                own->self.begin() + static_cast<std::ptrdiff_t>((i + 1) * selfPairs));
+        }
+        narrow.pairPadding = std::move(picked);
+    }
+    std::vector<std::uint8_t> valid(missed.size());
+    check(rows.data(), missed.size(), valid.data(), narrow);
+    for (std::size_t k = 0; k < missed.size(); ++k)
+        verdicts[missed[k]] = static_cast<std::uint8_t>(valid[k] ? PaddedVerdict::Near : PaddedVerdict::Collides);
+}
+
 // The backends only say that a state is out of bounds; which coordinate is asked of the model here,
 // off the hot path (such states are rare, and their verdict needs no more).
 void Checker::nameCoordinatesOutOfBounds(const double *q, std::size_t n, Contact *contacts) const

@@ -227,35 +227,56 @@ public:
         : PairPaddings(model, request.padding, request.pairPadding.get(), row)
     {
     }
-    /** \brief \a base plus, when \a extra is not null, its row \a row (0 for one row) per pair. */
-    PairPaddings(const CollisionModel &model, double base, const PairPadding *extra, std::size_t row)
+    /** \brief \a base plus, when \a extra is not null, its row \a row (0 for one row) per pair,
+        plus, when \a wider is not null, its row \a row too (Checker::checkTwoPaddings' wider
+        paddings). */
+    PairPaddings(const CollisionModel &model, double base, const PairPadding *extra, std::size_t row,
+                 const PairPadding *wider = nullptr)
         : base_(base), numComponents_(model.numComponents()), numEnvironmentPairs_(model.numObjects() * model.numComponents())
     {
         if (extra)
-        {
-            const std::size_t r = extra->rows == 1 ? 0 : row;
-            environment_ = extra->environment.data() + r * model.numComponents();
-            self_ = extra->self.data() + r * model.selfPairs.size();
-        }
+            own_ = Terms(model, *extra, row);
+        if (wider)
+            (extra ? added_ : own_) = Terms(model, *wider, row);
     }
     /** \brief No entry per pair: every pair has the request's padding. */
-    bool uniform() const { return environment_ == nullptr; }
+    bool uniform() const { return own_.environment == nullptr; }
     /** \brief Component \a k against any scene object. */
-    double component(std::size_t k) const { return base_ + (environment_ ? environment_[k] : 0.0); }
+    double component(std::size_t k) const
+    {
+        return base_ + (own_.environment ? own_.environment[k] : 0.0) + (added_.environment ? added_.environment[k] : 0.0);
+    }
     /** \brief Self pair \a i (CollisionModel::selfPairs order). */
-    double self(std::size_t i) const { return base_ + (self_ ? self_[i] : 0.0); }
+    double self(std::size_t i) const
+    {
+        return base_ + (own_.self ? own_.self[i] : 0.0) + (added_.self ? added_.self[i] : 0.0);
+    }
     /** \brief Pair \a pair in CollisionModel's numbering (environment pairs, then self pairs). */
     double pair(std::uint32_t pair) const
     {
-        return device::paddingOfPair(base_, environment_, self_, numComponents_, numEnvironmentPairs_, pair);
+        return device::paddingOfPair(base_, own_.environment, own_.self, numComponents_, numEnvironmentPairs_, pair) +
+               (added_.environment ? device::paddingOfPair(0.0, added_.environment, added_.self, numComponents_,
+                                                           numEnvironmentPairs_, pair)
+                                   : 0.0);
     }
 
 private:
+    /** \brief One row of a PairPadding (row 0 when it has one row). */
+    struct Terms
+    {
+        Terms() = default;
+        Terms(const CollisionModel &model, const PairPadding &rows, std::size_t row)
+            : environment(rows.environment.data() + (rows.rows == 1 ? 0 : row) * model.numComponents()),
+              self(rows.self.data() + (rows.rows == 1 ? 0 : row) * model.selfPairs.size())
+        {
+        }
+        const double *environment = nullptr;  // numComponents entries, or null
+        const double *self = nullptr;         // selfPairs.size() entries, or null
+    };
     double base_;
     std::size_t numComponents_;
     std::size_t numEnvironmentPairs_;
-    const double *environment_ = nullptr;  // numComponents entries, or null
-    const double *self_ = nullptr;         // selfPairs.size() entries, or null
+    Terms own_, added_;  // the first and second row given (added_ only when both are)
 };
 
 }  // namespace rastercheck

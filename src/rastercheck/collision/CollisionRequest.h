@@ -68,6 +68,15 @@ struct PairPadding
     std::size_t rows = 1;
 };
 
+/** \brief A state's verdict at two paddings (Checker::checkTwoPaddings): nonzero = valid at the
+    request's own paddings. */
+enum class PaddedVerdict : std::uint8_t
+{
+    Collides = 0,  ///< in collision at the request's paddings (or outside the bounds)
+    Clear = 1,     ///< clear at the wider paddings too
+    Near = 2       ///< clear at the request's paddings, not at the wider ones
+};
+
 /** \brief Throws ConfigurationError, naming \a name, unless every entry of \a rows is finite and >= 0. */
 void validateEntries(const PairPadding &rows, const std::string &name);
 

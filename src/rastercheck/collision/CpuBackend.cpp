@@ -406,8 +406,8 @@ bool CpuBackend::decideOpenPair(std::uint32_t pair, const CollisionRequest &requ
     return exactOverlap(a, b, padding, true, ws, contact) && curvedShapesConfirm(model, pair, a, b, request, padding);
 }
 
-bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws, Contact *contactOut,
-                         std::size_t paddingRow) const
+std::uint8_t CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWorkspace &ws,
+                                 Contact *contactOut, std::size_t paddingRow, const PairPadding *wider) const
 {
     const CollisionModel &model = *model_;
     Contact contact;
@@ -416,7 +416,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         contact.kind = kind;
         if (contactOut)
             *contactOut = contact;
-        return false;
+        return static_cast<std::uint8_t>(PaddedVerdict::Collides);
     };
 
     if (!model.configurationAdmissible(q))
@@ -428,18 +428,35 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
     const double pixel = request.pixelSize > 0 ? request.pixelSize : model.defaultPixelSize;
     const bool wantContact = contactOut != nullptr;
     const ModeRules rules = modeRules(request.mode, wantContact);
-    // Paddings: the request's, plus its pairPadding entry per pair. The distance set and the layer
-    // culls take the largest padding they stand for.
-    const PairPaddings paddings(model, request, paddingRow);
+    // Paddings: the request's, plus its pairPadding entry per pair (plus wider's: the outer
+    // paddings of two). The distance set and the layer culls take the largest padding they stand
+    // for, the outer one.
+    const PairPaddings own(model, request, paddingRow);
+    const PairPaddings outer(model, request.padding, request.pairPadding.get(), paddingRow, wider);
+    // With two paddings, the first pair nearer than its outer padding but clear at its own makes the
+    // state Near; from then on only the request's own paddings matter.
+    bool near = false;
+    auto padding = [&](double outerPadding, double ownPadding) { return near ? ownPadding : outerPadding; };
+    // A pair that meets at \a paddingUsed: whether the state collides (else it is now Near).
+    auto collidesAtOwn = [&](const Solid &a, const Solid &b, std::uint32_t pairNumber, double paddingUsed,
+                             double ownPadding)
+    {
+        if (!wider || near || paddingUsed <= ownPadding)
+            return true;
+        if (pairCollides(a, b, pairNumber, request, rules, ownPadding, pixel, model, wantContact, ws, contact))
+            return true;
+        near = true;
+        return false;
+    };
     double reachPadding = request.padding;
-    if (paddings.uniform())
+    if (outer.uniform())
         std::fill(ws.layerPadding.begin(), ws.layerPadding.end(), device::floatPadding(request.padding));
     else
     {
         // A layer's padding is the largest in its subtree (the layer boxes' own walk).
         device::joinLayers(
             model.componentSubtreeEnd.data(), static_cast<int>(m), ws.layerLargest.data(),
-            [&](int k) { return std::max(request.padding, paddings.component(static_cast<std::size_t>(k))); },
+            [&](int k) { return std::max(request.padding, outer.component(static_cast<std::size_t>(k))); },
             [](double &layer, double child) { layer = std::max(layer, child); });
         for (std::size_t k = 0; k < m; ++k)
         {
@@ -467,12 +484,15 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
                     k = static_cast<std::size_t>(model.componentSubtreeEnd[k]);
                     continue;
                 }
-                const double padding = paddings.component(k);
+                const double pairPadding = padding(outer.component(k), own.component(k));
+                const Solid component = componentSolid(model, ws, k);
+                const std::uint32_t pairNumber =
+                    device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m));
                 if (device::solidsMayMeet(ws.componentBounds[k], ws.componentBox[k], objectBox,
-                                          model.objectOrientedBoxes[o], device::floatPadding(padding)) &&
-                    pairCollides(componentSolid(model, ws, k), object,
-                                 device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m)),
-                                 request, rules, padding, pixel, model, wantContact, ws, contact))
+                                          model.objectOrientedBoxes[o], device::floatPadding(pairPadding)) &&
+                    pairCollides(component, object, pairNumber, request, rules, pairPadding, pixel, model, wantContact,
+                                 ws, contact) &&
+                    collidesAtOwn(component, object, pairNumber, pairPadding, own.component(k)))
                 {
                     contact.component = static_cast<int>(k);
                     contact.object = static_cast<int>(o);
@@ -487,19 +507,21 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
         for (std::size_t i = 0; i < model.selfPairs.size(); ++i)
         {
             const auto [a, b] = model.selfPairs[i];
-            const double padding = paddings.self(i);
+            const double pairPadding = padding(outer.self(i), own.self(i));
             if (!device::solidsMayMeet(ws.componentBounds[a], ws.componentBox[a], ws.componentBounds[b],
-                                       ws.componentBox[b], device::floatPadding(padding)))
+                                       ws.componentBox[b], device::floatPadding(pairPadding)))
                 continue;
             // The pair's clearance table: a proof of "apart" without a hull test. Safe and exact mode
             // only, whose verdicts are the meshes' own (conservative and raster verdicts are their
             // tests' outcomes, which the table must not change).
-            if (rules.clearanceTables && model.selfPairTables.apart(i, q, padding))
+            if (rules.clearanceTables && model.selfPairTables.apart(i, q, pairPadding))
                 continue;
-            if (pairCollides(
-                    componentSolid(model, ws, a), componentSolid(model, ws, b),
-                    device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()), static_cast<int>(m)),
-                    request, rules, padding, pixel, model, wantContact, ws, contact))
+            const Solid solidA = componentSolid(model, ws, a), solidB = componentSolid(model, ws, b);
+            const std::uint32_t pairNumber =
+                device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()), static_cast<int>(m));
+            if (pairCollides(solidA, solidB, pairNumber, request, rules, pairPadding, pixel, model, wantContact, ws,
+                             contact) &&
+                collidesAtOwn(solidA, solidB, pairNumber, pairPadding, own.self(i)))
             {
                 contact.component = a;
                 contact.otherComponent = b;
@@ -509,7 +531,7 @@ bool CpuBackend::isValid(const double *q, const CollisionRequest &request, CpuWo
 
     if (contactOut)
         *contactOut = Contact{};
-    return true;
+    return static_cast<std::uint8_t>(near ? PaddedVerdict::Near : PaddedVerdict::Clear);
 }
 
 bool CpuBackend::rasterImage(const double *q, const Contact &contact, const CollisionRequest &request,
@@ -542,16 +564,34 @@ bool CpuBackend::rasterImage(const double *q, const Contact &contact, const Coll
 void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
                        const CollisionRequest &request, int threads) const
 {
+    decide(q, n, valid, contacts, request, nullptr, threads);
+}
+
+bool CpuBackend::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *verdicts,
+                                  const CollisionRequest &request, const PairPadding &wider, int threads) const
+{
+    // One pass relies on a pair clear at a padding being clear at every smaller one; raster
+    // verdicts (pixels) need not be.
+    if (request.mode == CollisionMode::Raster)
+        return false;
+    decide(q, n, verdicts, nullptr, request, &wider, threads);
+    return true;
+}
+
+void CpuBackend::decide(const double *q, std::size_t n, std::uint8_t *verdicts, Contact *contacts,
+                        const CollisionRequest &request, const PairPadding *wider, int threads) const
+{
     const std::size_t dof = model_->robot->numCoordinates();
     const int workers = batchWorkers(n, threads);
-    // One pairPadding row for every state, or one per state (PairPadding::rows).
-    const bool rowPerState = request.pairPadding && request.pairPadding->rows > 1;
+    // One pairPadding row for every state, or one per state (PairPadding::rows); wider's alike.
+    const bool rowPerState =
+        (request.pairPadding && request.pairPadding->rows > 1) || (wider && wider->rows > 1);
     auto paddingRow = [rowPerState](std::size_t i) { return rowPerState ? i : std::size_t{0}; };
     if (workers == 1 || n < 2)
     {
         std::unique_ptr<CpuWorkspace> ws = borrow();
         for (std::size_t i = 0; i < n; ++i)
-            valid[i] = isValid(q + i * dof, request, *ws, contacts ? contacts + i : nullptr, paddingRow(i)) ? 1 : 0;
+            verdicts[i] = isValid(q + i * dof, request, *ws, contacts ? contacts + i : nullptr, paddingRow(i), wider);
         giveBack(std::move(ws));
         return;
     }
@@ -560,10 +600,8 @@ void CpuBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Cont
         std::unique_ptr<CpuWorkspace> ws = borrow();
 #pragma omp for schedule(dynamic, 16)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
-            valid[i] = isValid(q + static_cast<std::size_t>(i) * dof, request, *ws, contacts ? contacts + i : nullptr,
-                               paddingRow(static_cast<std::size_t>(i)))
-                           ? 1
-                           : 0;
+            verdicts[i] = isValid(q + static_cast<std::size_t>(i) * dof, request, *ws,
+                                  contacts ? contacts + i : nullptr, paddingRow(static_cast<std::size_t>(i)), wider);
         giveBack(std::move(ws));
     }
 }

@@ -83,10 +83,17 @@ public:
     void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts, const CollisionRequest &request,
                int threads) const override;
 
+    /** \brief One pass: a pair that misses its wider padding is tried at the request's own, and
+        the pairs after it only at theirs. */
+    bool checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *verdicts, const CollisionRequest &request,
+                          const PairPadding &wider, int threads) const override;
+
     /** \brief Decides one state with the caller's workspace (no locking, no allocation once warm),
-        with row \a paddingRow of the request's pairPadding. */
-    bool isValid(const double *q, const CollisionRequest &request, CpuWorkspace &workspace, Contact *contact,
-                 std::size_t paddingRow = 0) const;
+        with row \a paddingRow of the request's pairPadding. With \a wider (row \a paddingRow
+        too), a PaddedVerdict: Clear at the wider paddings, Near, or Collides at the request's;
+        without, 1 = valid, 0 = not. */
+    std::uint8_t isValid(const double *q, const CollisionRequest &request, CpuWorkspace &workspace, Contact *contact,
+                         std::size_t paddingRow = 0, const PairPadding *wider = nullptr) const;
 
     std::unique_ptr<CpuWorkspace> makeWorkspace() const;
     /** \brief A pooled workspace (made when the pool is empty); give it back with giveBack(). */
@@ -111,6 +118,10 @@ public:
                      RasterImage &image) const;
 
 private:
+    /** \brief check() (\a wider null) and checkTwoPaddings(): isValid over \a n states, on threads. */
+    void decide(const double *q, std::size_t n, std::uint8_t *verdicts, Contact *contacts,
+                const CollisionRequest &request, const PairPadding *wider, int threads) const;
+
     CollisionModelConstPtr model_;
     Pool<CpuWorkspace> workspaces_;
 };

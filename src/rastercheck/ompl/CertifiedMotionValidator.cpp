@@ -35,6 +35,7 @@ struct CertifiedMotionValidator::EdgeSearch
     std::vector<Interval> refined;  ///< what is left of intervals whose midpoints missed the margin (next level)
     std::vector<Interval> batch;    ///< intervals whose midpoints are checked in this round
     std::vector<Interval> close;    ///< intervals of batch whose midpoints missed the margin
+    std::vector<Interval> collided;  ///< intervals of batch whose midpoints collide
     double stop = std::numeric_limits<double>::infinity();  ///< earliest start known not certifiable
     double budget = 0.0;                                    ///< refined midpoints the edge may use
     double spent = 0.0;
@@ -83,6 +84,7 @@ struct Scratch
     std::vector<double> rows;
     std::vector<std::uint8_t> verdicts;
     std::vector<double> caps, radii;
+    PairPadding sweepPadding;  ///< per midpoint, what each pair can close in over half its interval
 };
 
 Scratch &scratch()
@@ -259,7 +261,6 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
     const CollisionModel &model = checker_->collisionModel();
     const std::size_t components = model.numComponents();
     const std::size_t selfPairs = model.selfPairs.size();
-    const PairPadding *base = request_.pairPadding.get();
     std::vector<EdgeSearch *> open;
     for (;;)
     {
@@ -274,32 +275,29 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
             break;
 
         // Every edge's midpoints in one batch, in the request's own mode, each with its own edge's
-        // pair paddings: what each pair can close in over half its interval (on top of any pair
-        // padding the request carries).
+        // pair paddings: what each pair can close in over half its interval, on top of the
+        // request's paddings. One pass says per midpoint whether it is clear by that much, or
+        // else whether it is valid at all (a collision ends the search).
         std::size_t count = 0;
         for (const EdgeSearch *search : open)
             count += search->batch.size();
-        auto extra = std::make_shared<PairPadding>();
-        extra->rows = count;
-        extra->environment.resize(count * components);
-        extra->self.resize(count * selfPairs);
+        PairPadding &sweep = w.sweepPadding;
+        sweep.rows = count;
+        sweep.environment.resize(count * components);
+        sweep.self.resize(count * selfPairs);
         std::size_t row = 0;
         for (const EdgeSearch *search : open)
             for (const EdgeSearch::Interval &interval : search->batch)
             {
                 for (std::size_t c = 0; c < components; ++c)
-                    extra->environment[row * components + c] =
-                        (base ? base->environment[c] : 0.0) + 0.5 * search->componentSweeps[c] * interval.length;
+                    sweep.environment[row * components + c] = 0.5 * search->componentSweeps[c] * interval.length;
                 for (std::size_t p = 0; p < selfPairs; ++p)
-                    extra->self[row * selfPairs + p] =
-                        (base ? base->self[p] : 0.0) + 0.5 * search->pairSweeps[p] * interval.length;
+                    sweep.self[row * selfPairs + p] = 0.5 * search->pairSweeps[p] * interval.length;
                 ++row;
             }
-        CollisionRequest margin = request_;
-        margin.pairPadding = std::move(extra);
         midpointRows(open, false, w.rows);
         w.verdicts.resize(count);
-        checker_->check(w.rows.data(), count, w.verdicts.data(), margin);
+        checker_->checkTwoPaddings(w.rows.data(), count, w.verdicts.data(), request_, sweep);
         states_.fetch_add(count, std::memory_order_relaxed);
 
         std::size_t closeCount = 0;
@@ -307,22 +305,37 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         for (EdgeSearch *search : open)
         {
             search->close.clear();
+            search->collided.clear();
             for (const EdgeSearch::Interval &interval : search->batch)
-                if (!w.verdicts[row++])
+                switch (static_cast<PaddedVerdict>(w.verdicts[row++]))
+                {
+                case PaddedVerdict::Clear:
+                    break;
+                case PaddedVerdict::Near:
                     search->close.push_back(interval);
+                    break;
+                case PaddedVerdict::Collides:
+                    search->collided.push_back(interval);
+                    break;
+                }
+            // After the loop: rejecting may finish the search, which empties its batch.
+            for (const EdgeSearch::Interval &interval : search->collided)
+                search->reject(interval, wantFirst);
+            if (search->finished)
+                search->close.clear();
             closeCount += search->close.size();
         }
         if (closeCount == 0)
             continue;
-        midpointRows(open, true, w.rows);
 
-        // Nearer than the margin: the midpoint's clearance, measured against what each pair can
-        // close in per unit of the edge, certifies the middle of the interval (conservative
-        // advancement) and leaves two shorter sides; without it, or where it is 0, the interval is
-        // halved.
+        // Nearer than the margin but valid: the midpoint's clearance, measured against what each
+        // pair can close in per unit of the edge, certifies the middle of the interval
+        // (conservative advancement) and leaves two shorter sides; without it, or where it is 0,
+        // the interval is halved.
         w.radii.assign(closeCount, 0.0);
         if (sizeByClearance_)
         {
+            midpointRows(open, true, w.rows);
             auto rates = std::make_shared<PairPadding>();
             rates->rows = closeCount;
             rates->environment.resize(closeCount * components);
@@ -342,38 +355,10 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
                                  clearanceMeasure_);
             clearances_.fetch_add(closeCount, std::memory_order_relaxed);
         }
-
-        // A midpoint without clearance is checked at the padding itself, where a collision ends the
-        // search (the request's mode decides, as for every state).
-        const std::size_t dof = mapping_->numCoordinates();
-        std::size_t confirmCount = 0;
-        for (std::size_t k = 0; k < closeCount; ++k)
-            if (w.radii[k] <= 0.0)
-            {
-                if (confirmCount != k)
-                    std::copy_n(w.rows.begin() + static_cast<std::ptrdiff_t>(k * dof), dof,
-                                w.rows.begin() + static_cast<std::ptrdiff_t>(confirmCount * dof));
-                ++confirmCount;
-            }
-        w.verdicts.resize(confirmCount);
-        if (confirmCount > 0)
-        {
-            checker_->check(w.rows.data(), confirmCount, w.verdicts.data(), request_);
-            states_.fetch_add(confirmCount, std::memory_order_relaxed);
-        }
         row = 0;
-        std::size_t confirmed = 0;
         for (EdgeSearch *search : open)
             for (const EdgeSearch::Interval &interval : search->close)
-            {
-                const double radius = w.radii[row++];
-                if (radius > 0.0)
-                    search->refine(interval, radius, wantFirst);
-                else if (w.verdicts[confirmed++])
-                    search->refine(interval, 0.0, wantFirst);  // halved
-                else
-                    search->reject(interval, wantFirst);
-            }
+                search->refine(interval, w.radii[row++], wantFirst);  // a radius of 0 halves it
     }
     for (std::size_t i = 0; i < n; ++i)
     {
@@ -390,10 +375,11 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         for (std::vector<double> *buffer : {&search->componentSweeps, &search->pairSweeps})
             detail::releaseIfLarge(*buffer);
         for (std::vector<EdgeSearch::Interval> *buffer :
-             {&search->pending, &search->refined, &search->batch, &search->close})
+             {&search->pending, &search->refined, &search->batch, &search->close, &search->collided})
             detail::releaseIfLarge(*buffer);
     }
-    for (std::vector<double> *buffer : {&w.qa, &w.qb, &w.rows, &w.caps, &w.radii})
+    for (std::vector<double> *buffer :
+         {&w.qa, &w.qb, &w.rows, &w.caps, &w.radii, &w.sweepPadding.environment, &w.sweepPadding.self})
         detail::releaseIfLarge(*buffer);
     detail::releaseIfLarge(w.order);
     detail::releaseIfLarge(w.intervals);
