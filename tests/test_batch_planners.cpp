@@ -137,8 +137,8 @@ void resetCounters(const og::SimpleSetup &setup)
 TEST(BatchRRTConnect, LazyAndEagerModesReturnCertifiedPathsAndLazyCertifiesFewerStates)
 {
     // Both modes return paths whose every edge the certified validator accepts on its own; lazy
-    // mode certifies only the candidate solutions' edges, so it certifies far fewer states. (Cage, the hardest, is left out of the counts: there lazy mode reaches
-    // lazy_limit and finishes eagerly.)
+    // mode certifies only the candidate solutions' edges, so it certifies far fewer states. (Cage, the hardest, is left
+    // out of the counts: there lazy mode reaches lazy_limit and finishes eagerly.)
     RASTERCHECK_REQUIRE_DATA(root);
     // Under the sanitizers (scripts/sanitize.sh scales the long-running tests by
     // RASTERCHECK_SOAK_SCALE) the checker runs 10-50x slower and cage, the hardest, would reach the

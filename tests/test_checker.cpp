@@ -400,8 +400,8 @@ TEST(Checker, TwoPaddingsInOnePassGiveTheVerdictsOfTwoChecks)
         const rc::CollisionModel &model = checker.collisionModel();
         const std::size_t n = suite.numStates();
         const std::shared_ptr<rc::PairPadding> wider = rc::test::randomPairPaddings(model, n, 5);
-        for (const rc::CollisionMode mode :
-             {rc::CollisionMode::Safe, rc::CollisionMode::Exact, rc::CollisionMode::Conservative, rc::CollisionMode::Raster})
+        for (const rc::CollisionMode mode : {rc::CollisionMode::Safe, rc::CollisionMode::Exact,
+                                             rc::CollisionMode::Conservative, rc::CollisionMode::Raster})
             for (const bool ownPairPaddings : {false, true})
             {
                 rc::CollisionRequest request;
@@ -430,8 +430,8 @@ TEST(Checker, TwoPaddingsInOnePassGiveTheVerdictsOfTwoChecks)
                                                        : valid[i] ? rc::PaddedVerdict::Near
                                                                   : rc::PaddedVerdict::Collides;
                     EXPECT_EQ(verdicts[i], static_cast<std::uint8_t>(expected))
-                        << suite.name << ", mode " << rc::toString(mode) << (ownPairPaddings ? ", own pair paddings" : "")
-                        << ", state " << i;
+                        << suite.name << ", mode " << rc::toString(mode)
+                        << (ownPairPaddings ? ", own pair paddings" : "") << ", state " << i;
                     ++kinds[verdicts[i] < 3 ? verdicts[i] : 0];
                 }
             }

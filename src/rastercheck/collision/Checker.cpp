@@ -144,8 +144,8 @@ void Checker::check(const double *q, std::size_t n, std::uint8_t *valid, const C
     nameCoordinatesOutOfBounds(q, n, contacts);
 }
 
-void Checker::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *verdicts,
-                               const CollisionRequest &request, const PairPadding &wider) const
+void Checker::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *verdicts, const CollisionRequest &request,
+                               const PairPadding &wider) const
 {
     validateRequest(request, n);
     validateRows(wider, "checkTwoPaddings' wider paddings", n);
@@ -187,7 +187,8 @@ void Checker::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *ver
     const std::size_t coordinates = dof();
     std::vector<double> rows(missed.size() * coordinates);
     for (std::size_t k = 0; k < missed.size(); ++k)
-        std::copy_n(q + missed[k] * coordinates, coordinates, rows.begin() + static_cast<std::ptrdiff_t>(k * coordinates));
+        std::copy_n(q + missed[k] * coordinates, coordinates,
+                    rows.begin() + static_cast<std::ptrdiff_t>(k * coordinates));
     CollisionRequest narrow = request;
     if (own && own->rows > 1)
     {
@@ -195,7 +196,8 @@ void Checker::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *ver
         picked->rows = missed.size();
         for (const std::size_t i : missed)
         {
-            picked->environment.insert(picked->environment.end(), own->environment.begin() + static_cast<std::ptrdiff_t>(i * components),
+            picked->environment.insert(picked->environment.end(),
+                                       own->environment.begin() + static_cast<std::ptrdiff_t>(i * components),
                                        own->environment.begin() + static_cast<std::ptrdiff_t>((i + 1) * components));
             picked->self.insert(picked->self.end(), own->self.begin() + static_cast<std::ptrdiff_t>(i * selfPairs),
                                 own->self.begin() + static_cast<std::ptrdiff_t>((i + 1) * selfPairs));

@@ -232,7 +232,9 @@ public:
         paddings). */
     PairPaddings(const CollisionModel &model, double base, const PairPadding *extra, std::size_t row,
                  const PairPadding *wider = nullptr)
-        : base_(base), numComponents_(model.numComponents()), numEnvironmentPairs_(model.numObjects() * model.numComponents())
+        : base_(base),
+          numComponents_(model.numComponents()),
+          numEnvironmentPairs_(model.numObjects() * model.numComponents())
     {
         if (extra)
             own_ = Terms(model, *extra, row);
@@ -244,7 +246,8 @@ public:
     /** \brief Component \a k against any scene object. */
     double component(std::size_t k) const
     {
-        return base_ + (own_.environment ? own_.environment[k] : 0.0) + (added_.environment ? added_.environment[k] : 0.0);
+        return base_ + (own_.environment ? own_.environment[k] : 0.0) +
+               (added_.environment ? added_.environment[k] : 0.0);
     }
     /** \brief Self pair \a i (CollisionModel::selfPairs order). */
     double self(std::size_t i) const

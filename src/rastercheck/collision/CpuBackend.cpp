@@ -438,8 +438,8 @@ std::uint8_t CpuBackend::isValid(const double *q, const CollisionRequest &reques
     bool near = false;
     auto padding = [&](double outerPadding, double ownPadding) { return near ? ownPadding : outerPadding; };
     // A pair that meets at \a paddingUsed: whether the state collides (else it is now Near).
-    auto collidesAtOwn = [&](const Solid &a, const Solid &b, std::uint32_t pairNumber, double paddingUsed,
-                             double ownPadding)
+    auto collidesAtOwn =
+        [&](const Solid &a, const Solid &b, std::uint32_t pairNumber, double paddingUsed, double ownPadding)
     {
         if (!wider || near || paddingUsed <= ownPadding)
             return true;
@@ -584,8 +584,7 @@ void CpuBackend::decide(const double *q, std::size_t n, std::uint8_t *verdicts, 
     const std::size_t dof = model_->robot->numCoordinates();
     const int workers = batchWorkers(n, threads);
     // One pairPadding row for every state, or one per state (PairPadding::rows); wider's alike.
-    const bool rowPerState =
-        (request.pairPadding && request.pairPadding->rows > 1) || (wider && wider->rows > 1);
+    const bool rowPerState = (request.pairPadding && request.pairPadding->rows > 1) || (wider && wider->rows > 1);
     auto paddingRow = [rowPerState](std::size_t i) { return rowPerState ? i : std::size_t{0}; };
     if (workers == 1 || n < 2)
     {

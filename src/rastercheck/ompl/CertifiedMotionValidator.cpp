@@ -35,7 +35,7 @@ struct CertifiedMotionValidator::EdgeSearch
     std::vector<Interval> refined;  ///< what is left of intervals whose midpoints missed the margin (next level)
     std::vector<Interval> batch;    ///< intervals whose midpoints are checked in this round
     std::vector<Interval> close;    ///< intervals of batch whose midpoints missed the margin
-    std::vector<Interval> collided;  ///< intervals of batch whose midpoints collide
+    std::vector<Interval> collided;                         ///< intervals of batch whose midpoints collide
     double stop = std::numeric_limits<double>::infinity();  ///< earliest start known not certifiable
     double budget = 0.0;                                    ///< refined midpoints the edge may use
     double spent = 0.0;
@@ -309,14 +309,14 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
             for (const EdgeSearch::Interval &interval : search->batch)
                 switch (static_cast<PaddedVerdict>(w.verdicts[row++]))
                 {
-                case PaddedVerdict::Clear:
-                    break;
-                case PaddedVerdict::Near:
-                    search->close.push_back(interval);
-                    break;
-                case PaddedVerdict::Collides:
-                    search->collided.push_back(interval);
-                    break;
+                    case PaddedVerdict::Clear:
+                        break;
+                    case PaddedVerdict::Near:
+                        search->close.push_back(interval);
+                        break;
+                    case PaddedVerdict::Collides:
+                        search->collided.push_back(interval);
+                        break;
                 }
             // After the loop: rejecting may finish the search, which empties its batch.
             for (const EdgeSearch::Interval &interval : search->collided)

@@ -27,10 +27,10 @@ struct CertifiedMotionOptions
     unsigned int levels = 12;
     /** \brief Coarsest samples checked in the first batch of an edge (>= 1); later batches double,
         in the rake order of MotionValidator (every prefix spread over the edge). One: most edges a
-        planner rejects collide over a good part of their length, and one midpoint and its
-        confirmation reject them where a first batch of 8 paid 8 and up to 8 confirmations
-        (OMPL.app Home, lazy BatchRRTConnect: 1.53 M -> 0.38 M states per solve, 2.5x faster; no
-        problem set slower, docs/benchmarks.md "Rake width of certified edges"). Wider first
+        planner rejects collide over a good part of their length, and one midpoint rejects them
+        where a first batch of 8 paid 8 (OMPL.app Home, lazy BatchRRTConnect: 1.53 M -> 0.38 M
+        states per solve, 2.5x faster; no problem set slower, docs/benchmarks.md "Rake width of
+        certified edges"). Wider first
         batches make fewer, larger checker calls, for a backend whose calls cost more than their
         states. */
     unsigned int rakeWidth = 1;
@@ -51,28 +51,27 @@ struct CertifiedMotionOptions
 /** \brief A motion validator whose accepted edges are collision-free at every point, not only at
     sampled states: continuous collision checking for the planner's straight edges.
 
-    For an edge s1 -> s2, MotionBound gives, per component, a bound on how far any of its points
-    travels along it, and per self pair, on how much the distance between their points can change
-    (only the joints between the two links count). Over an interval of fractions of length h, a
-    component then moves at most its sweep x h / 2 from where it is at the interval's midpoint, and
-    a self pair closes in by at most its sweep x h / 2: a midpoint whose every pair is clear by
-    that much more than the padding p certifies the whole interval (one check, with
-    CollisionRequest::pairPadding). The edge is covered by intervals of equal length, the
-    longest for which no pair needs more than the margin, each checked in the request's own mode:
-    in safe and exact mode the pairs the proofs leave go to the exact narrow phase, which settles
-    them where conservative mode would call every unproven pair a false alarm and pay for it with
-    a check at padding p and two finer midpoints (Panda MotionBenchMaker edges, bench/edges: 30 ->
-    25 states and 1.3x less time per edge). Where a midpoint fails, it is checked at padding p in
-    the request's own mode (a real collision ends the search) and otherwise its interval is
-    halved, each half needing half the margin, down to margin / 2^levels. With
-    CertifiedMotionOptions::sizeByClearance, a failed midpoint's clearance (Checker::freeRadius)
-    certifies the part of its interval the motion bound keeps clear instead, and only the two
-    sides left go on (conservative advancement). Intervals of one level are checked together in
-    one batch (Checker::check: many states in one pass), the coarsest in
-    rake order. checkMotions runs the searches of many edges side by side: each round's midpoints
-    of all of them go to the checker in one batch, each state with its own edge's pair paddings
-    (PairPadding rows), so every edge gets the verdict it gets alone. The base of a robot that does not move is held to
-   the padding p only, and two links a joint apart only to what that joint can do between them.
+    For an edge s1 -> s2, MotionBound gives, per component, a bound on how far any of its points travels
+    along it, and per self pair, on how much the distance between their points can change (only the
+    joints between the two links count). Over an interval of fractions of length h, a component then
+    moves at most its sweep x h / 2 from where it is at the interval's midpoint, and a self pair closes
+    in by at most its sweep x h / 2: a midpoint whose every pair is clear by that much more than the
+    padding p certifies the whole interval. The edge is covered by intervals of equal length, the
+    longest for which no pair needs more than the margin. Each midpoint is checked once, in the
+    request's own mode, at two paddings (Checker::checkTwoPaddings: the request's, and its interval's
+    sweeps on top, per pair): clear by the sweeps certifies the interval; in collision at p ends the
+    search (a real collision); valid but nearer than the sweeps halves the interval, each half needing
+    half the margin, down to margin / 2^levels. (In safe and exact mode the pairs the proofs leave go to
+    the exact narrow phase, which settles them where conservative mode would call every unproven pair a
+    false alarm and pay for it with two finer midpoints: Panda MotionBenchMaker edges, bench/edges: 30
+    -> 25 states and 1.3x less time per edge.) With CertifiedMotionOptions::sizeByClearance, a near
+    midpoint's clearance (Checker::freeRadius) certifies the part of its interval the motion bound keeps
+    clear instead, and only the two sides left go on (conservative advancement). Intervals of one level
+    are checked together in one batch (many states in one pass), the coarsest in rake order.
+    checkMotions runs the searches of many edges side by side: each round's midpoints of all of them go
+    to the checker in one batch, each state with its own edge's pair paddings (PairPadding rows), so
+    every edge gets the verdict it gets alone. The base of a robot that does not move is held to the
+    padding p only, and two links a joint apart only to what that joint can do between them.
 
     Semantics: checkMotion(s1, s2) returns true only when every state of the edge, s1 and s2
     included, satisfies the bounds and is valid at the request's padding (in Safe or Exact mode,
