@@ -178,6 +178,28 @@ TEST_F(PandaOnTheGpu, PerStatePairPaddingsMatchTheCpu)
     }
 }
 
+TEST_F(PandaOnTheGpu, TwoPaddingsMatchTheCpu)
+{
+    // Certified edges' one check per midpoint (Checker::checkTwoPaddings): on the device the two
+    // checks it stands for (wider paddings, then the request's for the states that missed them),
+    // against the CPU backend's one pass.
+    const std::size_t n = 1000;
+    const std::vector<double> states = rc::test::randomStates(*panda_->robot, n, 9);
+    const std::shared_ptr<rc::PairPadding> wider = rc::test::randomPairPaddings(gpu_->collisionModel(), n, 13);
+    for (rc::CollisionMode mode : {rc::CollisionMode::Safe, rc::CollisionMode::Exact, rc::CollisionMode::Conservative})
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        request.padding = 0.002;
+        std::vector<std::uint8_t> onDevice(n), onCpu(n);
+        gpu_->checkTwoPaddings(states.data(), n, onDevice.data(), request, *wider);
+        ASSERT_TRUE(cpu_->checkTwoPaddings(states.data(), n, onCpu.data(), request, *wider, 0));
+        EXPECT_EQ(onDevice, onCpu) << rc::toString(mode);
+        EXPECT_NE(std::count(onCpu.begin(), onCpu.end(), static_cast<std::uint8_t>(rc::PaddedVerdict::Near)), 0)
+            << rc::toString(mode);
+    }
+}
+
 TEST_F(PandaOnTheGpu, ABatchOf32StatesWaitsOnceAndAllocatesNothingAfterTheFirst)
 {
     // The CUDA executor counts its launches, waits and allocations (device buffers and page-locked
