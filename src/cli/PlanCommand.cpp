@@ -53,6 +53,7 @@ struct PlanOptions
     double segmentFraction = 0.01;
     std::string edges = "auto";
     double margin = 0.0;
+    unsigned int rakeWidth = ompl::CertifiedMotionOptions{}.rakeWidth;
     unsigned int recheckFactor = 10;
     std::string logPath;
     std::string pathOut;
@@ -151,6 +152,7 @@ int runPlan(const PlanOptions &options)
                               : options.checking.mode == "raster" ? "batched"
                                                          : "certified";
     setupOptions.certified.margin = options.margin;
+    setupOptions.certified.rakeWidth = options.rakeWidth;
     for (const std::string &text : options.held)
     {
         const auto [name, value] = splitAssignment(text, "--hold");
@@ -274,12 +276,12 @@ int runPlan(const PlanOptions &options)
 
     ot::Benchmark::Request request(timeLimit, memoryLimit, static_cast<unsigned int>(runs), 0.05, false, false,
                                    !options.noSimplify);
-    // The margin in use (--margin or its default, a tenth of the robot's size): it sets how finely
-    // certified edges are refined near obstacles, and with it much of a solve's time.
+    // The margin in use (--margin or its default, a tenth of the robot's size) and the first batch:
+    // they set how finely certified edges are sampled, and with it much of a solve's time.
     std::ostringstream margin;
     if (const auto *certified = dynamic_cast<const ompl::CertifiedMotionValidator *>(
             setup->getSpaceInformation()->getMotionValidator().get()))
-        margin << " (margin " << certified->getMargin() << ")";
+        margin << " (margin " << certified->getMargin() << ", first batch " << certified->getRakeWidth() << ")";
     std::cerr << "rastercheck: backend " << checker->getChecker().backendName() << ", mode " << options.checking.mode
               << ", " << edges << " edges" << margin.str() << ", " << runs << " run(s) of " << timeLimit
               << " s per planner\n";
@@ -377,6 +379,11 @@ void addPlanCommand(CLI::App &app)
                      "certified edges: clearance margin of the coarsest samples, scene units (default a tenth "
                      "of the robot's size)")
         ->check(CLI::NonNegativeNumber);
+    command
+        ->add_option("--rake-width", options->rakeWidth,
+                     "certified edges: coarsest midpoints in an edge's first check, later ones doubling (default 1; "
+                     "wider makes fewer, larger batches, for a backend whose calls cost more than their states)")
+        ->check(CLI::PositiveNumber);
     command
         ->add_option("--recheck-factor", options->recheckFactor,
                      "solution paths are re-checked at this many times the planner's resolution (default 10)")

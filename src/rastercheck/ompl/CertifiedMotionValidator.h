@@ -110,6 +110,8 @@ public:
 
     /** \brief The coarsest margin in use (options.margin, or its default). */
     double getMargin() const { return margin_; }
+    /** \brief Coarsest midpoints in an edge's first batch (options.rakeWidth). */
+    unsigned int getRakeWidth() const { return rakeWidth_; }
     const MotionBound &getMotionBound() const { return bound_; }
 
 private:
