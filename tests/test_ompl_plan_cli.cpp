@@ -187,8 +187,9 @@ TEST(PlanCli, CertifiedEdgesDoNotStepThroughAThinWall)
     // The margin and first batch in use are logged: a tenth of the robot's size and one midpoint by
     // default, else --margin's and --rake-width's.
     EXPECT_TRUE(contains(byDefault.output, "certified edges (margin ")) << byDefault.output;
-    const CliRun margin = runCli("plan " + wallProblem(makeTempDir("plan_cli_wall_margin")) +
-                                 " --runs 1 --time-limit 1 --segment-fraction 0.1 --seed 5 --margin 0.25 --rake-width 8");
+    const CliRun margin =
+        runCli("plan " + wallProblem(makeTempDir("plan_cli_wall_margin")) +
+               " --runs 1 --time-limit 1 --segment-fraction 0.1 --seed 5 --margin 0.25 --rake-width 8");
     EXPECT_EQ(margin.status, 0) << margin.output;
     EXPECT_TRUE(contains(margin.output, "certified edges (margin 0.25, first batch 8),")) << margin.output;
     EXPECT_TRUE(contains(byDefault.output, ", first batch 1),")) << byDefault.output;
