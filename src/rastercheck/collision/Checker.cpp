@@ -156,23 +156,20 @@ void Checker::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *ver
         return;
 
     // Two passes: every state at the wider paddings (the request's pair paddings plus wider's, row
-    // by row), then the states that missed them at the request's own.
+    // by row, as PairPaddings adds them), then the states that missed them at the request's own.
     const std::size_t components = model_->numComponents(), selfPairs = model_->selfPairs.size();
     const PairPadding *own = request.pairPadding.get();
-    const bool rowPerState = wider.rows > 1 || (own && own->rows > 1);
-    auto rowOf = [](const PairPadding &rows, std::size_t i) { return rows.rows == 1 ? 0 : i; };
     auto outer = std::make_shared<PairPadding>();
-    outer->rows = rowPerState ? n : 1;
+    outer->rows = wider.rows > 1 || (own && own->rows > 1) ? n : 1;
     outer->environment.resize(outer->rows * components);
     outer->self.resize(outer->rows * selfPairs);
     for (std::size_t r = 0; r < outer->rows; ++r)
     {
+        const PairPaddings sum(*model_, 0.0, own, r, &wider);
         for (std::size_t c = 0; c < components; ++c)
-            outer->environment[r * components + c] = wider.environment[rowOf(wider, r) * components + c] +
-                                                     (own ? own->environment[rowOf(*own, r) * components + c] : 0.0);
+            outer->environment[r * components + c] = sum.component(c);
         for (std::size_t p = 0; p < selfPairs; ++p)
-            outer->self[r * selfPairs + p] =
-                wider.self[rowOf(wider, r) * selfPairs + p] + (own ? own->self[rowOf(*own, r) * selfPairs + p] : 0.0);
+            outer->self[r * selfPairs + p] = sum.self(p);
     }
     CollisionRequest wide = request;
     wide.pairPadding = std::move(outer);

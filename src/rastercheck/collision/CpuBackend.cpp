@@ -583,14 +583,12 @@ void CpuBackend::decide(const double *q, std::size_t n, std::uint8_t *verdicts, 
 {
     const std::size_t dof = model_->robot->numCoordinates();
     const int workers = batchWorkers(n, threads);
-    // One pairPadding row for every state, or one per state (PairPadding::rows); wider's alike.
-    const bool rowPerState = (request.pairPadding && request.pairPadding->rows > 1) || (wider && wider->rows > 1);
-    auto paddingRow = [rowPerState](std::size_t i) { return rowPerState ? i : std::size_t{0}; };
+    // State i reads row i of the pair paddings (PairPaddings reads row 0 of a single row).
     if (workers == 1 || n < 2)
     {
         std::unique_ptr<CpuWorkspace> ws = borrow();
         for (std::size_t i = 0; i < n; ++i)
-            verdicts[i] = isValid(q + i * dof, request, *ws, contacts ? contacts + i : nullptr, paddingRow(i), wider);
+            verdicts[i] = isValid(q + i * dof, request, *ws, contacts ? contacts + i : nullptr, i, wider);
         giveBack(std::move(ws));
         return;
     }
@@ -600,7 +598,7 @@ void CpuBackend::decide(const double *q, std::size_t n, std::uint8_t *verdicts, 
 #pragma omp for schedule(dynamic, 16)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
             verdicts[i] = isValid(q + static_cast<std::size_t>(i) * dof, request, *ws,
-                                  contacts ? contacts + i : nullptr, paddingRow(static_cast<std::size_t>(i)), wider);
+                                  contacts ? contacts + i : nullptr, static_cast<std::size_t>(i), wider);
         giveBack(std::move(ws));
     }
 }

@@ -35,7 +35,6 @@ struct CertifiedMotionValidator::EdgeSearch
     std::vector<Interval> refined;  ///< what is left of intervals whose midpoints missed the margin (next level)
     std::vector<Interval> batch;    ///< intervals whose midpoints are checked in this round
     std::vector<Interval> close;    ///< intervals of batch whose midpoints missed the margin
-    std::vector<Interval> collided;                         ///< intervals of batch whose midpoints collide
     double stop = std::numeric_limits<double>::infinity();  ///< earliest start known not certifiable
     double budget = 0.0;                                    ///< refined midpoints the edge may use
     double spent = 0.0;
@@ -305,7 +304,7 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         for (EdgeSearch *search : open)
         {
             search->close.clear();
-            search->collided.clear();
+            double firstCollision = std::numeric_limits<double>::infinity();
             for (const EdgeSearch::Interval &interval : search->batch)
                 switch (static_cast<PaddedVerdict>(w.verdicts[row++]))
                 {
@@ -315,12 +314,13 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
                         search->close.push_back(interval);
                         break;
                     case PaddedVerdict::Collides:
-                        search->collided.push_back(interval);
+                        firstCollision = std::min(firstCollision, interval.start);
                         break;
                 }
-            // After the loop: rejecting may finish the search, which empties its batch.
-            for (const EdgeSearch::Interval &interval : search->collided)
-                search->reject(interval, wantFirst);
+            // After the loop: rejecting may finish the search, which empties its batch. The earliest
+            // colliding interval says all that rejecting each would.
+            if (firstCollision < std::numeric_limits<double>::infinity())
+                search->reject({firstCollision, 0.0}, wantFirst);
             if (search->finished)
                 search->close.clear();
             closeCount += search->close.size();
@@ -375,7 +375,7 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         for (std::vector<double> *buffer : {&search->componentSweeps, &search->pairSweeps})
             detail::releaseIfLarge(*buffer);
         for (std::vector<EdgeSearch::Interval> *buffer :
-             {&search->pending, &search->refined, &search->batch, &search->close, &search->collided})
+             {&search->pending, &search->refined, &search->batch, &search->close})
             detail::releaseIfLarge(*buffer);
     }
     for (std::vector<double> *buffer :

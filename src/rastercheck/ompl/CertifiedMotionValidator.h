@@ -30,9 +30,8 @@ struct CertifiedMotionOptions
         planner rejects collide over a good part of their length, and one midpoint rejects them
         where a first batch of 8 paid 8 (OMPL.app Home, lazy BatchRRTConnect: 1.53 M -> 0.38 M
         states per solve, 2.5x faster; no problem set slower, docs/benchmarks.md "Rake width of
-        certified edges"). Wider first
-        batches make fewer, larger checker calls, for a backend whose calls cost more than their
-        states. */
+        certified edges"). Wider first batches make fewer, larger checker calls, for a backend whose
+        calls cost more than their states. */
     unsigned int rakeWidth = 1;
     /** \brief Where a midpoint misses its margin, size what it certifies by its clearance
         (Checker::freeRadius: each pair's exact distance against what it can close in along the
