@@ -18,10 +18,13 @@ namespace rastercheck
     phase's acceleration structure (and the oracle's), and the batched stages pick a pair's triangles
     through it (device::forEachTriangleNearImage).
 
-    Each node's box is fitted to its triangles' corners along the principal axes of their
-    covariance, as FCL's OBB nodes are: measured on OMPL.app's alpha-1.5 and Apartment (3 000
-    uniform states), boxes along the mesh axes made the traversal visit 3x to 5x more node pairs
-    (docs/benchmarks.md). Built top-down: for the first 24 levels each node is split where the
+    Each node's box is fitted to its triangles' corners along the frame of least surface area among
+    the principal axes of their covariance (FCL's OBB fit) and the frames about a few normals (those
+    axes, the mesh's axes, a few of the node's triangles' normals), each turned about its normal to
+    the least rectangle about the corners (see fitAxes). Boxes along the principal axes alone made
+    distance queries 17-44 % slower and collision queries near contact 1.2x-1.9x slower
+    (docs/benchmarks.md); boxes along the mesh axes alone, 3x to 5x more node pairs on OMPL.app's
+    alpha-1.5 and Apartment. Built top-down: for the first 24 levels each node is split where the
     surface area heuristic says (its three axes, 15 cuts each; 2.6x fewer node pairs than the
     median of the longest axis on FCL's env/rob), below that at the median along its longest axis,
     so the depth stays bounded (at most 24 + log2(triangles)), which lets every query traverse it
@@ -122,8 +125,14 @@ public:
     device::ExactTree exactTree() const;
 
 private:
-    int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level,
-              std::vector<Eigen::Vector3d> &centroids, unsigned maxLeafTriangles);
+    struct BuildScratch;
+    /** \brief The axes (columns) of the box over slots begin..end: of \a principal and the frames
+        about a few normals, the one whose box has the least surface area. */
+    Eigen::Matrix3d fitAxes(std::uint32_t begin, std::uint32_t end, const Eigen::Matrix3d &principal,
+                            BuildScratch &scratch) const;
+    /** \brief Builds node \a node over slots begin..end and its subtree; returns its height. */
+    int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level, BuildScratch &scratch,
+              unsigned maxLeafTriangles);
     /** \brief The surface area heuristic's split of slots begin..end: false when every centroid
         projects alike on every axis of \a axes, else the cut (centroids below \a cut along
         \a direction go left; both sides non-empty). */
