@@ -31,15 +31,17 @@ CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, const Eigen:
     return slice;
 }
 
-/** \brief Triangles per leaf of a component's (robot link's) tree; the scene's trees keep one. Two
-    per leaf halve the robot's nodes, and the simultaneous traversal, which mostly moves the
-    robot's tree, then tests fewer node pairs for a few more triangle pairs. Measured A/B
-    (rastercheck_bench_meshes, 3 000 states, safe / FCL, uniform and near contact): alpha-1.5
-    2.99-3.08 -> 3.33-3.49, FCL's env/rob 3.45-4.08 -> 3.88-4.54, terrain 1e4 3.23-4.21 -> 3.48-4.62;
-    two per leaf in the scene's trees too cost the terrain's near-contact states 3.23 -> 2.55-2.89,
-    four everywhere helped env/rob (6.4) but not Home. The Panda on MotionBenchMaker: 6.12 -> 6.20
-    (same within noise). */
-constexpr unsigned kComponentLeafTriangles = 2;
+/** \brief Triangles per leaf of every tree (the robot's links and the scene's objects). Two per leaf
+    halve the nodes, and the simultaneous traversal then tests fewer node pairs for a few more
+    triangle pairs. In the robot's trees since 2026-11-25 (rastercheck_bench_meshes, 3 000 states,
+    safe / FCL, uniform and near contact: alpha-1.5 2.99-3.08 -> 3.33-3.49, FCL's env/rob 3.45-4.08
+    -> 3.88-4.54); in the scene's since the boxes are fitted by least area (which made the scene's
+    leaf boxes as tight as the robot's): against one per leaf, same command, distance queries
+    (rastercheck_bench_distance) bugtrap 30.4 -> 25.8 us, alpha-1.5 55.7 -> 46.5, and collision
+    queries' worst ratio to FCL 3.26 -> 3.47 uniform, 4.39 -> 4.71 near contact (before the fit,
+    two per leaf in the scene's trees cost the terrain's near-contact states 3.23 -> 2.55-2.89).
+    Four: bugtrap's distance 25.8 -> 29.6 us. */
+constexpr unsigned kLeafTriangles = 2;
 
 /** \brief Moves the trees' nodes and triangle orders into one flat pair of arrays (the slices say
     where each mesh's part starts) and points every tree at its part, so each node is stored once. */
@@ -483,8 +485,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         box.halfExtents.array() += 1e-5 * box.halfExtents.norm() + 1e-9;
         componentLocalBoxes.push_back(toDeviceBox(box));
         componentLink.push_back(component.link);
-        componentBvhs.push_back(
-            std::make_unique<MeshBvh>(component.mesh, kComponentLeafTriangles, component.topology.closed));
+        componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh, kLeafTriangles, component.topology.closed));
         diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
         // The component's own tree: its patches are a cut of it (one tree per mesh).
         convex.add(*componentBvhs.back(), component.topology.closed, kPatchFlatness * diagonals.back());
@@ -517,7 +518,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         fitted.center -= origin;
         fitted.halfExtents.array() += 1e-5 * fitted.halfExtents.norm() + 1e-6 * distance + 1e-9;
         objectOrientedBoxes.push_back(toDeviceBox(fitted));
-        objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh, 1, object.topology.closed));
+        objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh, kLeafTriangles, object.topology.closed));
         convex.add(*objectBvhs.back(), object.topology.closed,
                    kPatchFlatness * (robotScale > 0.0 ? robotScale : (object.bounds.max - object.bounds.min).norm()));
     }
