@@ -36,10 +36,15 @@ constexpr int kSahBins = 16;
 // boxes keep fewer node pairs in every walk: against the principal axes alone, distance queries
 // per core 17-44 % faster on OMPL.app's scenes and the Panda (bench/distance), collision queries
 // near contact 1.2x-1.9x (bench/meshes).
-constexpr std::size_t kFitCorners = 48;      // above, a node is fitted to its extreme corners along kFitDirections
+//
+// Above kFitCorners corners a node is fitted to its extreme corners along kFitDirections, below to
+// all its vertices (192 against 48: distance queries per core 2-8 % faster on OMPL.app's bugtrap,
+// alpha-1.5, Easy and spirelli, the 1e6-triangle terrain's build 6.9 -> 7.1 s; 768: bugtrap 25 ->
+// 30 us).
+constexpr std::size_t kFitCorners = 192;
 constexpr std::uint32_t kFitTriangles = 16;  // triangles (evenly spread over the node) whose normals are tried
-// Normals within 5 degrees are tried once (the 1e6-triangle terrain's build: 10.2 s with half a
-// degree, 8.2 s with this; the same node pairs per query on OMPL.app's scenes).
+// Normals within 5 degrees are tried once (the terrain's build, one triangle per leaf: 10.2 s with
+// half a degree, 8.2 s with this; the same distance query times on OMPL.app's scenes).
 constexpr double kSameDirection = 0.996;
 
 // Directions whose extreme corners stand in for a large node's corners while its frame is chosen
