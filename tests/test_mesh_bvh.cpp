@@ -17,6 +17,7 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
+#include "rastercheck/core/Error.h"
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/MeshTree.h"
 #include "rastercheck/device/SolidRelation.h"
@@ -309,17 +310,19 @@ TEST(MeshBvh, BoxesFitATurnedCubeExactly)
         rc::Mesh mesh = boxMesh(Vec(1.0, 1.0, 1.0), divisions);
         for (Vec &v : mesh.vertices)
             v = turn * v + Vec(5.0, -2.0, 1.0);
-        const rc::MeshBvh bvh(mesh, 2);
+        const rc::MeshBvh bvh(mesh);  // one triangle per leaf
         const rc::MeshBvh::Node &root = bvh.nodes()[0];
         for (int k = 0; k < 3; ++k)
             EXPECT_NEAR(root.halfExtents[k], 1.0, 1e-5) << divisions << " divisions, axis " << k;
-        // Every box of a face's triangles is flat: its thinnest extent is the float rounding's.
+        // Every leaf's box is flat: its thinnest extent is the float rounding's.
         for (std::size_t i = 0; i < bvh.numNodes(); ++i)
         {
             const rc::MeshBvh::Node &node = bvh.nodes()[i];
-            if (node.isLeaf() && node.count == 1)
+            if (node.isLeaf())
+            {
                 EXPECT_LT(std::min({node.halfExtents[0], node.halfExtents[1], node.halfExtents[2]}), 1e-5)
                     << "leaf " << i;
+            }
         }
     }
 }
@@ -451,6 +454,22 @@ TEST(MeshBvh, EmptyMeshesNeverTouch)
     EXPECT_FALSE(rc::surfacesWithin(emptyBvh, identity, boxBvh, identity, 1.0));
     EXPECT_FALSE(rc::solidsOverlap(boxBvh, identity, true, emptyBvh, identity, true, 0.0));
     EXPECT_FALSE(rc::pointInsideClosedMesh(emptyBvh, Vec::Zero()));
+}
+
+TEST(MeshBvh, AVertexNotFiniteIsRefusedByName)
+{
+    rc::Mesh mesh = boxMesh(Vec(1, 1, 1));
+    mesh.vertices[3].y() = std::numeric_limits<double>::quiet_NaN();
+    try
+    {
+        const rc::MeshBvh bvh(mesh);
+        FAIL() << "a NaN vertex was accepted";
+    }
+    catch (const rc::ConfigurationError &error)
+    {
+        EXPECT_NE(std::string(error.what()).find("has vertex 3 at a coordinate that is not finite"), std::string::npos)
+            << error.what();
+    }
 }
 
 TEST(SurfacesWithin, MatchesBruteForceOverAllTrianglePairs)

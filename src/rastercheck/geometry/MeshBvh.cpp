@@ -236,9 +236,15 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
     for (std::size_t i = 0; i < n; ++i)
     {
         for (std::uint32_t v : mesh.triangles[i])
+        {
             if (v >= mesh.vertices.size())
                 throw ConfigurationError("MeshBvh: triangle " + std::to_string(i) + " names vertex " +
                                          std::to_string(v) + " of " + std::to_string(mesh.vertices.size()));
+            // The splits and fits sort by coordinates, which a NaN would leave unordered.
+            if (!mesh.vertices[v].allFinite())
+                throw ConfigurationError("MeshBvh: triangle " + std::to_string(i) + " has vertex " + std::to_string(v) +
+                                         " at a coordinate that is not finite");
+        }
         const Mesh::Triangle &t = mesh.triangles[i];
         centroids[i] = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
     }
