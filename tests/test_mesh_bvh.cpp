@@ -25,6 +25,7 @@
 #include "rastercheck/device/Traversal.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/geometry/MeshTopology.h"
+#include "rastercheck/geometry/Obb.h"
 #include "rastercheck/geometry/TriangleTests.h"
 #include "rastercheck/model/Kinematics.h"
 #include "NonConvex.h"
@@ -325,6 +326,23 @@ TEST(MeshBvh, BoxesFitATurnedCubeExactly)
             }
         }
     }
+}
+
+// The robot's and the scene's oriented boxes (the culls') are fitted the same way: a turned cube's
+// box is the cube, right-handed.
+TEST(Obb, FitsATurnedCubeExactly)
+{
+    const Eigen::Matrix3d turn =
+        (Eigen::AngleAxisd(0.4, Vec::UnitZ()) * Eigen::AngleAxisd(0.7, Vec::UnitX())).toRotationMatrix();
+    rc::Mesh mesh = boxMesh(Vec(1.0, 1.0, 1.0), 2);  // its covariance is isotropic: any axes are principal
+    for (Vec &v : mesh.vertices)
+        v = turn * v + Vec(5.0, -2.0, 1.0);
+    const rc::Obb box = rc::Obb::fit(mesh);
+    EXPECT_NEAR(box.volume(), 8.0, 1e-9);
+    EXPECT_NEAR(box.axes.determinant(), 1.0, 1e-12);
+    EXPECT_LT((box.center - Vec(5.0, -2.0, 1.0)).norm(), 1e-9);
+    for (const Vec &v : mesh.vertices)  // and it holds every vertex
+        EXPECT_TRUE(((box.axes.transpose() * (v - box.center)).cwiseAbs() - box.halfExtents).maxCoeff() < 1e-9);
 }
 
 TEST(MeshBvh, DepthStaysBoundedWhenEverySplitPeelsOneTriangle)

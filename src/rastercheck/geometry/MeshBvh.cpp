@@ -10,6 +10,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/geometry/BoxFit.h"
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/model/Kinematics.h"
 
@@ -27,106 +28,20 @@ using device::kNodeRounding;
 constexpr int kSahLevels = 24;
 constexpr int kSahBins = 16;
 
-// A node's box is fitted along the frame, of several candidates, whose box about the node's corners has
-// the least surface area (fitAxes): the principal axes of the corners' covariance (FCL's OBB fit),
-// and the frames about each of these normals: those axes, the mesh's axes (architectural models
-// and OMPL.app's scenes are mostly built along them) and the normals of a few of the node's
-// triangles. About a normal, the least rectangle about the corners' projection has a side along an
-// edge of their convex hull (Freeman and Shapira, 1975), so each hull edge gives one frame. Tighter
-// boxes keep fewer node pairs in every walk: against the principal axes alone, distance queries
-// per core 17-44 % faster on OMPL.app's scenes and the Panda (bench/distance), collision queries
-// near contact 1.2x-1.9x (bench/meshes).
+// A node's box is fitted along the frame of least surface area (leastAreaAxes) among the principal
+// axes of the corners' covariance (FCL's OBB fit) and the frames about each of these normals: those
+// axes, the mesh's axes (architectural models and OMPL.app's scenes are mostly built along them)
+// and the normals of up to kFitTriangles of the node's triangles. Tighter boxes keep fewer node
+// pairs in every walk: against the principal axes alone, distance queries per core 17-44 % faster
+// on OMPL.app's scenes and the Panda (bench/distance), collision queries near contact 1.2x-1.9x
+// (bench/meshes).
 //
-// Above kFitCorners corners a node is fitted to its extreme corners along kFitDirections, below to
-// all its vertices (192 against 48: distance queries per core 2-8 % faster on OMPL.app's bugtrap,
+// Above kFitCorners corners a node is fitted to its extreme corners (ExtremePoints), below to all
+// its vertices (192 against 48: distance queries per core 2-8 % faster on OMPL.app's bugtrap,
 // alpha-1.5, Easy and spirelli, the 1e6-triangle terrain's build 6.9 -> 7.1 s; 768: bugtrap 25 ->
 // 30 us).
 constexpr std::size_t kFitCorners = 192;
 constexpr std::uint32_t kFitTriangles = 16;  // triangles (evenly spread over the node) whose normals are tried
-// Normals within 5 degrees are tried once (the terrain's build, one triangle per leaf: 10.2 s with
-// half a degree, 8.2 s with this; the same distance query times on OMPL.app's scenes).
-constexpr double kSameDirection = 0.996;
-
-// Directions whose extreme corners stand in for a large node's corners while its frame is chosen
-// (the box is then fitted to every corner): the axes, the cube's diagonals and its face diagonals.
-const Vec kFitDirections[13] = {{1, 0, 0}, {0, 1, 0},  {0, 0, 1}, {1, 1, 1},  {1, 1, -1}, {1, -1, 1}, {1, -1, -1},
-                                {1, 1, 0}, {1, -1, 0}, {1, 0, 1}, {1, 0, -1}, {0, 1, 1},  {0, 1, -1}};
-
-// Half the surface area of the box along \a frame's columns about \a points.
-double boxArea(const std::vector<Vec> &points, const Eigen::Matrix3d &frame)
-{
-    Vec lower = Vec::Constant(std::numeric_limits<double>::infinity()), upper = -lower;
-    for (const Vec &p : points)
-    {
-        const Vec local = frame.transpose() * p;
-        lower = lower.cwiseMin(local);
-        upper = upper.cwiseMax(local);
-    }
-    const Vec e = upper - lower;
-    return e.x() * e.y() + e.y() * e.z() + e.z() * e.x();
-}
-
-// Of the frames whose third axis is the unit \a normal, the one with the least box about \a points (a
-// side of its rectangle along an edge of the projection's hull) replaces \a best when its area is
-// below \a bestArea. \a plane and \a hull are scratch.
-void fitAboutNormal(const std::vector<Vec> &points, const Vec &normal, Eigen::Matrix3d &best, double &bestArea,
-                    std::vector<Eigen::Vector2d> &plane, std::vector<Eigen::Vector2d> &hull)
-{
-    const Vec u = normal.unitOrthogonal(), v = normal.cross(u);
-    plane.clear();
-    double low = std::numeric_limits<double>::infinity(), high = -low;
-    for (const Vec &p : points)
-    {
-        plane.emplace_back(u.dot(p), v.dot(p));
-        low = std::min(low, normal.dot(p));
-        high = std::max(high, normal.dot(p));
-    }
-    const double height = high - low;
-    // Andrew's monotone chain.
-    std::sort(plane.begin(), plane.end(),
-              [](const Eigen::Vector2d &a, const Eigen::Vector2d &b)
-              { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
-    const auto turn = [](const Eigen::Vector2d &o, const Eigen::Vector2d &a, const Eigen::Vector2d &b)
-    { return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x()); };
-    hull.resize(2 * plane.size());
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < plane.size(); ++i)
-    {
-        while (k >= 2 && turn(hull[k - 2], hull[k - 1], plane[i]) <= 0.0)
-            --k;
-        hull[k++] = plane[i];
-    }
-    for (std::size_t i = plane.size() - 1, lowerEnd = k + 1; i > 0; --i)
-    {
-        while (k >= lowerEnd && turn(hull[k - 2], hull[k - 1], plane[i - 1]) <= 0.0)
-            --k;
-        hull[k++] = plane[i - 1];
-    }
-    hull.resize(k > 1 ? k - 1 : k);  // the last point repeats the first
-    for (std::size_t i = 0; i < hull.size(); ++i)
-    {
-        const Eigen::Vector2d edge = hull[(i + 1) % hull.size()] - hull[i];
-        if (!(edge.squaredNorm() > 0.0))
-            continue;
-        const Eigen::Vector2d along = edge.normalized(), across(-along.y(), along.x());
-        double a0 = std::numeric_limits<double>::infinity(), a1 = -a0, b0 = a0, b1 = -a0;
-        for (const Eigen::Vector2d &h : hull)
-        {
-            a0 = std::min(a0, along.dot(h));
-            a1 = std::max(a1, along.dot(h));
-            b0 = std::min(b0, across.dot(h));
-            b1 = std::max(b1, across.dot(h));
-        }
-        const double w = a1 - a0, l = b1 - b0, area = w * l + (w + l) * height;
-        if (area < bestArea)
-        {
-            bestArea = area;
-            best.col(0) = along.x() * u + along.y() * v;
-            best.col(1) = across.x() * u + across.y() * v;
-            best.col(2) = normal;
-        }
-    }
-}
 
 float roundedUp(double x)
 {
@@ -220,7 +135,7 @@ struct MeshBvh::BuildScratch
     std::vector<Vec> centroids;  // per triangle (mesh order)
     std::vector<Vec> fitPoints, fitNormals;
     std::vector<std::uint32_t> fitVertices;
-    std::vector<Eigen::Vector2d> plane, hull;
+    BoxFitScratch fit;
 };
 
 MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) : mesh_(&mesh)
@@ -497,7 +412,7 @@ Eigen::Matrix3d MeshBvh::fitAxes(std::uint32_t begin, std::uint32_t end, const E
                                  BuildScratch &scratch) const
 {
     // The corners the frame is chosen by: a small node's vertices, each once (neighbouring triangles
-    // share corners), or a large node's extreme corners along kFitDirections.
+    // share corners), or a large node's extreme corners.
     std::vector<Vec> &points = scratch.fitPoints;
     points.clear();
     if (3 * static_cast<std::size_t>(end - begin) <= kFitCorners)
@@ -514,59 +429,28 @@ Eigen::Matrix3d MeshBvh::fitAxes(std::uint32_t begin, std::uint32_t end, const E
     }
     else
     {
-        constexpr int n = sizeof(kFitDirections) / sizeof(kFitDirections[0]);
-        const Vec *lowest[n] = {}, *highest[n] = {};
-        double low[n], high[n];
-        std::fill(low, low + n, std::numeric_limits<double>::infinity());
-        std::fill(high, high + n, -std::numeric_limits<double>::infinity());
+        ExtremePoints extremes;
         for (std::uint32_t slot = begin; slot < end; ++slot)
             for (std::uint32_t v : mesh_->triangles[ownTriangleOrder_[slot]])
-            {
-                const Vec &p = mesh_->vertices[v];
-                for (int d = 0; d < n; ++d)
-                {
-                    const double t = kFitDirections[d].dot(p);
-                    if (t < low[d])
-                        low[d] = t, lowest[d] = &p;
-                    if (t > high[d])
-                        high[d] = t, highest[d] = &p;
-                }
-            }
-        for (int d = 0; d < n; ++d)
-        {
-            points.push_back(*lowest[d]);
-            points.push_back(*highest[d]);
-        }
+                extremes.add(mesh_->vertices[v]);
+        extremes.appendTo(points);
     }
-    Eigen::Matrix3d axes = principal;
-    double bestArea = boxArea(points, axes);
-    std::vector<Vec> &tried = scratch.fitNormals;
-    tried.clear();
-    const auto tryNormal = [&](const Vec &direction)
-    {
-        if (!(direction.squaredNorm() > 0.0))
-            return;
-        const Vec normal = direction.normalized();
-        for (const Vec &t : tried)
-            if (std::abs(t.dot(normal)) > kSameDirection)
-                return;
-        tried.push_back(normal);
-        fitAboutNormal(points, normal, axes, bestArea, scratch.plane, scratch.hull);
-    };
+    std::vector<Vec> &normals = scratch.fitNormals;
+    normals.clear();
     if (end - begin > 1)  // a single triangle's least box lies about its normal
         for (int k = 0; k < 3; ++k)
         {
-            tryNormal(principal.col(k));
-            tryNormal(Vec::Unit(k));
+            normals.push_back(principal.col(k));
+            normals.push_back(Vec::Unit(k));
         }
     const std::uint32_t step = std::max<std::uint32_t>(1, (end - begin) / kFitTriangles);
     for (std::uint32_t slot = begin; slot < end; slot += step)
     {
         const Mesh::Triangle &t = mesh_->triangles[ownTriangleOrder_[slot]];
         const Vec &a = mesh_->vertices[t[0]], &b = mesh_->vertices[t[1]], &c = mesh_->vertices[t[2]];
-        tryNormal((b - a).cross(c - a));
+        normals.push_back((b - a).cross(c - a));
     }
-    return axes;
+    return leastAreaAxes(points, principal, normals, scratch.fit);
 }
 
 int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level, BuildScratch &scratch,

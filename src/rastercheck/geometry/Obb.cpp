@@ -1,7 +1,12 @@
 #include "rastercheck/geometry/Obb.h"
 
+#include <algorithm>
+#include <limits>
+#include <vector>
+
 #include <Eigen/Eigenvalues>
 
+#include "rastercheck/geometry/BoxFit.h"
 #include "rastercheck/geometry/Mesh.h"
 
 namespace rastercheck
@@ -36,11 +41,8 @@ Obb Obb::fromAabb(const Aabb &box)
 
 Obb Obb::fit(const Mesh &mesh)
 {
-    const Aabb bounds = mesh.bounds();
-    Obb best = Obb::fromAabb(bounds);
     if (mesh.empty())
-        return best;
-
+        return Obb::fromAabb(mesh.bounds());
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (const Eigen::Vector3d &v : mesh.vertices)
         mean += v;
@@ -48,8 +50,33 @@ Obb Obb::fit(const Mesh &mesh)
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
     for (const Eigen::Vector3d &v : mesh.vertices)
         covariance += (v - mean) * (v - mean).transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
-    Eigen::Matrix3d axes = solver.eigenvectors();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+    const Eigen::Matrix3d principal =
+        solver.info() == Eigen::Success ? solver.eigenvectors() : Eigen::Matrix3d::Identity();
+
+    // The frame of least surface area (as the triangle trees' boxes, MeshBvh): the principal axes,
+    // or the frames about them, the mesh's axes and a few triangles' normals, each turned to the
+    // least rectangle about the mesh's extreme vertices.
+    std::vector<Eigen::Vector3d> points, normals;
+    ExtremePoints extremes;
+    for (const Mesh::Triangle &t : mesh.triangles)
+        for (std::uint32_t i : t)
+            extremes.add(mesh.vertices[i]);
+    extremes.appendTo(points);
+    for (int k = 0; k < 3; ++k)
+    {
+        normals.push_back(principal.col(k));
+        normals.push_back(Eigen::Vector3d::Unit(k));
+    }
+    constexpr std::size_t kTriangleNormals = 16;
+    const std::size_t step = std::max<std::size_t>(1, mesh.triangles.size() / kTriangleNormals);
+    for (std::size_t i = 0; i < mesh.triangles.size(); i += step)
+    {
+        const Mesh::Triangle &t = mesh.triangles[i];
+        normals.push_back((mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]));
+    }
+    BoxFitScratch scratch;
+    Eigen::Matrix3d axes = leastAreaAxes(points, principal, normals, scratch);
     if (axes.determinant() < 0)
         axes.col(2) = -axes.col(2);
 
@@ -62,10 +89,10 @@ Obb Obb::fit(const Mesh &mesh)
             lo = lo.cwiseMin(local);
             hi = hi.cwiseMax(local);
         }
-    Obb principal;
-    principal.axes = axes;
-    principal.center = axes * (0.5 * (lo + hi));
-    principal.halfExtents = 0.5 * (hi - lo);
-    return principal.volume() < best.volume() ? principal : best;
+    Obb box;
+    box.axes = axes;
+    box.center = axes * (0.5 * (lo + hi));
+    box.halfExtents = 0.5 * (hi - lo);
+    return box;
 }
 }  // namespace rastercheck

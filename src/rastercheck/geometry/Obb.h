@@ -22,8 +22,9 @@ struct Obb
     Aabb aabb() const;
     double volume() const { return 8.0 * halfExtents.prod(); }
 
-    /** \brief A tight box around \a mesh: the smaller (by volume) of the box along the principal
-        axes of the vertex covariance and the axis-aligned box. Empty mesh gives a zero box. */
+    /** \brief A tight box around \a mesh: along the frame of least surface area among the principal
+        axes of the vertex covariance and the frames about a few normals (those axes, the mesh's
+        axes, a few triangles' normals; leastAreaAxes). Empty mesh gives a zero box. */
     static Obb fit(const Mesh &mesh);
     static Obb fromAabb(const Aabb &box);
 };
