@@ -36,11 +36,11 @@ CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, const Eigen:
     triangle pairs. In the robot's trees since 2026-11-25 (rastercheck_bench_meshes, 3 000 states,
     safe / FCL, uniform and near contact: alpha-1.5 2.99-3.08 -> 3.33-3.49, FCL's env/rob 3.45-4.08
     -> 3.88-4.54); in the scene's since the boxes are fitted by least area (which made the scene's
-    leaf boxes as tight as the robot's): against one per leaf, same command, distance queries
-    (rastercheck_bench_distance) bugtrap 30.4 -> 25.8 us, alpha-1.5 55.7 -> 46.5, and collision
-    queries' worst ratio to FCL 3.26 -> 3.47 uniform, 4.39 -> 4.71 near contact (before the fit,
-    two per leaf in the scene's trees cost the terrain's near-contact states 3.23 -> 2.55-2.89).
-    Four: bugtrap's distance 25.8 -> 29.6 us. */
+    leaf boxes as tight as the robot's): against one per leaf, distance queries (Checker::distance
+    timed alone, 1000 uniform poses) bugtrap 30.4 -> 25.8 us, alpha-1.5 55.7 -> 46.5, and collision
+    queries' worst ratio to FCL (same bench) 3.26 -> 3.47 uniform, 4.39 -> 4.71 near contact (before
+    the fit, two per leaf in the scene's trees cost the terrain's near-contact states 3.23 ->
+    2.55-2.89). Four: bugtrap's distance 25.8 -> 29.6 us. */
 constexpr unsigned kLeafTriangles = 2;
 
 /** \brief Moves the trees' nodes and triangle orders into one flat pair of arrays (the slices say

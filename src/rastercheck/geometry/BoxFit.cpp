@@ -102,7 +102,9 @@ Eigen::Matrix3d leastAreaAxes(const std::vector<Vec> &points, const Eigen::Matri
                               const std::vector<Vec> &normals, BoxFitScratch &scratch)
 {
     Eigen::Matrix3d axes = start;
-    if (points.empty())
+    // Nothing to choose by, or coordinates the hull's sort cannot order (the caller's box then
+    // says so; MeshBvh refuses such vertices, loaded meshes never hold them).
+    if (points.empty() || !std::all_of(points.begin(), points.end(), [](const Vec &p) { return p.allFinite(); }))
         return axes;
     double bestArea = boxArea(points, axes);
     scratch.tried.clear();

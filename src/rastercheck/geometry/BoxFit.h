@@ -18,7 +18,7 @@ struct BoxFitScratch
     degrees of one tried is skipped). About a normal, the least rectangle about the points'
     projection has a side along an edge of their convex hull (Freeman and Shapira, 1975), so each
     hull edge gives one frame. The frames about a normal are right-handed; \a start is returned as
-    given when nothing beats it. */
+    given when nothing beats it, and when a point is not finite. */
 Eigen::Matrix3d leastAreaAxes(const std::vector<Eigen::Vector3d> &points, const Eigen::Matrix3d &start,
                               const std::vector<Eigen::Vector3d> &normals, BoxFitScratch &scratch);
 

@@ -10,8 +10,8 @@
 #include <Eigen/Eigenvalues>
 
 #include "rastercheck/core/Error.h"
-#include "rastercheck/geometry/BoxFit.h"
 #include "rastercheck/device/ExactPhase.h"
+#include "rastercheck/geometry/BoxFit.h"
 #include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
