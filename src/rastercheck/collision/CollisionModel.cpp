@@ -211,10 +211,7 @@ bool patchIsFlat(const Mesh &mesh, const std::uint32_t *order, std::size_t begin
 {
     Eigen::Vector3d normal = Eigen::Vector3d::Zero();
     for (std::size_t i = begin; i < end; ++i)
-    {
-        const Mesh::Triangle &t = mesh.triangles[order[i]];
-        normal += (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
-    }
+        normal += mesh.triangleNormal(order[i]);
     const double length = normal.norm();
     if (!(length > 0.0))
         return false;

@@ -23,6 +23,13 @@ struct Mesh
     std::size_t numVertices() const { return vertices.size(); }
     std::size_t numTriangles() const { return triangles.size(); }
     bool empty() const { return triangles.empty(); }
+    /** \brief Triangle \a t's normal by its corners' order (counter-clockwise seen from its tip),
+        twice its area long. */
+    Eigen::Vector3d triangleNormal(std::size_t t) const
+    {
+        const Triangle &c = triangles[t];
+        return (vertices[c[1]] - vertices[c[0]]).cross(vertices[c[2]] - vertices[c[0]]);
+    }
 
     /** \brief Axis-aligned bounds of the vertices used by triangles (empty box for an empty mesh). */
     Aabb bounds() const;

@@ -31,17 +31,15 @@ constexpr int kSahBins = 16;
 // A node's box is fitted along the frame of least surface area (leastAreaAxes) among the principal
 // axes of the corners' covariance (FCL's OBB fit) and the frames about each of these normals: those
 // axes, the mesh's axes (architectural models and OMPL.app's scenes are mostly built along them)
-// and the normals of up to kFitTriangles of the node's triangles. Tighter boxes keep fewer node
-// pairs in every walk: against the principal axes alone, distance queries per core 17-44 % faster
-// on OMPL.app's scenes and the Panda (bench/distance), collision queries near contact 1.2x-1.9x
-// (bench/meshes).
+// and the normals of up to kFitTriangleNormals of the node's triangles (appendFitNormals). Tighter boxes keep fewer
+// node pairs in every walk: against the principal axes alone, distance queries per core 17-44 % faster on OMPL.app's
+// scenes and the Panda (bench/distance), collision queries near contact 1.2x-1.9x (bench/meshes).
 //
 // Above kFitCorners corners a node is fitted to its extreme corners (ExtremePoints), below to all
 // its vertices (192 against 48: distance queries per core 2-8 % faster on OMPL.app's bugtrap,
 // alpha-1.5, Easy and spirelli, the 1e6-triangle terrain's build 6.9 -> 7.1 s; 768: bugtrap 25 ->
 // 30 us).
 constexpr std::size_t kFitCorners = 192;
-constexpr std::uint32_t kFitTriangles = 16;  // triangles (evenly spread over the node) whose normals are tried
 
 float roundedUp(double x)
 {
@@ -437,19 +435,9 @@ Eigen::Matrix3d MeshBvh::fitAxes(std::uint32_t begin, std::uint32_t end, const E
     }
     std::vector<Vec> &normals = scratch.fitNormals;
     normals.clear();
-    if (end - begin > 1)  // a single triangle's least box lies about its normal
-        for (int k = 0; k < 3; ++k)
-        {
-            normals.push_back(principal.col(k));
-            normals.push_back(Vec::Unit(k));
-        }
-    const std::uint32_t step = std::max<std::uint32_t>(1, (end - begin) / kFitTriangles);
-    for (std::uint32_t slot = begin; slot < end; slot += step)
-    {
-        const Mesh::Triangle &t = mesh_->triangles[ownTriangleOrder_[slot]];
-        const Vec &a = mesh_->vertices[t[0]], &b = mesh_->vertices[t[1]], &c = mesh_->vertices[t[2]];
-        normals.push_back((b - a).cross(c - a));
-    }
+    appendFitNormals(
+        principal, end - begin, [&](std::size_t i) { return mesh_->triangleNormal(ownTriangleOrder_[begin + i]); },
+        normals);
     return leastAreaAxes(points, principal, normals, scratch.fit);
 }
 

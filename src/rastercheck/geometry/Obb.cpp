@@ -63,18 +63,8 @@ Obb Obb::fit(const Mesh &mesh)
         for (std::uint32_t i : t)
             extremes.add(mesh.vertices[i]);
     extremes.appendTo(points);
-    for (int k = 0; k < 3; ++k)
-    {
-        normals.push_back(principal.col(k));
-        normals.push_back(Eigen::Vector3d::Unit(k));
-    }
-    constexpr std::size_t kTriangleNormals = 16;
-    const std::size_t step = std::max<std::size_t>(1, mesh.triangles.size() / kTriangleNormals);
-    for (std::size_t i = 0; i < mesh.triangles.size(); i += step)
-    {
-        const Mesh::Triangle &t = mesh.triangles[i];
-        normals.push_back((mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]));
-    }
+    appendFitNormals(
+        principal, mesh.triangles.size(), [&](std::size_t i) { return mesh.triangleNormal(i); }, normals);
     BoxFitScratch scratch;
     Eigen::Matrix3d axes = leastAreaAxes(points, principal, normals, scratch);
     if (axes.determinant() < 0)
