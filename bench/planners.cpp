@@ -87,7 +87,7 @@ void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortc
     rastercheck::ompl::resetCheckedStates(setup);
     setup.setPlanner(planner);
     const auto begin = std::chrono::steady_clock::now();
-    const ob::PlannerStatus status = setup.solve(timeLimit);
+    const ob::PlannerStatus status = rastercheck::ompl::solveWithin(setup, timeLimit);
     const bool solved = status == ob::PlannerStatus::EXACT_SOLUTION;
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
     ++tally.attempts;

@@ -65,7 +65,7 @@ Outcome solve(og::SimpleSetup &setup, double timeLimit, const rastercheck::ompl:
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_WARN);
     setup.clear();
     setup.setPlanner(std::make_shared<og::RRTConnect>(setup.getSpaceInformation()));
-    const ob::PlannerStatus status = setup.solve(timeLimit);
+    const ob::PlannerStatus status = rastercheck::ompl::solveWithin(setup, timeLimit);
     Outcome outcome;
     outcome.solved = status == ob::PlannerStatus::EXACT_SOLUTION;
     outcome.seconds = setup.getLastPlanComputationTime();

@@ -295,7 +295,7 @@ int run(const Options &options)
             edges->resetStateCounter();
         setup->setPlanner(planner);
         const auto begin = std::chrono::steady_clock::now();
-        const ::ompl::base::PlannerStatus result = setup->solve(options.time);
+        const ::ompl::base::PlannerStatus result = rastercheck::ompl::solveWithin(*setup, options.time);
         seconds = secondsSince(begin);
         return result;
     };

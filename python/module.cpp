@@ -480,7 +480,7 @@ std::pair<py::array_t<double>, PlanResult> plan(const PyProblemPtr &problem, con
         ob::PlannerPtr algorithm = rc::ompl::allocatePlanner(planner, setup->getSpaceInformation());
         rc::ompl::setPlannerParameters(*algorithm, plannerParameters);
         setup->setPlanner(algorithm);
-        const ob::PlannerStatus status = setup->solve(timeLimit);
+        const ob::PlannerStatus status = rc::ompl::solveWithin(*setup, timeLimit);
         result.solved = status == ob::PlannerStatus::EXACT_SOLUTION;
         result.status = status.asString();
         result.planner = algorithm->getName();

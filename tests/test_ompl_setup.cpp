@@ -1,6 +1,10 @@
 // makeSimpleSetup on a MotionBenchMaker Panda problem: space, start and goal from the MoveIt request,
 // unknown joints, and a short RRT-Connect solve whose path the exact oracle re-checks densely.
+#include <chrono>
 #include <cmath>
+#include <fstream>
+#include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -166,4 +170,63 @@ TEST(OmplSetup, DensePathCheckFindsACollisionTheCoarseCheckSkips)
     EXPECT_FALSE(checker->getChecker().isValid(dense.configuration, exact));
     // Coarser than the planner never finds more than it.
     EXPECT_TRUE(rco::checkPathDensely(path, checker->getStateMapping(), checker->getChecker(), exact, 1).valid);
+}
+
+namespace
+{
+/** \brief Threads of this process, from /proc/self/status. */
+int threadCount()
+{
+    std::ifstream status("/proc/self/status");
+    for (std::string line; std::getline(status, line);)
+        if (line.rfind("Threads:", 0) == 0)
+            return std::stoi(line.substr(8));
+    return -1;
+}
+
+/** \brief Counts the threads while it plans, and runs until the termination condition holds. */
+class ThreadCountingPlanner : public ob::Planner
+{
+public:
+    explicit ThreadCountingPlanner(const ob::SpaceInformationPtr &si) : ob::Planner(si, "ThreadCounting") {}
+    ob::PlannerStatus solve(const ob::PlannerTerminationCondition &ptc) override
+    {
+        threadsWhilePlanning = threadCount();
+        const auto begin = std::chrono::steady_clock::now();
+        while (!ptc())
+            std::this_thread::sleep_for(std::chrono::microseconds(200));
+        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+        return ob::PlannerStatus::TIMEOUT;
+    }
+    int threadsWhilePlanning = -1;
+    double seconds = 0.0;
+};
+}  // namespace
+
+TEST(OmplSetup, SolveWithinKeepsItsLimitWithoutATimingThread)
+{
+    // OMPL's solve(double) starts a thread for limits of a second or more (and joins it when the
+    // solve returns, up to a millisecond later); solveWithin tests the clock in the planner's thread.
+    rc::Aabb bounds;
+    bounds.min = Eigen::Vector3d::Constant(-1);
+    bounds.max = Eigen::Vector3d::Constant(1);
+    rc::Problem problem;
+    problem.robot = rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.1)), bounds);
+    problem.scene = std::make_shared<rc::Scene>();
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(problem);
+    rco::setStartAndGoal(*setup, {-0.5, 0, 0, 0, 0, 0, 1}, {0.5, 0, 0, 0, 0, 0, 1});
+    auto planner = std::make_shared<ThreadCountingPlanner>(setup->getSpaceInformation());
+    setup->setPlanner(planner);
+    setup->setup();
+    const int before = threadCount();
+    ASSERT_GT(before, 0);
+
+    EXPECT_EQ(rco::solveWithin(*setup, 1.0), ob::PlannerStatus::TIMEOUT);
+    EXPECT_EQ(planner->threadsWhilePlanning, before);
+    EXPECT_GE(planner->seconds, 1.0);
+    EXPECT_LT(planner->seconds, 30.0);  // the limit, not a hang (sanitizer builds, shared machines)
+
+    // What it avoids (if OMPL ever drops the thread, this line says solveWithin is no longer needed).
+    EXPECT_EQ(setup->solve(1.0), ob::PlannerStatus::TIMEOUT);
+    EXPECT_EQ(planner->threadsWhilePlanning, before + 1);
 }

@@ -226,4 +226,9 @@ void setStartAndGoal(og::SimpleSetup &setup, const MotionPlanRequest &request)
     setStartAndGoalInBounds(setup, ontoBounds(mapping, std::move(start), "start"),
                             ontoBounds(mapping, std::move(goal), "goal", slackDown, slackUp));
 }
+
+::ompl::base::PlannerStatus solveWithin(::ompl::geometric::SimpleSetup &setup, double seconds)
+{
+    return setup.solve(::ompl::base::timedPlannerTerminationCondition(seconds));
+}
 }  // namespace rastercheck::ompl
