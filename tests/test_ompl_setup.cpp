@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <thread>
 
@@ -38,6 +39,18 @@ rc::Problem pandaProblem(const std::string &root, const std::string &scenario, c
     source.srdfPath = root + "/mbm/panda/panda.srdf";
     source.scenePath = root + "/mbm/panda/problems/" + scenario + "_panda/scene" + index + ".yaml";
     return rc::loadProblem(source);
+}
+
+/** \brief A free-flying 0.1 m cube within [-bound, bound]^3, among \a scene's objects. */
+rc::Problem cubeAmong(std::shared_ptr<rc::Scene> scene, double bound)
+{
+    rc::Aabb bounds;
+    bounds.min = Eigen::Vector3d::Constant(-bound);
+    bounds.max = Eigen::Vector3d::Constant(bound);
+    rc::Problem problem;
+    problem.robot = rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.1)), bounds);
+    problem.scene = std::move(scene);
+    return problem;
 }
 }  // namespace
 
@@ -135,14 +148,9 @@ TEST(OmplSetup, DensePathCheckFindsACollisionTheCoarseCheckSkips)
 {
     // A 0.1 m cube crossing a 2 cm wall at x = 0 in 5 segments of 0.4 m (x = -0.6, -0.2, 0.2, ...):
     // the planner's resolution steps over the wall, ten times finer does not.
-    rc::Aabb bounds;
-    bounds.min = Eigen::Vector3d::Constant(-2);
-    bounds.max = Eigen::Vector3d::Constant(2);
-    rc::Problem problem;
-    problem.robot = rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.1)), bounds);
     auto scene = std::make_shared<rc::Scene>();
     scene->addObject("wall", rc::makeBox(Eigen::Vector3d(0.02, 3.0, 3.0)));
-    problem.scene = scene;
+    const rc::Problem problem = cubeAmong(scene, 2.0);
     rco::SetupOptions options;
     options.edges = rco::EdgeChecking::Batched;  // the discrete resolution is what this test is about
     // SE(3) counts segments per subspace (the largest count wins): 0.45 m steps on the position,
@@ -207,13 +215,7 @@ TEST(OmplSetup, SolveWithinKeepsItsLimitWithoutATimingThread)
 {
     // OMPL's solve(double) starts a thread for limits of a second or more (and joins it when the
     // solve returns, up to a millisecond later); solveWithin tests the clock in the planner's thread.
-    rc::Aabb bounds;
-    bounds.min = Eigen::Vector3d::Constant(-1);
-    bounds.max = Eigen::Vector3d::Constant(1);
-    rc::Problem problem;
-    problem.robot = rc::makeRigidBodyModel("cube", rc::makeBox(Eigen::Vector3d::Constant(0.1)), bounds);
-    problem.scene = std::make_shared<rc::Scene>();
-    og::SimpleSetupPtr setup = rco::makeSimpleSetup(problem);
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(cubeAmong(std::make_shared<rc::Scene>(), 1.0));
     rco::setStartAndGoal(*setup, {-0.5, 0, 0, 0, 0, 0, 1}, {0.5, 0, 0, 0, 0, 0, 1});
     auto planner = std::make_shared<ThreadCountingPlanner>(setup->getSpaceInformation());
     setup->setPlanner(planner);
