@@ -453,6 +453,48 @@ TEST(BatchShortcutter, ShortensAPathAndKeepsItCollisionFree)
     EXPECT_GE(path.getStateCount(), 3u);
 }
 
+TEST(BatchShortcutter, TakesALineThatPassesTheRakeOnlyWhenTheEdgeCheckerAcceptsIt)
+{
+    // At a resolution of about 1.2 m the rake checks no state of a line shorter than that, so a
+    // short line through the 0.1 m wall passes it; only certification refuses it. A shortcutter that
+    // took the rake's word would cut through the wall here.
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    options.longestValidSegmentFraction = 0.2;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    const ob::SpaceInformationPtr si = setup->getSpaceInformation();
+    si->setup();
+    const rco::StateMapping &mapping = rco::getStateValidityChecker(*setup)->getStateMapping();
+    auto at = [&](double x, double y)
+    {
+        std::vector<double> q = mapping.baseConfiguration();
+        q[0] = x;
+        q[1] = y;
+        auto state = std::make_shared<ob::ScopedState<>>(si);
+        mapping.fromConfiguration(q, state->get());
+        return state;
+    };
+    // Down to the gap, through it, and up again on the other side.
+    og::PathGeometric path(si);
+    for (const auto &[x, y] : std::vector<std::pair<double, double>>{
+             {-0.5, 1.0}, {-0.5, 0.0}, {0.5, 0.0}, {0.5, 1.0}})
+        path.append(at(x, y)->get());
+    ASSERT_TRUE(collisionFree(*setup, path));
+    rcp::BatchShortcutter shortcutter(si);
+    const auto from = at(-0.5, 0.9), to = at(0.5, 0.9);  // 1 m, through the wall's upper block
+    std::vector<unsigned int> levels{0};
+    std::vector<std::uint8_t> valid;
+    EXPECT_EQ(shortcutter.edgeChecker().rake({{from->get(), to->get()}}, levels, valid, false), 0u);
+    EXPECT_EQ(valid, std::vector<std::uint8_t>{1});
+    shortcutter.edgeChecker().check({{from->get(), to->get()}}, valid);
+    EXPECT_EQ(valid, std::vector<std::uint8_t>{0});
+
+    rc::test::seedOmpl(5);
+    shortcutter.shortcut(path, ob::timedPlannerTerminationCondition(30.0));
+    EXPECT_TRUE(collisionFree(*setup, path));
+    EXPECT_GE(path.getStateCount(), 3u);  // still through the gap
+}
+
 TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)
 {
     auto describe = [](rco::EdgeChecking edges, rc::CollisionMode mode)

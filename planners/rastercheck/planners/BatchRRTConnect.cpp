@@ -105,34 +105,6 @@ BatchRRTConnect::Motion *BatchRRTConnect::addMotion(const Tree &tree, const ob::
     return motion;
 }
 
-std::size_t BatchRRTConnect::checkAlongEdges(const std::vector<ompl::Edge> &edges,
-                                             const std::vector<std::pair<std::size_t, double>> &points,
-                                             std::vector<std::uint8_t> &valid) const
-{
-    std::vector<ob::State *> inner;
-    std::vector<const ob::State *> states;
-    states.reserve(points.size());
-    for (const auto &[e, fraction] : points)
-    {
-        if (fraction >= 1.0)
-        {
-            states.push_back(edges[e].to);
-            continue;
-        }
-        inner.push_back(si_->allocState());
-        si_->getStateSpace()->interpolate(edges[e].from, edges[e].to, fraction, inner.back());
-        states.push_back(inner.back());
-    }
-    std::vector<std::uint8_t> stateValid;
-    edges_->checkStates(states, stateValid);
-    for (std::size_t i = 0; i < points.size(); ++i)
-        if (!stateValid[i])
-            valid[points[i].first] = 0;
-    for (ob::State *state : inner)
-        si_->freeState(state);
-    return states.size();
-}
-
 void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid)
 {
     if (!lazyNow_)
@@ -148,7 +120,7 @@ void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::v
         for (unsigned int j = 1; j <= k; ++j)
             points.emplace_back(e, j == k ? 1.0 : static_cast<double>(j) / k);
     valid.assign(edges.size(), 1);
-    lazyStates_ += checkAlongEdges(edges, points, valid);
+    lazyStates_ += edges_->checkAlong(edges, points, valid);
 }
 
 void BatchRRTConnect::cutSubtree(Motion *motion)
@@ -226,44 +198,6 @@ BatchRRTConnect::Motion *BatchRRTConnect::nearest(const Tree &tree, const Motion
     return motion;
 }
 
-bool BatchRRTConnect::rakeEdges(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
-                                std::vector<std::uint8_t> &valid)
-{
-    valid.assign(edges.size(), 1);
-    const double segment = si_->getStateSpace()->getLongestValidSegmentLength();
-    std::vector<double> length(edges.size());
-    for (std::size_t e = 0; e < edges.size(); ++e)
-        length[e] = si_->distance(edges[e].from, edges[e].to);
-    std::vector<std::pair<std::size_t, double>> points;
-    bool passed = true;
-    // Level L checks the odd multiples of 2^-L of every edge still longer than 2^-L times the
-    // segment length and not yet clean at that level; a level with a rejected state ends the rake.
-    for (unsigned int level = 1; passed; ++level)
-    {
-        const double parts = std::ldexp(1.0, static_cast<int>(level));
-        points.clear();
-        bool deeper = false;  // some edge still needs this level
-        for (std::size_t e = 0; e < edges.size(); ++e)
-        {
-            if (length[e] * 2.0 / parts <= segment)
-                continue;
-            deeper = true;
-            if (level <= levels[e])
-                continue;
-            for (double j = 1.0; j < parts; j += 2.0)
-                points.emplace_back(e, j / parts);
-        }
-        if (!deeper)
-            break;
-        rakedStates_ += checkAlongEdges(edges, points, valid);
-        passed = std::all_of(valid.begin(), valid.end(), [](std::uint8_t v) { return v != 0; });
-        for (std::size_t e = 0; e < edges.size(); ++e)
-            if (valid[e] && levels[e] + 1 == level)
-                levels[e] = level;
-    }
-    return passed;
-}
-
 bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided)
 {
     // The undecided edges of both branches (parent to child, as they were grown) and the bridge.
@@ -291,7 +225,8 @@ bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const o
     std::vector<unsigned int> levels;
     for (const Motion *m : below)
         levels.push_back(m ? m->rakedLevels : 0u);
-    const bool certify = rakeEdges(edges, levels, valid);
+    rakedStates_ += edges_->rake(edges, levels, valid, true);
+    const bool certify = std::all_of(valid.begin(), valid.end(), [](std::uint8_t v) { return v != 0; });
     for (std::size_t e = 0; e < edges.size(); ++e)
         if (below[e])
             below[e]->rakedLevels = levels[e];

@@ -98,7 +98,7 @@ private:
         const Tree *tree = nullptr;
         std::vector<Motion *> children;  ///< kept for cutting subtrees in lazy mode
         bool edgeDecided = true;         ///< the edge from parent was decided by the EdgeChecker
-        unsigned int rakedLevels = 0;    ///< levels of rakeEdges the undecided edge from parent passed
+        unsigned int rakedLevels = 0;    ///< levels of EdgeChecker::rake the undecided edge from parent passed
         bool cut = false;                ///< removed from its tree with a rejected edge above it
     };
 
@@ -106,12 +106,6 @@ private:
         true, with the solution path added, when a line joins the trees. */
     bool connect(const std::vector<std::pair<Motion *, const Tree *>> &fresh,
                  const ::ompl::base::PlannerTerminationCondition &ptc);
-    /** \brief Checks the states at \a points (edge index, fraction; 1 = the edge's end) in one
-        batch; valid[e] = 0 for every edge with a rejected state (the others are left as they are).
-        Returns the number of states checked. */
-    std::size_t checkAlongEdges(const std::vector<ompl::Edge> &edges,
-                                const std::vector<std::pair<std::size_t, double>> &points,
-                                std::vector<std::uint8_t> &valid) const;
     /** \brief Decides the new \a edges: by the EdgeChecker, or in lazy mode at lazy_samples states each. */
     void checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid);
     /** \brief Decides the edges from both trees' roots to \a startEnd and \a goalEnd that are not
@@ -119,13 +113,6 @@ private:
         rake that rejects most failing candidates for less); cuts the subtree below each rejected
         tree edge. True when every edge is accepted (at once when none needed deciding). */
     bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided);
-    /** \brief Checks states along \a edges at rising density (the midpoints, then the quarter
-        points, ...) down to the space's longest valid segment, one batch per level; stops after the
-        first level with a rejected state. levels[e]: the levels edge e passed before (skipped), and
-        on return the levels it has passed now. valid[e] = 0 for the edges where a state was
-        rejected; true when none was. */
-    bool rakeEdges(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
-                   std::vector<std::uint8_t> &valid);
     /** \brief Removes \a motion and every motion below it from their tree. */
     void cutSubtree(Motion *motion);
     /** \brief Cuts every edge not yet decided; the rest of the solve is eager. */

@@ -43,6 +43,7 @@ bool BatchShortcutter::shortcut(og::PathGeometric &path, const ob::PlannerTermin
     std::vector<Candidate> candidatesOfRound;
     std::vector<ompl::Edge> lines;
     std::vector<std::uint8_t> valid;
+    std::vector<unsigned int> levels;
     std::vector<double> arcs;
     unsigned int idle = 0;
     while (idle < idleRounds && !ptc && path.getStateCount() > 2)
@@ -111,9 +112,18 @@ bool BatchShortcutter::shortcut(og::PathGeometric &path, const ob::PlannerTermin
         lines.clear();
         for (const Candidate &candidate : candidatesOfRound)
             lines.push_back({candidate.a, candidate.b});
-        edges_->check(lines, valid);
+        // Certified lines cost about 20 checks each at two paddings, and most candidates cross an
+        // obstacle: a rake (free states at rising density) rejects those first, and only the
+        // shortcuts chosen among the rest are certified.
+        if (edges_->certifies())
+        {
+            levels.assign(lines.size(), 0);
+            edges_->rake(lines, levels, valid, false);
+        }
+        else
+            edges_->check(lines, valid);
 
-        // The valid ones, largest saving first, where they do not overlap a shortcut already taken.
+        // The valid ones, largest saving first, where they do not overlap a shortcut already chosen.
         std::vector<std::size_t> order;
         for (std::size_t k = 0; k < candidatesOfRound.size(); ++k)
             if (valid[k])
@@ -121,21 +131,34 @@ bool BatchShortcutter::shortcut(og::PathGeometric &path, const ob::PlannerTermin
         std::sort(order.begin(), order.end(),
                   [&](std::size_t x, std::size_t y)
                   { return candidatesOfRound[x].saving > candidatesOfRound[y].saving; });
-        std::vector<std::size_t> taken;
-        double saved = 0.0;
+        std::vector<std::size_t> chosen;
         for (const std::size_t k : order)
         {
             const Candidate &c = candidatesOfRound[k];
             bool overlaps = false;
-            for (const std::size_t t : taken)
+            for (const std::size_t t : chosen)
                 overlaps = overlaps ||
                            !(c.to.arc <= candidatesOfRound[t].from.arc || c.from.arc >= candidatesOfRound[t].to.arc);
             if (!overlaps)
-            {
-                taken.push_back(k);
-                saved += c.saving;
-            }
+                chosen.push_back(k);
         }
+        // Only the edge checker decides a line: the chosen ones it rejects are dropped this round.
+        std::vector<std::size_t> taken;
+        if (edges_->certifies())
+        {
+            lines.clear();
+            for (const std::size_t k : chosen)
+                lines.push_back({candidatesOfRound[k].a, candidatesOfRound[k].b});
+            edges_->check(lines, valid);
+            for (std::size_t i = 0; i < chosen.size(); ++i)
+                if (valid[i])
+                    taken.push_back(chosen[i]);
+        }
+        else
+            taken = chosen;
+        double saved = 0.0;
+        for (const std::size_t k : taken)
+            saved += candidatesOfRound[k].saving;
         std::sort(taken.begin(), taken.end(),
                   [&](std::size_t x, std::size_t y)
                   { return candidatesOfRound[x].from.arc < candidatesOfRound[y].from.arc; });

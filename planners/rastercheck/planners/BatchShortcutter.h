@@ -16,9 +16,11 @@ namespace rastercheck::planners
 
     Each round draws candidates: pairs of points on the path (a point is a vertex or anywhere on
     an edge; a quarter of the pairs are vertex pairs) whose straight line is shorter than the path
-    between them. All candidate lines are decided together (EdgeChecker: certified edges unless the
-    setup chose otherwise); of the valid ones, non-overlapping shortcuts are taken greedily by the
-    length they save, and the path is rebuilt with them. Rounds go on until \a idleRounds in a row
+    between them. All candidate lines are raked together (EdgeChecker::rake: states at rising
+    density, which reject most lines that cross an obstacle for a few checks); of the lines left,
+    non-overlapping shortcuts are chosen greedily by the length they save, the chosen ones are
+    decided together (EdgeChecker: certified edges unless the setup chose otherwise; batched edges
+    decide every candidate at once instead of a rake), and the path is rebuilt with those accepted. Rounds go on until \a idleRounds in a row
     save less than a thousandth of the length, or the termination condition says stop.
 
     A shortcut never makes a path collide: every line it adds is decided by the edge checker, and

@@ -1,5 +1,8 @@
 #include "rastercheck/planners/EdgeChecker.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "rastercheck/planners/Log.h"
 
 #include "rastercheck/ompl/CertifiedMotionValidator.h"
@@ -67,5 +70,72 @@ void EdgeChecker::checkStates(const std::vector<const ob::State *> &states, std:
     }
     for (std::size_t i = 0; i < states.size(); ++i)
         valid[i] = si_->isValid(states[i]) ? 1 : 0;
+}
+
+std::size_t EdgeChecker::checkAlong(const std::vector<ompl::Edge> &edges,
+                                    const std::vector<std::pair<std::size_t, double>> &points,
+                                    std::vector<std::uint8_t> &valid) const
+{
+    std::vector<ob::State *> inner;
+    std::vector<const ob::State *> states;
+    states.reserve(points.size());
+    for (const auto &[e, fraction] : points)
+    {
+        if (fraction >= 1.0)
+        {
+            states.push_back(edges[e].to);
+            continue;
+        }
+        inner.push_back(si_->allocState());
+        si_->getStateSpace()->interpolate(edges[e].from, edges[e].to, fraction, inner.back());
+        states.push_back(inner.back());
+    }
+    std::vector<std::uint8_t> stateValid;
+    checkStates(states, stateValid);
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (!stateValid[i])
+            valid[points[i].first] = 0;
+    for (ob::State *state : inner)
+        si_->freeState(state);
+    return states.size();
+}
+
+std::size_t EdgeChecker::rake(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
+                              std::vector<std::uint8_t> &valid, bool allMustPass) const
+{
+    valid.assign(edges.size(), 1);
+    const double segment = si_->getStateSpace()->getLongestValidSegmentLength();
+    std::vector<double> length(edges.size());
+    for (std::size_t e = 0; e < edges.size(); ++e)
+        length[e] = si_->distance(edges[e].from, edges[e].to);
+    std::vector<std::pair<std::size_t, double>> points;
+    std::size_t checked = 0;
+    // Level L checks the odd multiples of 2^-L of every edge still longer than 2^-L times the
+    // segment length, not yet clean at that level and not yet rejected.
+    for (unsigned int level = 1;; ++level)
+    {
+        const double parts = std::ldexp(1.0, static_cast<int>(level));
+        points.clear();
+        bool deeper = false;  // some edge still needs this level
+        for (std::size_t e = 0; e < edges.size(); ++e)
+        {
+            if (!valid[e] || length[e] * 2.0 / parts <= segment)
+                continue;
+            deeper = true;
+            if (level <= levels[e])
+                continue;
+            for (double j = 1.0; j < parts; j += 2.0)
+                points.emplace_back(e, j / parts);
+        }
+        if (!deeper)
+            break;
+        checked += checkAlong(edges, points, valid);
+        for (std::size_t e = 0; e < edges.size(); ++e)
+            if (valid[e] && levels[e] + 1 == level)
+                levels[e] = level;
+        if (allMustPass && !std::all_of(valid.begin(), valid.end(), [](std::uint8_t v) { return v != 0; }))
+            break;
+    }
+    return checked;
 }
 }  // namespace rastercheck::planners

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <ompl/base/SpaceInformation.h>
@@ -31,8 +32,29 @@ public:
         checker is rastercheck's, else one isValid call per state. */
     void checkStates(const std::vector<const ::ompl::base::State *> &states, std::vector<std::uint8_t> &valid) const;
 
+    /** \brief Checks the states at \a points (edge index, fraction of the edge; 1 = its end) in one
+        batch (checkStates); valid[e] = 0 for every edge with a rejected state, the others are left
+        as they are. Returns the number of states checked. */
+    std::size_t checkAlong(const std::vector<ompl::Edge> &edges,
+                           const std::vector<std::pair<std::size_t, double>> &points,
+                           std::vector<std::uint8_t> &valid) const;
+
+    /** \brief States along \a edges at rising density (the midpoints, then the quarter points, ...)
+        down to the space's longest valid segment, one batch per level: most edges that cross an
+        obstacle are rejected at a few states, for a fraction of what check() costs. valid[e] = 0
+        for the edges where a state was rejected, 1 for the others. levels[e]: the levels edge e
+        passed before (skipped), and on return the levels it has passed now. With \a allMustPass
+        (the edges are one candidate path) the rake stops after the first level that rejects a
+        state; else it goes on with the edges not yet rejected. A state check, not a decision: an
+        edge the rake passes is decided only by check(). Returns the number of states checked. */
+    std::size_t rake(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
+                     std::vector<std::uint8_t> &valid, bool allMustPass) const;
+
     /** \brief "certified", "batched" or "one at a time": what check() runs. */
     const std::string &description() const { return description_; }
+    /** \brief Whether check() certifies edges (collision-free at every point): then a rake before it
+        saves work; batched edges check the rake's states themselves. */
+    bool certifies() const { return description_ == "certified"; }
 
 private:
     ::ompl::base::SpaceInformationPtr si_;
