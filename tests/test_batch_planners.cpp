@@ -476,8 +476,7 @@ TEST(BatchShortcutter, TakesALineThatPassesTheRakeOnlyWhenTheEdgeCheckerAcceptsI
     };
     // Down to the gap, through it, and up again on the other side.
     og::PathGeometric path(si);
-    for (const auto &[x, y] : std::vector<std::pair<double, double>>{
-             {-0.5, 1.0}, {-0.5, 0.0}, {0.5, 0.0}, {0.5, 1.0}})
+    for (const auto &[x, y] : std::vector<std::pair<double, double>>{{-0.5, 1.0}, {-0.5, 0.0}, {0.5, 0.0}, {0.5, 1.0}})
         path.append(at(x, y)->get());
     ASSERT_TRUE(collisionFree(*setup, path));
     rcp::BatchShortcutter shortcutter(si);

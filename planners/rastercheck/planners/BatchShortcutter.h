@@ -20,8 +20,9 @@ namespace rastercheck::planners
     density, which reject most lines that cross an obstacle for a few checks); of the lines left,
     non-overlapping shortcuts are chosen greedily by the length they save, the chosen ones are
     decided together (EdgeChecker: certified edges unless the setup chose otherwise; batched edges
-    decide every candidate at once instead of a rake), and the path is rebuilt with those accepted. Rounds go on until \a idleRounds in a row
-    save less than a thousandth of the length, or the termination condition says stop.
+    decide every candidate at once instead of a rake), and the path is rebuilt with those accepted.
+    Rounds go on until \a idleRounds in a row save less than a thousandth of the length, or the
+    termination condition says stop.
 
     A shortcut never makes a path collide: every line it adds is decided by the edge checker, and
     the rest of the path is pieces of its own edges (with certified edges, collision-free at every
