@@ -123,39 +123,51 @@ bool BatchShortcutter::shortcut(og::PathGeometric &path, const ob::PlannerTermin
         else
             edges_->check(lines, valid);
 
-        // The valid ones, largest saving first, where they do not overlap a shortcut already chosen.
-        std::vector<std::size_t> order;
-        for (std::size_t k = 0; k < candidatesOfRound.size(); ++k)
-            if (valid[k])
-                order.push_back(k);
-        std::sort(order.begin(), order.end(),
-                  [&](std::size_t x, std::size_t y)
-                  { return candidatesOfRound[x].saving > candidatesOfRound[y].saving; });
-        std::vector<std::size_t> chosen;
-        for (const std::size_t k : order)
-        {
-            const Candidate &c = candidatesOfRound[k];
-            bool overlaps = false;
-            for (const std::size_t t : chosen)
-                overlaps = overlaps ||
-                           !(c.to.arc <= candidatesOfRound[t].from.arc || c.from.arc >= candidatesOfRound[t].to.arc);
-            if (!overlaps)
-                chosen.push_back(k);
-        }
-        // Only the edge checker decides a line: the chosen ones it rejects are dropped this round.
+        // The valid ones, largest saving first, where they do not overlap a shortcut already taken.
+        // With a rake, "valid" is "not refused yet": the chosen lines are certified, and while
+        // certification refuses one, the choice is made again without it. With exact verdicts (safe
+        // and exact mode) the rake never refuses a line certification accepts, so the shortcuts
+        // taken are those a certification of every candidate would give.
+        std::vector<std::uint8_t> certified(candidatesOfRound.size(), edges_->certifies() ? 0 : 1);
         std::vector<std::size_t> taken;
-        if (edges_->certifies())
+        for (bool refused = true; refused;)
         {
+            std::vector<std::size_t> order;
+            for (std::size_t k = 0; k < candidatesOfRound.size(); ++k)
+                if (valid[k])
+                    order.push_back(k);
+            std::sort(order.begin(), order.end(),
+                      [&](std::size_t x, std::size_t y)
+                      { return candidatesOfRound[x].saving > candidatesOfRound[y].saving; });
+            taken.clear();
+            for (const std::size_t k : order)
+            {
+                const Candidate &c = candidatesOfRound[k];
+                bool overlaps = false;
+                for (const std::size_t t : taken)
+                    overlaps = overlaps || !(c.to.arc <= candidatesOfRound[t].from.arc ||
+                                             c.from.arc >= candidatesOfRound[t].to.arc);
+                if (!overlaps)
+                    taken.push_back(k);
+            }
+            std::vector<std::size_t> unknown;
             lines.clear();
-            for (const std::size_t k : chosen)
-                lines.push_back({candidatesOfRound[k].a, candidatesOfRound[k].b});
-            edges_->check(lines, valid);
-            for (std::size_t i = 0; i < chosen.size(); ++i)
-                if (valid[i])
-                    taken.push_back(chosen[i]);
+            for (const std::size_t k : taken)
+                if (!certified[k])
+                {
+                    unknown.push_back(k);
+                    lines.push_back({candidatesOfRound[k].a, candidatesOfRound[k].b});
+                }
+            std::vector<std::uint8_t> accepted;
+            edges_->check(lines, accepted);
+            refused = false;
+            for (std::size_t i = 0; i < unknown.size(); ++i)
+            {
+                certified[unknown[i]] = accepted[i];
+                valid[unknown[i]] = accepted[i];
+                refused = refused || !accepted[i];
+            }
         }
-        else
-            taken = chosen;
         double saved = 0.0;
         for (const std::size_t k : taken)
             saved += candidatesOfRound[k].saving;
