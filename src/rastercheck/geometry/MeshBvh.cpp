@@ -31,9 +31,10 @@ constexpr int kSahBins = 16;
 // A node's box is fitted along the frame of least surface area (leastAreaAxes) among the principal
 // axes of the corners' covariance (FCL's OBB fit) and the frames about each of these normals: those
 // axes, the mesh's axes (architectural models and OMPL.app's scenes are mostly built along them)
-// and the normals of up to kFitTriangleNormals of the node's triangles (appendFitNormals). Tighter boxes keep fewer
-// node pairs in every walk: against the principal axes alone, distance queries per core 17-44 % faster on OMPL.app's
-// scenes and the Panda (bench/distance), collision queries near contact 1.2x-1.9x (bench/meshes).
+// and the normals of up to kFitTriangleNormals of the node's triangles (appendFitNormals).
+// Tighter boxes keep fewer node pairs in every walk: against the principal axes alone, distance
+// queries per core 17-44 % faster on OMPL.app's scenes and the Panda (bench/distance), collision
+// queries near contact 1.2x-1.9x (bench/meshes).
 //
 // Above kFitCorners corners a node is fitted to its extreme corners (ExtremePoints), below to all
 // its vertices (192 against 48: distance queries per core 2-8 % faster on OMPL.app's bugtrap,
