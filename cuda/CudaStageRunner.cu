@@ -451,7 +451,10 @@ public:
         arrays_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
         arrays_.convex.planes = uploadOnce(model_memory_, host.convex.planes, host.numConvexPlaneDoubles);
         arrays_.convex.edges = uploadOnce(model_memory_, host.convex.edges, host.numConvexEdgeIndices);
-        arrays_.convex.hullGroups = uploadOnce(model_memory_, host.convex.hullGroups, host.numConvexHullGroups);
+        arrays_.convex.supportCellStart =
+            uploadOnce(model_memory_, host.convex.supportCellStart, host.numConvexSupportCellOffsets);
+        arrays_.convex.supportCandidates =
+            uploadOnce(model_memory_, host.convex.supportCandidates, host.numConvexSupportCandidates);
         arrays_.convex.patchNodes = uploadOnce(model_memory_, host.convex.patchNodes, host.numPatchNodes);
         arrays_.convex.solidPatchNodes = uploadOnce(model_memory_, host.convex.solidPatchNodes, m + o + 1);
         arrays_.convex.patchPieces = uploadOnce(model_memory_, host.convex.patchPieces, host.numPatches);

@@ -578,51 +578,76 @@ TEST(Separation, TheHullSlackBoundsHowFarVerticesStickOutOfTheHullPointsHull)
     }
 }
 
-TEST(Separation, TheClusteredSupportSearchFindsWhatReadingEveryHullPointFinds)
+TEST(Separation, TheCellSupportSearchFindsWhatReadingEveryHullPointFinds)
 {
     rc::ConvexSolids convex;
     convex.add(rc::MeshBvh(rc::makeBox(Vec(0.4, 0.1, 0.25))), true);  // 8 hull points: searched one by one
-    convex.add(rc::MeshBvh(rc::makeSphere(1.0, 1e-4)), true);         // 128 hull points in clusters
+    convex.add(rc::MeshBvh(rc::makeSphere(1.0, 1e-4)), true);         // 128 hull points in cells
     rc::Mesh rod = rc::makeCylinder(0.05, 2.0, 1e-4);                 // long and thin, far from its frame's origin
     rod.transform(Eigen::Isometry3d(Eigen::Translation3d(30.0, -20.0, 50.0)));
     convex.add(rc::MeshBvh(rod), true);
     std::vector<std::string> names = {"box", "sphere", "cylinder"};
     addPandaLinks(convex, names);
     const rc::device::ConvexArrays arrays = convex.arrays();
-    EXPECT_EQ(arrays.pieces[0].numHullGroups, 0u);
-    EXPECT_GT(arrays.pieces[1].numHullGroups, 8u);
+    EXPECT_EQ(arrays.pieces[0].hasSupportCells, 0u);
+    EXPECT_EQ(arrays.pieces[1].hasSupportCells, 1u);
+    // Directions a cell boundary, an edge or a corner of the cube map, an axis or a face's centre
+    // passes through, which rounding may put in either cell, and random ones of every scale.
+    std::vector<rc::device::Vec3<double>> directions;
+    const double steps[] = {-1.0, -0.75, -0.5, -0.25, 0.0, 0.25, 0.5, 0.75, 1.0, 1e-300, -1e-17};
+    for (const double a : steps)
+        for (const double b : steps)
+            for (const double scale : {1.0, -1.0, 3e-7, 2e5})
+            {
+                directions.push_back({scale, scale * a, scale * b});
+                directions.push_back({scale * b, scale, scale * a});
+                directions.push_back({scale * a, scale * b, scale});
+            }
     std::mt19937 rng(5);
     std::normal_distribution<double> normal;
     std::uniform_real_distribution<double> exponent(-3.0, 3.0);
+    for (int trial = 0; trial < 20000; ++trial)
+    {
+        const double scale = std::pow(10.0, exponent(rng));
+        directions.push_back({scale * normal(rng), scale * normal(rng), scale * normal(rng)});
+    }
     for (std::size_t s = 0; s < convex.numSolids(); ++s)
     {
         const rc::device::ConvexProxy piece = rc::device::convexProxy(arrays, arrays.solidPieces[s]);
-        std::uint32_t grouped = 0;
-        for (std::uint32_t g = 0; g < piece.numHullGroups; ++g)
+        if (piece.supportCellStart)
         {
-            const rc::device::HullGroup &group = piece.hullGroups[g];
-            grouped += group.numPoints;
-            for (std::uint32_t i = group.firstPoint; i < group.firstPoint + group.numPoints; ++i)
-            {
-                const double *p = piece.hullPoints + 3 * i;
-                EXPECT_LE(Vec(p[0] - group.centre[0], p[1] - group.centre[1], p[2] - group.centre[2]).norm(),
-                          group.radius)
-                    << names[s];
-            }
+            // Every cell lists a point, and on average under a tenth of them (what makes it fast).
+            const std::uint32_t listed = piece.supportCellStart[rc::device::kSupportCells] - piece.supportCellStart[0];
+            for (std::uint32_t cell = 0; cell < rc::device::kSupportCells; ++cell)
+                EXPECT_LT(piece.supportCellStart[cell], piece.supportCellStart[cell + 1]) << names[s];
+            EXPECT_LT(listed, rc::device::kSupportCells * piece.numHullPoints / 10) << names[s];
         }
-        if (piece.numHullGroups > 0)
+        for (std::size_t k = 0; k < directions.size(); ++k)
         {
-            EXPECT_EQ(grouped, piece.numHullPoints) << names[s];  // every point in one cluster
-        }
-        for (int trial = 0; trial < 20000; ++trial)
-        {
-            const double scale = std::pow(10.0, exponent(rng));
-            const rc::device::Vec3<double> d{scale * normal(rng), scale * normal(rng), scale * normal(rng)};
+            const rc::device::Vec3<double> &d = directions[k];
             const double everyPoint = rc::device::supportValue(piece.hullPoints, piece.numHullPoints, d);
             const double *found = piece.hullPoints + 3 * rc::device::detail::hullSupportIndex(piece, d);
-            ASSERT_EQ(d.x * found[0] + d.y * found[1] + d.z * found[2], everyPoint) << names[s] << " trial " << trial;
+            ASSERT_EQ(d.x * found[0] + d.y * found[1] + d.z * found[2], everyPoint) << names[s] << " direction " << k;
         }
     }
+}
+
+TEST(Separation, TheSupportCellOfADirectionIsItsCubeFaceAndSquare)
+{
+    namespace dev = rc::device;
+    constexpr std::uint32_t side = dev::kSupportCellsPerSide;
+    // Face +x, the square at (y, z) / x = (-1, -1): row 0, column 0; (+1, +1) is the last row and column.
+    EXPECT_EQ(dev::supportCell({1.0, -1.0 + 1e-9, -1.0 + 1e-9}), 0u);
+    EXPECT_EQ(dev::supportCell({2.0, 2.0 - 1e-9, 2.0 - 1e-9}), side * side - 1);
+    EXPECT_EQ(dev::supportCell({-3.0, 0.0, 0.0}), (1 * side + side / 2) * side + side / 2);  // face -x
+    EXPECT_EQ(dev::supportCell({0.1, 0.5, 0.0}) / (side * side), 2u);                        // face +y
+    EXPECT_EQ(dev::supportCell({0.0, -0.5, 0.1}) / (side * side), 3u);                       // face -y
+    EXPECT_EQ(dev::supportCell({0.0, 0.0, 1e-300}) / (side * side), 4u);                     // face +z
+    EXPECT_EQ(dev::supportCell({0.2, 0.3, -0.4}) / (side * side), 5u);                       // face -z
+    // No cell: the zero direction, an infinite one and NaN (the search then reads every point).
+    EXPECT_EQ(dev::supportCell({0.0, 0.0, 0.0}), dev::kSupportCells);
+    EXPECT_EQ(dev::supportCell({std::numeric_limits<double>::infinity(), 0.0, 0.0}), dev::kSupportCells);
+    EXPECT_EQ(dev::supportCell({0.0, std::numeric_limits<double>::quiet_NaN(), 1.0}), dev::kSupportCells);
 }
 
 namespace

@@ -135,54 +135,93 @@ std::vector<double> facePlanes(const Mesh &mesh)
     return planes;
 }
 
-/** \brief \a points (a piece's hull points) in at most device::kMaxHullGroups compact clusters,
-    each a list of indices: farthest-point seeds, then a few rounds of Lloyd's k-means. About the
-    square root of twice the count, which balances the bounds read against the points searched.
-    None for so few points that a plain search is as quick. */
-std::vector<std::vector<std::uint32_t>> hullClusters(const std::vector<Eigen::Vector3d> &points)
+/** \brief Per direction cell of \a points (a piece's hull points; device::supportCell's order),
+    the points, ascending, that can be extreme along a direction of the cell.
+
+    Why no point is missed: a cell's directions are the cone spanned by the four corners of a
+    square of the cube's face. First, scaled to unit length, they lie within the chord \a reach of
+    the unit direction c through the square's centre (the cap about c through the farthest
+    corner holds the cell). Relative to the points' mean o, a point p's value along such a unit
+    direction d is then within |p - o| reach of (p - o) . c, so no point beats best = max (p - o)
+    . c - |p - o| reach, and a point whose highest possible value, (p - o) . c + |p - o| reach,
+    stays below it is beaten in the whole cell by the point that gives best. Among the points
+    left, a point q is dropped when another point p beats it at all four corners: (p - q) . d is
+    linear in d, so p then beats q along every direction of the cone. The squares are grown by
+    1e-6 (far beyond the rounding of the cell a direction is put in), and a point counts as
+    beaten only by a ten-billionth of the points' size (far beyond the rounding of the dot
+    products, which compare the points as placed, not relative to o). */
+std::vector<std::vector<std::uint8_t>> supportCellCandidates(const std::vector<Eigen::Vector3d> &points)
 {
-    const std::size_t n = points.size();
-    const std::size_t k = std::min<std::size_t>(
-        device::kMaxHullGroups, static_cast<std::size_t>(std::ceil(std::sqrt(2.0 * static_cast<double>(n)))));
-    if (n < 32)
-        return {};
-    std::vector<Eigen::Vector3d> centres{points[0]};
-    std::vector<double> nearest(n, std::numeric_limits<double>::infinity());
-    while (centres.size() < k)
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    double size = 0.0;
+    for (const Eigen::Vector3d &p : points)
     {
-        std::size_t farthest = 0;
-        for (std::size_t i = 0; i < n; ++i)
-        {
-            nearest[i] = std::min(nearest[i], (points[i] - centres.back()).squaredNorm());
-            if (nearest[i] > nearest[farthest])
-                farthest = i;
-        }
-        centres.push_back(points[farthest]);
+        mean += p / static_cast<double>(points.size());
+        size = std::max(size, p.norm());
     }
-    std::vector<std::size_t> owner(n, 0);
-    for (int round = 0; round < 8; ++round)
+    const double tolerance = 1e-10 * size;
+    // The unit direction of face f at face coordinates (s, t), as device::supportCell reads them.
+    auto direction = [](std::uint32_t face, double s, double t)
     {
-        for (std::size_t i = 0; i < n; ++i)
-            for (std::size_t c = 1; c < k; ++c)
-                if ((points[i] - centres[c]).squaredNorm() < (points[i] - centres[owner[i]]).squaredNorm())
-                    owner[i] = c;
-        std::vector<Eigen::Vector3d> sums(k, Eigen::Vector3d::Zero());
-        std::vector<std::size_t> counts(k, 0);
-        for (std::size_t i = 0; i < n; ++i)
+        const double sign = face % 2 == 0 ? 1.0 : -1.0;
+        Eigen::Vector3d d;
+        switch (face / 2)
         {
-            sums[owner[i]] += points[i];
-            ++counts[owner[i]];
+            case 0:
+                d = Eigen::Vector3d(sign, s, t);
+                break;
+            case 1:
+                d = Eigen::Vector3d(t, sign, s);
+                break;
+            default:
+                d = Eigen::Vector3d(s, t, sign);
+                break;
         }
-        for (std::size_t c = 0; c < k; ++c)
-            if (counts[c] > 0)
-                centres[c] = sums[c] / static_cast<double>(counts[c]);
-    }
-    std::vector<std::vector<std::uint32_t>> clusters(k);
-    for (std::size_t i = 0; i < n; ++i)
-        clusters[owner[i]].push_back(static_cast<std::uint32_t>(i));
-    clusters.erase(std::remove_if(clusters.begin(), clusters.end(), [](const auto &c) { return c.empty(); }),
-                   clusters.end());
-    return clusters;
+        return d.normalized();
+    };
+    constexpr std::uint32_t side = device::kSupportCellsPerSide;
+    constexpr double grown = 1e-6;
+    std::vector<std::vector<std::uint8_t>> cells;
+    for (std::uint32_t face = 0; face < 6; ++face)
+        for (std::uint32_t row = 0; row < side; ++row)
+            for (std::uint32_t column = 0; column < side; ++column)
+            {
+                const double s0 = -1.0 + 2.0 * row / side - grown, s1 = -1.0 + 2.0 * (row + 1) / side + grown;
+                const double t0 = -1.0 + 2.0 * column / side - grown, t1 = -1.0 + 2.0 * (column + 1) / side + grown;
+                const Eigen::Vector3d centre = direction(face, 0.5 * (s0 + s1), 0.5 * (t0 + t1));
+                std::vector<Eigen::Vector3d> corners;
+                double reach = 0.0;
+                for (const double s : {s0, s1})
+                    for (const double t : {t0, t1})
+                    {
+                        corners.push_back(direction(face, s, t));
+                        reach = std::max(reach, (corners.back() - centre).norm());
+                    }
+                reach *= 1.0 + 1e-9;
+                double best = -std::numeric_limits<double>::infinity();
+                for (const Eigen::Vector3d &p : points)
+                    best = std::max(best, (p - mean).dot(centre) - (p - mean).norm() * reach);
+                std::vector<std::uint8_t> near;
+                for (std::size_t i = 0; i < points.size(); ++i)
+                    if ((points[i] - mean).dot(centre) + (points[i] - mean).norm() * reach >= best - tolerance)
+                        near.push_back(static_cast<std::uint8_t>(i));
+                std::vector<std::uint8_t> cell;
+                for (const std::uint8_t q : near)
+                {
+                    const bool beaten =
+                        std::any_of(near.begin(), near.end(),
+                                    [&](std::uint8_t p)
+                                    {
+                                        return std::all_of(corners.begin(), corners.end(),
+                                                           [&](const Eigen::Vector3d &corner)
+                                                           { return (points[p] - points[q]).dot(corner) > tolerance; });
+                                    });
+                    if (!beaten)
+                        cell.push_back(q);
+                }
+                cells.push_back(std::move(cell));
+            }
+    return cells;
 }
 
 /** \brief Appends triangle \a t of \a mesh to \a part, its corners renumbered through \a renumbered
@@ -254,7 +293,7 @@ device::ConvexPiece ConvexSolids::makePiece(const Mesh &mesh, bool closedShell)
                               0,
                               static_cast<std::uint32_t>(edges_.size() / 2),
                               0,
-                              static_cast<std::uint32_t>(hullGroups_.size()),
+                              0,
                               0,
                               0,
                               0,
@@ -286,35 +325,21 @@ device::ConvexPiece ConvexSolids::makePiece(const Mesh &mesh, bool closedShell)
     }
     std::vector<std::uint32_t> extreme = mesh.extremeVertices(kConvexHullDirections);
     piece.numHullPoints = static_cast<std::uint32_t>(extreme.size());
+    if (piece.numHullPoints >= device::kSupportCellsMinPoints)
     {
-        // Stored cluster by cluster, each cluster's bound beside it (device::HullGroup).
+        // Hull points are numbered in bytes in the cells (Mesh::extremeVertices gives at most one a direction).
+        static_assert(kConvexHullDirections <= 256, "hull point numbers must fit the cells' bytes");
         std::vector<Eigen::Vector3d> points;
         for (std::uint32_t i : extreme)
             points.push_back(mesh.vertices[i]);
-        const std::vector<std::vector<std::uint32_t>> clusters = hullClusters(points);
-        double size = 0.0;
-        for (const Eigen::Vector3d &p : points)
-            size = std::max(size, p.norm());
-        std::vector<std::uint32_t> grouped;
-        for (const std::vector<std::uint32_t> &cluster : clusters)
+        piece.firstSupportCell = static_cast<std::uint32_t>(supportCellStart_.size());
+        piece.hasSupportCells = 1;
+        for (const std::vector<std::uint8_t> &cell : supportCellCandidates(points))
         {
-            Aabb box;
-            for (std::uint32_t i : cluster)
-                box.extend(points[i]);
-            const Eigen::Vector3d centre = 0.5 * (box.min + box.max);
-            double radius = 0.0;
-            for (std::uint32_t i : cluster)
-                radius = std::max(radius, (points[i] - centre).norm());
-            hullGroups_.push_back(device::HullGroup{{centre.x(), centre.y(), centre.z()},
-                                                    radius + 1e-12 * (size + centre.norm()),
-                                                    static_cast<std::uint32_t>(grouped.size()),
-                                                    static_cast<std::uint32_t>(cluster.size())});
-            for (std::uint32_t i : cluster)
-                grouped.push_back(extreme[i]);
+            supportCellStart_.push_back(static_cast<std::uint32_t>(supportCandidates_.size()));
+            supportCandidates_.insert(supportCandidates_.end(), cell.begin(), cell.end());
         }
-        if (!clusters.empty())
-            extreme = grouped;
-        piece.numHullGroups = static_cast<std::uint32_t>(clusters.size());
+        supportCellStart_.push_back(static_cast<std::uint32_t>(supportCandidates_.size()));
     }
     const std::size_t firstHullDouble = hullPoints_.size();
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -413,9 +438,10 @@ std::size_t ConvexSolids::bytes() const
     return vertices_.size() * sizeof(double) + hullPoints_.size() * sizeof(double) +
            pieces_.size() * sizeof(device::ConvexPiece) + solidPieces_.size() * sizeof(std::uint32_t) +
            planes_.size() * sizeof(double) + edges_.size() * sizeof(std::uint32_t) +
-           hullGroups_.size() * sizeof(device::HullGroup) + patchNodes_.size() * sizeof(device::PatchNode) +
-           solidPatchNodes_.size() * sizeof(std::uint32_t) + patchPieces_.size() * sizeof(device::ConvexPiece) +
-           solidPatches_.size() * sizeof(std::uint32_t) + patchTriangles_.size() * sizeof(std::uint32_t);
+           supportCellStart_.size() * sizeof(std::uint32_t) + supportCandidates_.size() +
+           patchNodes_.size() * sizeof(device::PatchNode) + solidPatchNodes_.size() * sizeof(std::uint32_t) +
+           patchPieces_.size() * sizeof(device::ConvexPiece) + solidPatches_.size() * sizeof(std::uint32_t) +
+           patchTriangles_.size() * sizeof(std::uint32_t);
 }
 
 void ConvexSolids::add(const MeshBvh &tree, bool closed, double patchThickness)

@@ -67,17 +67,18 @@ public:
     std::size_t numPieces(std::size_t s) const { return solidPieces_[s + 1] - solidPieces_[s]; }
     device::ConvexArrays arrays() const
     {
-        return device::ConvexArrays{vertices_.data(),    hullPoints_.data(),    pieces_.data(),
-                                    solidPieces_.data(), planes_.data(),        edges_.data(),
-                                    hullGroups_.data(),  patchNodes_.data(),    solidPatchNodes_.data(),
-                                    patchPieces_.data(), patchTriangles_.data()};
+        return device::ConvexArrays{
+            vertices_.data(),   hullPoints_.data(),      pieces_.data(),           solidPieces_.data(),
+            planes_.data(),     edges_.data(),           supportCellStart_.data(), supportCandidates_.data(),
+            patchNodes_.data(), solidPatchNodes_.data(), patchPieces_.data(),      patchTriangles_.data()};
     }
     std::size_t numVertexDoubles() const { return vertices_.size(); }
     std::size_t numHullPointDoubles() const { return hullPoints_.size(); }
     std::size_t numAllPieces() const { return pieces_.size(); }
     std::size_t numPlaneDoubles() const { return planes_.size(); }
     std::size_t numEdgeIndices() const { return edges_.size(); }
-    std::size_t numHullGroups() const { return hullGroups_.size(); }
+    std::size_t numSupportCellOffsets() const { return supportCellStart_.size(); }
+    std::size_t numSupportCandidates() const { return supportCandidates_.size(); }
     std::size_t numPatchNodes() const { return patchNodes_.size(); }
     std::size_t numPatches() const { return patchPieces_.size(); }
     std::size_t numPatchTriangleIndices() const { return patchTriangles_.size(); }
@@ -103,7 +104,8 @@ private:
     std::vector<std::uint32_t> solidPieces_{0};      // n_solids + 1
     std::vector<double> planes_;                     // n_planes x 4
     std::vector<std::uint32_t> edges_;               // n_edges x 2
-    std::vector<device::HullGroup> hullGroups_;      // n_groups
+    std::vector<std::uint32_t> supportCellStart_;    // per piece with cells, kSupportCells + 1
+    std::vector<std::uint8_t> supportCandidates_;    // hull point numbers within their piece
     std::vector<device::PatchNode> patchNodes_;      // per solid, root first
     std::vector<std::uint32_t> solidPatchNodes_{0};  // n_solids + 1
     std::vector<device::ConvexPiece> patchPieces_;   // n_patches

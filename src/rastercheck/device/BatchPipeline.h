@@ -82,7 +82,8 @@ struct ModelArrays
     std::size_t numConvexPieces;
     std::size_t numConvexPlaneDoubles;
     std::size_t numConvexEdgeIndices;
-    std::size_t numConvexHullGroups;
+    std::size_t numConvexSupportCellOffsets;
+    std::size_t numConvexSupportCandidates;
     std::size_t numPatchNodes;
     std::size_t numPatches;
     std::size_t numPatchTriangleIndices;

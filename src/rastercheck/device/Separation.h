@@ -14,20 +14,55 @@
 
 namespace rastercheck::device
 {
-/** \brief A cluster of one piece's hull points (ConvexArrays::hullGroups): every point lies within
-    \a radius of \a centre (the radius is grown by a trillionth of the piece's size, which dwarfs
-    the rounding of the dot products), so d . centre + |d| radius bounds the group's support value
-    along d, and the support search skips a group whose bound cannot beat the best point found. */
-struct HullGroup
-{
-    double centre[3];
-    double radius;
-    std::uint32_t firstPoint;  ///< within the piece's hull points
-    std::uint32_t numPoints;
-};
+/** \brief The support search's direction cells (ConvexArrays::supportCellStart): the directions of
+    space as a cube map, each face of the cube cut into kSupportCellsPerSide x kSupportCellsPerSide
+    cells. A piece with many hull points lists, per cell, every hull point that is the extreme one
+    along some direction of the cell (a superset, sure up to rounding: see ConvexSolids), so the
+    search along a direction reads the few points of its cell instead of all of them. */
+constexpr std::uint32_t kSupportCellsPerSide = 8;
+constexpr std::uint32_t kSupportCells = 6 * kSupportCellsPerSide * kSupportCellsPerSide;
+/** \brief Fewest hull points for which a piece gets cells; fewer are searched one by one. */
+constexpr std::uint32_t kSupportCellsMinPoints = 32;
 
-/** \brief Most groups a piece's hull points are clustered into (a bound per group is read first). */
-constexpr std::uint32_t kMaxHullGroups = 16;
+/** \brief The cell of direction \a d (supportCellStart's order: face +x, -x, +y, -y, +z, -z, then row
+    and column), or kSupportCells for a direction with no cell: zero, infinite or NaN. */
+RC_HD std::uint32_t supportCell(const Vec3<double> &d)
+{
+    const double ax = d.x < 0 ? -d.x : d.x, ay = d.y < 0 ? -d.y : d.y, az = d.z < 0 ? -d.z : d.z;
+    if (!(ax + ay + az <= 1.7976931348623157e308) || ax + ay + az == 0.0)
+        return kSupportCells;
+    std::uint32_t face;
+    double major, u, v;
+    if (ax >= ay && ax >= az)
+    {
+        face = d.x > 0 ? 0u : 1u;
+        major = ax;
+        u = d.y;
+        v = d.z;
+    }
+    else if (ay >= az)
+    {
+        face = d.y > 0 ? 2u : 3u;
+        major = ay;
+        u = d.z;
+        v = d.x;
+    }
+    else
+    {
+        face = d.z > 0 ? 4u : 5u;
+        major = az;
+        u = d.x;
+        v = d.y;
+    }
+    // u / major and v / major lie in [-1, 1]; their cells are kSupportCellsPerSide equal steps.
+    constexpr double half = 0.5 * kSupportCellsPerSide;
+    const double su = (u / major + 1.0) * half, sv = (v / major + 1.0) * half;
+    const std::uint32_t last = kSupportCellsPerSide - 1;
+    const std::uint32_t row = su >= static_cast<double>(last) ? last : (su > 0.0 ? static_cast<std::uint32_t>(su) : 0u);
+    const std::uint32_t column =
+        sv >= static_cast<double>(last) ? last : (sv > 0.0 ? static_cast<std::uint32_t>(sv) : 0u);
+    return (face * kSupportCellsPerSide + row) * kSupportCellsPerSide + column;
+}
 
 /** \brief Where one convex piece's points lie in the flat arrays (ConvexArrays): every vertex of the
     piece (the piece lies in their convex hull) and a few of them that span that hull closely (the
@@ -55,10 +90,12 @@ struct ConvexPiece
         another solid proves an overlap, like a vertex. */
     std::uint32_t firstEdge;
     std::uint32_t numEdges;
-    /** \brief The hull points' clusters (ConvexArrays::hullGroups), in the order the hull points
-        are stored; none (0) for a few hull points, which are searched one by one. */
-    std::uint32_t firstHullGroup;
-    std::uint32_t numHullGroups;
+    /** \brief The piece's direction cells: ConvexArrays::supportCellStart[firstSupportCell ..
+        firstSupportCell + kSupportCells] bound each cell's hull points in supportCandidates. Only
+        when hasSupportCells (at least kSupportCellsMinPoints hull points); otherwise every hull
+        point is searched. */
+    std::uint32_t firstSupportCell;
+    std::uint32_t hasSupportCells;
     /** \brief A patch's triangles (ConvexArrays::patchTriangles, vertex numbers within the piece),
         for the ray parity test of containment (SolidRelation.h); none (0) for other pieces. */
     std::uint32_t firstTriangle;
@@ -95,9 +132,10 @@ struct ConvexArrays
     const double *hullPoints;
     const ConvexPiece *pieces;
     const std::uint32_t *solidPieces;
-    const double *planes;        ///< n_planes x 4: unit outward normal and offset (n . x = d on the face)
-    const std::uint32_t *edges;  ///< n_edges x 2: vertex numbers within the piece
-    const HullGroup *hullGroups;
+    const double *planes;                   ///< n_planes x 4: unit outward normal and offset (n . x = d on the face)
+    const std::uint32_t *edges;             ///< n_edges x 2: vertex numbers within the piece
+    const std::uint32_t *supportCellStart;  ///< per piece with cells, kSupportCells + 1 offsets
+    const std::uint8_t *supportCandidates;  ///< hull point numbers within the piece, ascending per cell
     /** \brief Solid s's patch tree is patchNodes[solidPatchNodes[s] .. solidPatchNodes[s + 1]),
         root first; an empty range: the solid has none (it is small, or close to convex). */
     const PatchNode *patchNodes;
@@ -121,8 +159,8 @@ struct ConvexProxy
     bool surfaceVertices;
     const std::uint32_t *edges;
     std::uint32_t numEdges;
-    const HullGroup *hullGroups;
-    std::uint32_t numHullGroups;
+    const std::uint32_t *supportCellStart;  ///< null: every hull point is searched
+    const std::uint8_t *supportCandidates;
 };
 
 RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, const ConvexPiece &p)
@@ -139,8 +177,8 @@ RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, const ConvexPiece &p)
                        p.surfaceVertices != 0,
                        arrays.edges + 2 * static_cast<std::size_t>(p.firstEdge),
                        p.numEdges,
-                       arrays.hullGroups + p.firstHullGroup,
-                       p.numHullGroups};
+                       p.hasSupportCells ? arrays.supportCellStart + p.firstSupportCell : nullptr,
+                       arrays.supportCandidates};
 }
 
 RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, std::uint32_t piece)
@@ -343,44 +381,33 @@ RC_HD SimplexStep closestOnSimplex(Vec3<double> *simplex, int &count, Vec3<doubl
     return SimplexStep::Closer;
 }
 
-/** \brief The hull point of \a solid extreme along \a d (its own frame): the group with the highest
-    bound first, then only the groups whose bound beats the best point so far (HullGroup). The same
-    maximum as a search of every hull point (test_separation checks it); on a Panda table_pick
-    problem it cut the instructions of planning by 17 %. */
+/** \brief The hull point of \a solid extreme along \a d (its own frame): among the points of \a d's
+    cell (kSupportCells) when the piece has cells, else among all. The same maximum as a search of
+    every hull point, since a cell lists every point that can be extreme in it (test_separation
+    checks it); on the Panda MotionBenchMaker
+    edges it halved the time of the hull tests' support search (docs/benchmarks.md). */
 RC_HD std::uint32_t hullSupportIndex(const ConvexProxy &solid, const Vec3<double> &d)
 {
     std::uint32_t index = 0;
-    if (solid.numHullGroups == 0)
+    const std::uint32_t cell = solid.supportCellStart ? supportCell(d) : kSupportCells;
+    if (cell == kSupportCells)
     {
         supportValue(solid.hullPoints, solid.numHullPoints, d, &index);
         return index;
     }
-    const double length = std::sqrt(dot(d, d));
-    double bound[kMaxHullGroups];
-    std::uint32_t top = 0;
-    for (std::uint32_t g = 0; g < solid.numHullGroups; ++g)
+    const std::uint8_t *candidate = solid.supportCandidates + solid.supportCellStart[cell];
+    const std::uint8_t *end = solid.supportCandidates + solid.supportCellStart[cell + 1];
+    index = *candidate;
+    const double *first = solid.hullPoints + 3 * index;
+    double best = d.x * first[0] + d.y * first[1] + d.z * first[2];
+    for (++candidate; candidate < end; ++candidate)
     {
-        const HullGroup &group = solid.hullGroups[g];
-        bound[g] = d.x * group.centre[0] + d.y * group.centre[1] + d.z * group.centre[2] + length * group.radius;
-        if (bound[g] > bound[top])
-            top = g;
-    }
-    std::uint32_t local = 0;
-    const HullGroup &first = solid.hullGroups[top];
-    double best =
-        supportValue(solid.hullPoints + 3 * static_cast<std::size_t>(first.firstPoint), first.numPoints, d, &local);
-    index = first.firstPoint + local;
-    for (std::uint32_t g = 0; g < solid.numHullGroups; ++g)
-    {
-        const HullGroup &group = solid.hullGroups[g];
-        if (g == top || !(bound[g] > best))
-            continue;
-        const double value =
-            supportValue(solid.hullPoints + 3 * static_cast<std::size_t>(group.firstPoint), group.numPoints, d, &local);
+        const double *p = solid.hullPoints + 3 * *candidate;
+        const double value = d.x * p[0] + d.y * p[1] + d.z * p[2];
         if (value > best)
         {
             best = value;
-            index = group.firstPoint + local;
+            index = *candidate;
         }
     }
     return index;
