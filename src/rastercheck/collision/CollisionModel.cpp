@@ -205,11 +205,20 @@ std::vector<std::vector<std::uint8_t>> supportCellCandidates(const std::vector<E
                 for (std::size_t i = 0; i < points.size(); ++i)
                     if ((points[i] - mean).dot(centre) + (points[i] - mean).norm() * reach >= best - tolerance)
                         near.push_back(static_cast<std::uint8_t>(i));
+                // A point beaten by another of near is beaten by one kept before it: the winner has the
+                // higher value at the centre (a positive sum of the corners), and a dropped winner was
+                // itself beaten by a kept point, which then beats the loser too. So the points are
+                // taken best first and tried against those kept.
+                std::vector<double> atCentre(points.size());
+                for (const std::uint8_t i : near)
+                    atCentre[i] = (points[i] - mean).dot(centre);
+                std::sort(near.begin(), near.end(),
+                          [&](std::uint8_t a, std::uint8_t b) { return atCentre[a] > atCentre[b]; });
                 std::vector<std::uint8_t> cell;
                 for (const std::uint8_t q : near)
                 {
                     const bool beaten =
-                        std::any_of(near.begin(), near.end(),
+                        std::any_of(cell.begin(), cell.end(),
                                     [&](std::uint8_t p)
                                     {
                                         return std::all_of(corners.begin(), corners.end(),
@@ -219,6 +228,7 @@ std::vector<std::vector<std::uint8_t>> supportCellCandidates(const std::vector<E
                     if (!beaten)
                         cell.push_back(q);
                 }
+                std::sort(cell.begin(), cell.end());
                 cells.push_back(std::move(cell));
             }
     return cells;
