@@ -160,6 +160,13 @@ std::vector<std::vector<std::uint8_t>> supportCellCandidates(const std::vector<E
         size = std::max(size, p.norm());
     }
     const double tolerance = 1e-10 * size;
+    std::vector<Eigen::Vector3d> relative;  // p - o
+    std::vector<double> distance;           // |p - o|
+    for (const Eigen::Vector3d &p : points)
+    {
+        relative.push_back(p - mean);
+        distance.push_back(relative.back().norm());
+    }
     // The unit direction of face f at face coordinates (s, t), as device::supportCell reads them.
     auto direction = [](std::uint32_t face, double s, double t)
     {
@@ -198,20 +205,21 @@ std::vector<std::vector<std::uint8_t>> supportCellCandidates(const std::vector<E
                         reach = std::max(reach, (corners.back() - centre).norm());
                     }
                 reach *= 1.0 + 1e-9;
+                std::vector<double> atCentre(points.size());  // (p - o) . c
                 double best = -std::numeric_limits<double>::infinity();
-                for (const Eigen::Vector3d &p : points)
-                    best = std::max(best, (p - mean).dot(centre) - (p - mean).norm() * reach);
+                for (std::size_t i = 0; i < points.size(); ++i)
+                {
+                    atCentre[i] = relative[i].dot(centre);
+                    best = std::max(best, atCentre[i] - distance[i] * reach);
+                }
                 std::vector<std::uint8_t> near;
                 for (std::size_t i = 0; i < points.size(); ++i)
-                    if ((points[i] - mean).dot(centre) + (points[i] - mean).norm() * reach >= best - tolerance)
+                    if (atCentre[i] + distance[i] * reach >= best - tolerance)
                         near.push_back(static_cast<std::uint8_t>(i));
                 // A point beaten by another of near is beaten by one kept before it: the winner has the
                 // higher value at the centre (a positive sum of the corners), and a dropped winner was
                 // itself beaten by a kept point, which then beats the loser too. So the points are
                 // taken best first and tried against those kept.
-                std::vector<double> atCentre(points.size());
-                for (const std::uint8_t i : near)
-                    atCentre[i] = (points[i] - mean).dot(centre);
                 std::sort(near.begin(), near.end(),
                           [&](std::uint8_t a, std::uint8_t b) { return atCentre[a] > atCentre[b]; });
                 std::vector<std::uint8_t> cell;

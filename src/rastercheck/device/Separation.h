@@ -29,7 +29,8 @@ constexpr std::uint32_t kSupportCellsMinPoints = 32;
 RC_HD std::uint32_t supportCell(const Vec3<double> &d)
 {
     const double ax = d.x < 0 ? -d.x : d.x, ay = d.y < 0 ? -d.y : d.y, az = d.z < 0 ? -d.z : d.z;
-    if (!(ax + ay + az <= 1.7976931348623157e308) || ax + ay + az == 0.0)
+    constexpr double kLargest = 1.7976931348623157e308;  // DBL_MAX: an infinite or NaN sum fails the test
+    if (!(ax + ay + az <= kLargest) || ax + ay + az == 0.0)
         return kSupportCells;
     std::uint32_t face;
     double major, u, v;
@@ -55,12 +56,14 @@ RC_HD std::uint32_t supportCell(const Vec3<double> &d)
         v = d.y;
     }
     // u / major and v / major lie in [-1, 1]; their cells are kSupportCellsPerSide equal steps.
-    constexpr double half = 0.5 * kSupportCellsPerSide;
-    const double su = (u / major + 1.0) * half, sv = (v / major + 1.0) * half;
-    const std::uint32_t last = kSupportCellsPerSide - 1;
-    const std::uint32_t row = su >= static_cast<double>(last) ? last : (su > 0.0 ? static_cast<std::uint32_t>(su) : 0u);
-    const std::uint32_t column =
-        sv >= static_cast<double>(last) ? last : (sv > 0.0 ? static_cast<std::uint32_t>(sv) : 0u);
+    const auto step = [major](double coordinate)
+    {
+        const double position = (coordinate / major + 1.0) * (0.5 * kSupportCellsPerSide);
+        constexpr std::uint32_t last = kSupportCellsPerSide - 1;
+        return position >= static_cast<double>(last) ? last
+                                                     : (position > 0.0 ? static_cast<std::uint32_t>(position) : 0u);
+    };
+    const std::uint32_t row = step(u), column = step(v);
     return (face * kSupportCellsPerSide + row) * kSupportCellsPerSide + column;
 }
 
