@@ -102,6 +102,11 @@ void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortc
         return;
     }
     ++tally.solved;
+    if (const auto *batch = dynamic_cast<const planners::BatchRRTConnect *>(planner.get()))
+        std::fprintf(stderr, "  %s: %.4f s, %.0f states, %u candidates (%u rejected)\n", label.c_str(), seconds,
+                     tally.states.back(), batch->getCandidateCount(), batch->getRejectedCandidateCount());
+    else
+        std::fprintf(stderr, "  %s: %.4f s, %.0f states\n", label.c_str(), seconds, tally.states.back());
     tally.solvedWithinOneSecond += seconds <= 1.0 ? 1 : 0;
     tally.times.push_back(seconds);
     og::PathGeometric &path = setup.getSolutionPath();
