@@ -43,7 +43,9 @@ namespace rastercheck::planners
     through walls faster than candidates cut them back), a solve gives laziness up after
     lazy_limit rejected candidates: it cuts what it has not decided and goes on eagerly.
 
-    Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's extent),
+    Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's maximum
+    extent; arms among clutter do better with a tenth, which cut the Panda's MotionBenchMaker p95
+    from 0.29 to 0.03 s, open spaces with a fifth: docs/benchmarks.md "Tuning: why the defaults"),
     "batch_size" (samples per iteration, >= 1), "shortcut" (0 or 1: shorten the solution with
     BatchShortcutter before returning it), "lazy" (0 or 1), "lazy_samples" (states per new edge
     in lazy mode, >= 1) and "lazy_limit" (rejected candidates before a solve turns eager). Seeded
