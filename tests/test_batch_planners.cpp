@@ -179,7 +179,7 @@ namespace
     long as the space, so that the first candidate, the straight line from start to goal, passes
     the lazy check (both ends are free) but crosses the wall; asserts a solution the oracle accepts. */
 void solveLazilyAcrossTheWall(og::SimpleSetupPtr &setup, std::shared_ptr<rcp::BatchRRTConnect> &planner,
-                              unsigned int lazyLimit)
+                              unsigned int lazyLimit, double range = 10.0)
 {
     rco::SetupOptions options;
     options.checker.backend = rc::BackendChoice::Cpu;
@@ -187,7 +187,7 @@ void solveLazilyAcrossTheWall(og::SimpleSetupPtr &setup, std::shared_ptr<rcp::Ba
     setAcrossTheWall(*setup);
     planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
     planner->setLazySamples(1);
-    planner->setRange(10.0);
+    planner->setRange(range);
     planner->setLazyLimit(lazyLimit);
     setup->setPlanner(planner);
     rc::test::seedOmpl(4);
@@ -236,6 +236,30 @@ TEST(BatchRRTConnect, AfterLazyLimitRejectedCandidatesTheSolveGoesOnEagerly)
     const og::PathGeometric &path = setup->getSolutionPath();
     for (std::size_t i = 0; i + 1 < path.getStateCount(); ++i)
         EXPECT_TRUE(edges->checkMotion(path.getState(i), path.getState(i + 1))) << i;
+}
+
+TEST(BatchRRTConnect, OnceEagerItStepsHalfTheRange)
+{
+    // Range 2 (the straight line from start to goal, 2 long, is the first candidate, one edge).
+    // Lazily to the end, the path keeps edges longer than 1; with lazy_limit 1 every edge of the
+    // path is grown after the first rejection, at most half the range long.
+    auto longestEdge = [](const og::SimpleSetup &setup)
+    {
+        const og::PathGeometric &path = setup.getSolutionPath();
+        double longest = 0.0;
+        for (std::size_t i = 0; i + 1 < path.getStateCount(); ++i)
+            longest = std::max(longest, setup.getSpaceInformation()->distance(path.getState(i), path.getState(i + 1)));
+        return longest;
+    };
+    og::SimpleSetupPtr setup;
+    std::shared_ptr<rcp::BatchRRTConnect> planner;
+    ASSERT_NO_FATAL_FAILURE(solveLazilyAcrossTheWall(setup, planner, 1000, 2.0));
+    EXPECT_EQ(planner->getRange(), 2.0);
+    EXPECT_GT(longestEdge(*setup), 1.0 + 1e-6);
+    ASSERT_NO_FATAL_FAILURE(solveLazilyAcrossTheWall(setup, planner, 1, 2.0));
+    EXPECT_EQ(planner->getRejectedCandidateCount(), 1u);
+    EXPECT_EQ(planner->getRange(), 2.0);  // the parameter is unchanged: the next solve starts lazy at 2
+    EXPECT_LE(longestEdge(*setup), 1.0 + 1e-9);
 }
 
 TEST(BatchRRTConnect, SeededRunsRepeat)

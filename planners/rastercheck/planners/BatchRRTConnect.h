@@ -41,7 +41,8 @@ namespace rastercheck::planners
     most of both trees, cost a few state checks instead of a certification (LazyRRT's idea, on
     both trees of RRT-Connect). Where candidates keep failing (narrow passages: lazy trees grow
     through walls faster than candidates cut them back), a solve gives laziness up after
-    lazy_limit rejected candidates: it cuts what it has not decided and goes on eagerly.
+    lazy_limit rejected candidates: it cuts what it has not decided and goes on eagerly, with
+    extensions and connection steps of half the range (long edges fail where candidates did).
 
     Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's maximum
     extent; arms among clutter do better with a tenth, which cut the Panda's MotionBenchMaker p95
@@ -134,6 +135,7 @@ private:
     std::vector<Motion *> motions_;             ///< every motion of both trees, for freeing
     std::shared_ptr<const EdgeChecker> edges_;  ///< made by setup()
     double range_ = 0.0;
+    double stepRange_ = 0.0;  ///< this solve's longest extension: range, halved when laziness is abandoned
     unsigned int batchSize_ = 8;
     bool shortcut_ = false;
     bool lazy_ = true;
