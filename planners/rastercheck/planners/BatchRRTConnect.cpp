@@ -163,11 +163,6 @@ void BatchRRTConnect::abandonLaziness()
     OMPL_LOG(INFO, "%s: %u candidates rejected; the rest of this solve decides every new edge", getName().c_str(),
              rejectedCandidates_);
     lazyNow_ = false;
-    // Where lazy candidates keep failing, edges of the full range mostly fail too: half as long,
-    // more of them pass (problems 1-10 of every MotionBenchMaker scenario: Panda p95 0.29-0.34 ->
-    // 0.09 s, Fetch 45 -> 56 of 70 solved; OMPL.app Home median 1.07 -> 0.87 s; docs/benchmarks.md
-    // "Tuning: why the defaults").
-    stepRange_ = 0.5 * range_;
     for (const Tree *tree : {&startTree_, &goalTree_})
     {
         std::vector<Motion *> motions;
@@ -186,6 +181,15 @@ std::size_t &BatchRRTConnect::ghosts(const Tree &tree)
 std::size_t BatchRRTConnect::liveSize(const Tree &tree) const
 {
     return tree->size() - ghosts_[&tree == &startTree_ ? 0 : 1];
+}
+
+double BatchRRTConnect::stepRange() const
+{
+    // Where lazy candidates keep failing, edges of the full range mostly fail too: half as long,
+    // more of them pass (problems 1-10 of every MotionBenchMaker scenario: Panda p95 0.29-0.34 ->
+    // 0.09 s, Fetch 45 -> 56 of 70 solved; OMPL.app Home median 1.07 -> 0.87 s; docs/benchmarks.md
+    // "Tuning: why the defaults").
+    return lazy_ && !lazyNow_ ? 0.5 * range_ : range_;
 }
 
 BatchRRTConnect::Motion *BatchRRTConnect::nearest(const Tree &tree, const Motion *probe) const
@@ -288,7 +292,8 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
         line.last = nearest(*line.other, motion);
         line.origin = line.last->state;
         const double d = si_->distance(line.origin, motion->state);
-        line.step = d > stepRange_ ? stepRange_ / d : 1.0;
+        const double step = stepRange();
+        line.step = d > step ? step / d : 1.0;
         lines.push_back(line);
     }
     // Rounds: the next step of every live line, all decided in one call. One step per line and
@@ -393,7 +398,6 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
         sampler_ = si_->allocStateSampler();
     candidates_ = rejectedCandidates_ = cutMotions_ = 0;
     lazyNow_ = lazy_;
-    stepRange_ = range_;
     lazyStates_ = rakedStates_ = 0;
     OMPL_LOG(INFO, "%s: starting with %u states, %u samples per batch", getName().c_str(),
              static_cast<unsigned int>(startTree_->size() + goalTree_->size()), batchSize_);
@@ -444,8 +448,9 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
             const double d = si_->distance(from->state, samples[i]);
             if (!(d > 0.0))
                 continue;
-            if (d > stepRange_)
-                si_->getStateSpace()->interpolate(from->state, samples[i], stepRange_ / d, samples[i]);
+            const double step = stepRange();
+            if (d > step)
+                si_->getStateSpace()->interpolate(from->state, samples[i], step / d, samples[i]);
             parents.push_back(from);
             grown.push_back(&tree);
             edges.push_back({from->state, samples[i]});

@@ -120,6 +120,9 @@ private:
     void cutSubtree(Motion *motion);
     /** \brief Cuts every edge not yet decided; the rest of the solve is eager. */
     void abandonLaziness();
+    /** \brief The longest extension or connection step now: range, halved once this solve has
+        given laziness up. */
+    double stepRange() const;
     /** \brief The live motion of \a tree nearest to \a probe (cut motions are skipped). */
     Motion *nearest(const Tree &tree, const Motion *probe) const;
     /** \brief Cut motions still held by \a tree's structure; its motions that are not cut. */
@@ -135,7 +138,6 @@ private:
     std::vector<Motion *> motions_;             ///< every motion of both trees, for freeing
     std::shared_ptr<const EdgeChecker> edges_;  ///< made by setup()
     double range_ = 0.0;
-    double stepRange_ = 0.0;  ///< this solve's longest extension: range, halved when laziness is abandoned
     unsigned int batchSize_ = 8;
     bool shortcut_ = false;
     bool lazy_ = true;
