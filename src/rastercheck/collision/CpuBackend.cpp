@@ -437,6 +437,13 @@ std::uint8_t CpuBackend::isValid(const double *q, const CollisionRequest &reques
     // state Near; from then on only the request's own paddings matter.
     bool near = false;
     auto padding = [&](double outerPadding, double ownPadding) { return near ? ownPadding : outerPadding; };
+    // A pair tried at a wider padding than its own is tried at its own next if it meets (collidesAtOwn),
+    // with the overlap proofs: at the wider one they would only tell what the hull test's Unknown and
+    // the exact phase tell too, and GJK stops sooner without them.
+    ModeRules widerRules = rules;
+    widerRules.proveOverlaps = false;
+    auto rulesAt = [&](double paddingUsed, double ownPadding) -> const ModeRules &
+    { return paddingUsed > ownPadding ? widerRules : rules; };
     // A pair that meets at \a paddingUsed: whether the state collides (else it is now Near).
     auto collidesAtOwn =
         [&](const Solid &a, const Solid &b, std::uint32_t pairNumber, double paddingUsed, double ownPadding)
@@ -490,8 +497,8 @@ std::uint8_t CpuBackend::isValid(const double *q, const CollisionRequest &reques
                     device::environmentPair(static_cast<int>(o), static_cast<int>(k), static_cast<int>(m));
                 if (device::solidsMayMeet(ws.componentBounds[k], ws.componentBox[k], objectBox,
                                           model.objectOrientedBoxes[o], device::floatPadding(pairPadding)) &&
-                    pairCollides(component, object, pairNumber, request, rules, pairPadding, pixel, model, wantContact,
-                                 ws, contact) &&
+                    pairCollides(component, object, pairNumber, request, rulesAt(pairPadding, own.component(k)),
+                                 pairPadding, pixel, model, wantContact, ws, contact) &&
                     collidesAtOwn(component, object, pairNumber, pairPadding, own.component(k)))
                 {
                     contact.component = static_cast<int>(k);
@@ -519,8 +526,8 @@ std::uint8_t CpuBackend::isValid(const double *q, const CollisionRequest &reques
             const Solid solidA = componentSolid(model, ws, a), solidB = componentSolid(model, ws, b);
             const std::uint32_t pairNumber =
                 device::selfPair(static_cast<int>(i), static_cast<int>(model.numObjects()), static_cast<int>(m));
-            if (pairCollides(solidA, solidB, pairNumber, request, rules, pairPadding, pixel, model, wantContact, ws,
-                             contact) &&
+            if (pairCollides(solidA, solidB, pairNumber, request, rulesAt(pairPadding, own.self(i)), pairPadding, pixel,
+                             model, wantContact, ws, contact) &&
                 collidesAtOwn(solidA, solidB, pairNumber, pairPadding, own.self(i)))
             {
                 contact.component = a;
