@@ -18,6 +18,7 @@
 
 #include "NonConvex.h"
 #include "TestSupport.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/model/RigidBody.h"
@@ -262,6 +263,56 @@ TEST(BatchRRTConnect, OnceEagerItStepsHalfTheRange)
     EXPECT_LE(longestEdge(*setup), 1.0 + 1e-9);
 }
 
+TEST(BatchRRTConnect, SizesItsBatchesByTheBackend)
+{
+    // batch_size 0 (the default): 8 samples per iteration on the CPU backend; on the batched stages
+    // (a GPU, or here the same code on the host executor) enough that an iteration's new states
+    // reach the device's smallest batch, at least 256 and at most 4096; an explicit size stands.
+    auto planWith = [](rc::BackendChoice backend, std::size_t deviceBatch)
+    {
+        rco::SetupOptions options;
+        options.checker.backend = backend;
+        options.checker.threads = 1;
+        options.checker.minDeviceBatch = deviceBatch;
+        og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+        setAcrossTheWall(*setup);
+        return setup;
+    };
+    struct Case
+    {
+        rc::BackendChoice backend;
+        std::size_t deviceBatch;
+        bool lazy;
+        unsigned int batchSize, expected;
+    };
+    for (const Case &c : {Case{rc::BackendChoice::Cpu, 0, true, 0, 8}, Case{rc::BackendChoice::Cpu, 0, true, 16, 16},
+                          Case{rc::BackendChoice::HostStages, 64, true, 0, 256},
+                          Case{rc::BackendChoice::HostStages, 2000, true, 0, 1000},
+                          Case{rc::BackendChoice::HostStages, 2000, false, 0, 2000},
+                          Case{rc::BackendChoice::HostStages, 0, true, 0, 2048},  // 4096 per CPU thread
+                          Case{rc::BackendChoice::HostStages, 100000, true, 0, 4096},
+                          Case{rc::BackendChoice::HostStages, 64, true, 16, 16}})
+    {
+        og::SimpleSetupPtr setup = planWith(c.backend, c.deviceBatch);
+        rcp::BatchRRTConnect planner(setup->getSpaceInformation());
+        planner.setLazy(c.lazy);
+        planner.setBatchSize(c.batchSize);
+        planner.setProblemDefinition(setup->getProblemDefinition());
+        planner.setup();
+        EXPECT_EQ(planner.samplesPerBatch(), c.expected)
+            << "device batch " << c.deviceBatch << (c.lazy ? ", lazy" : ", eager") << ", batch_size " << c.batchSize;
+    }
+    // A solve on the stages: its batches run there, and its path is collision-free.
+    og::SimpleSetupPtr setup = planWith(rc::BackendChoice::HostStages, 64);
+    const auto *stages =
+        dynamic_cast<const rc::StagedBackend *>(&rco::getStateValidityChecker(*setup)->getChecker().backend());
+    ASSERT_NE(stages, nullptr);
+    rc::test::seedOmpl(3);
+    const og::PathGeometric path = solveAndCheck(*setup, 60.0);
+    EXPECT_GE(path.getStateCount(), 2u);
+    EXPECT_GT(stages->executorCounts().calls, 0u);
+}
+
 TEST(BatchRRTConnect, SeededRunsRepeat)
 {
     RASTERCHECK_REQUIRE_DATA(root);
@@ -369,8 +420,9 @@ TEST(BatchRRTConnect, ParametersAndRegistry)
     EXPECT_EQ(batch->getBatchSize(), 16u);
     EXPECT_DOUBLE_EQ(batch->getRange(), 0.5);
     EXPECT_TRUE(batch->getShortcut());
-    EXPECT_THROW(rco::setPlannerParameters(*planner, {{"batch_size", "0"}}), rc::ConfigurationError);
-    EXPECT_EQ(batch->getBatchSize(), 16u);
+    rco::setPlannerParameters(*planner, {{"batch_size", "0"}});  // by the backend
+    EXPECT_EQ(batch->getBatchSize(), 0u);
+    rco::setPlannerParameters(*planner, {{"batch_size", "16"}});
     // Values OMPL cannot read: not a number, a number too large for the parameter's type.
     for (const char *value : {"abc", "1e999"})
         EXPECT_THROW(rco::setPlannerParameters(*planner, {{"range", value}}), rc::ConfigurationError) << value;

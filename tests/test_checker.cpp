@@ -15,6 +15,7 @@
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/collision/CpuBackend.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
 #include "rastercheck/geometry/Primitives.h"
@@ -601,6 +602,41 @@ TEST(Checker, WithoutAUsableDeviceTheCudaChoiceFallsBackToTheCpuWithAWarning)
     // Decisions still come, from the CPU backend.
     EXPECT_FALSE(checker.isValid(at(0, 0, 0)));
     EXPECT_TRUE(checker.isValid(at(0, 0, 1)));
+}
+
+TEST(Checker, HostStagesRunTheDevicePathFromTheirDeviceBatchOn)
+{
+    // BackendChoice::HostStages: the GPU's staged pipeline on the host executor, batches of at
+    // least minDeviceBatch states on it, smaller ones on the CPU backend; deviceBatch() says where
+    // that line is (0: every batch on the CPU), which planners size their batches by.
+    EXPECT_EQ(rc::parseBackendChoice("host-stages"), rc::BackendChoice::HostStages);
+    const rc::Checker cpu(cubeRobot(0.2), tableScene(), rc::CheckerOptions{rc::BackendChoice::Cpu, 1});
+    EXPECT_EQ(cpu.deviceBatch(), 0u);
+    rc::CheckerOptions options{rc::BackendChoice::HostStages, 2};
+    const rc::Checker automatic(cubeRobot(0.2), tableScene(), options);
+    EXPECT_EQ(automatic.deviceBatch(), 2 * rc::kDeviceBatchPerCpuThread);
+    options.minDeviceBatch = 4;
+    const rc::Checker staged(cubeRobot(0.2), tableScene(), options);
+    EXPECT_EQ(staged.deviceBatch(), 4u);
+    EXPECT_EQ(staged.backendName(), "cpu-staged");
+    const auto *stages = dynamic_cast<const rc::StagedBackend *>(&staged.backend());
+    ASSERT_NE(stages, nullptr);
+    // Three states go to the CPU backend, four to the stages; the verdicts are the CPU's.
+    std::vector<double> q;
+    for (const std::vector<double> &state : {at(0, 0, 0), at(0, 0, 1), at(2, 0, 0.5), at(3, 3, 3)})
+        q.insert(q.end(), state.begin(), state.end());
+    for (const std::size_t n : {std::size_t{3}, std::size_t{4}})
+    {
+        const unsigned long long callsBefore = stages->executorCounts().calls;
+        std::vector<std::uint8_t> valid(n), expected(n);
+        staged.check(q.data(), n, valid.data());
+        cpu.check(q.data(), n, expected.data());
+        EXPECT_EQ(valid, expected) << n;
+        std::vector<std::uint8_t> known = {0, 1, 0, 1};
+        known.resize(n);
+        EXPECT_EQ(valid, known) << n;
+        EXPECT_EQ(stages->executorCounts().calls - callsBefore, n >= 4 ? 1u : 0u) << n;
+    }
 }
 
 TEST(LongRunning, CheckersBuiltAndDroppedKeepMemoryFlat)

@@ -15,6 +15,10 @@ void CheckingArguments::addModeAndPadding(CLI::App &command, const std::string &
 void CheckingArguments::addBackendAndThreads(CLI::App &command, const std::string &threadsHelp)
 {
     command.add_option("--backend", backend, "auto, cpu or cuda")->check(CLI::IsMember({"auto", "cpu", "cuda"}));
+    command.add_option("--device-batch", deviceBatch,
+                       "smallest batch of states sent to the GPU; smaller ones run on the CPU (default: 4096 per CPU "
+                       "thread, where a device starts to beat the cores; planning on the GPU wants every batch "
+                       "it can take, e.g. 32)");
     command.add_option("--threads", threads, threadsHelp + " (0 = all cores)")->check(CLI::NonNegativeNumber);
 }
 
@@ -31,6 +35,7 @@ CheckerOptions CheckingArguments::checker() const
     CheckerOptions options;
     options.backend = parseBackendChoice(backend);
     options.threads = threads;
+    options.minDeviceBatch = deviceBatch;
     return options;
 }
 }  // namespace rastercheck::cli

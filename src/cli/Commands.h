@@ -39,14 +39,15 @@ struct CheckingArguments
     double padding = 0.0;
     std::string backend = "auto";
     int threads = 0;
+    std::size_t deviceBatch = 0;  ///< CheckerOptions::minDeviceBatch (0: automatic)
 
     /** \brief Declares --mode (\a what: what the mode decides in this command) and --padding. */
     void addModeAndPadding(CLI::App &command, const std::string &what);
-    /** \brief Declares --backend and --threads (\a threads: what the threads run). */
+    /** \brief Declares --backend, --device-batch and --threads (\a threads: what the threads run). */
     void addBackendAndThreads(CLI::App &command, const std::string &threads);
     /** \brief A request of this mode and padding. */
     CollisionRequest request() const;
-    /** \brief Checker options of this backend and thread count. */
+    /** \brief Checker options of this backend, device batch and thread count. */
     CheckerOptions checker() const;
 };
 

@@ -22,7 +22,7 @@ BatchRRTConnect::BatchRRTConnect(const ob::SpaceInformationPtr &si) : ob::Planne
     specs_.directed = true;
     declareParam<double>("range", this, &BatchRRTConnect::setRange, &BatchRRTConnect::getRange, "0.:1.:10000.");
     declareParam<unsigned int>("batch_size", this, &BatchRRTConnect::setBatchSize, &BatchRRTConnect::getBatchSize,
-                               "1:1:1024");
+                               "0:1:4096");
     declareParam<bool>("shortcut", this, &BatchRRTConnect::setShortcut, &BatchRRTConnect::getShortcut, "0,1");
     declareParam<bool>("lazy", this, &BatchRRTConnect::setLazy, &BatchRRTConnect::getLazy, "0,1");
     declareParam<unsigned int>("lazy_limit", this, &BatchRRTConnect::setLazyLimit, &BatchRRTConnect::getLazyLimit,
@@ -38,11 +38,17 @@ void BatchRRTConnect::setLazySamples(unsigned int samples)
     lazySamples_ = samples;
 }
 
-void BatchRRTConnect::setBatchSize(unsigned int samples)
+unsigned int BatchRRTConnect::samplesPerBatch() const
 {
-    if (samples == 0)
-        throw ConfigurationError(getName() + ": batch_size must be at least 1");
-    batchSize_ = samples;
+    if (batchSize_ > 0)
+        return batchSize_;
+    const std::size_t deviceBatch = edges_ ? edges_->deviceBatch() : 0;
+    if (deviceBatch == 0)
+        return kCpuSamplesPerBatch;
+    const std::size_t statesPerSample = lazy_ ? lazySamples_ : 1;
+    const std::size_t samples = (deviceBatch + statesPerSample - 1) / statesPerSample;
+    return static_cast<unsigned int>(
+        std::clamp<std::size_t>(samples, kDeviceSamplesPerBatch[0], kDeviceSamplesPerBatch[1]));
 }
 
 BatchRRTConnect::~BatchRRTConnect()
@@ -399,10 +405,11 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
     candidates_ = rejectedCandidates_ = cutMotions_ = 0;
     lazyNow_ = lazy_;
     lazyStates_ = rakedStates_ = 0;
+    const unsigned int batchSize = samplesPerBatch();
     OMPL_LOG(INFO, "%s: starting with %u states, %u samples per batch", getName().c_str(),
-             static_cast<unsigned int>(startTree_->size() + goalTree_->size()), batchSize_);
+             static_cast<unsigned int>(startTree_->size() + goalTree_->size()), batchSize);
 
-    std::vector<ob::State *> samples(batchSize_);
+    std::vector<ob::State *> samples(batchSize);
     si_->allocStates(samples);
     Motion probe;
     // States added since the last connection round, and the tree each belongs to.
@@ -439,7 +446,7 @@ ob::PlannerStatus BatchRRTConnect::solve(const ob::PlannerTerminationCondition &
         edges.clear();
         parents.clear();
         grown.clear();
-        for (unsigned int i = 0; i < batchSize_; ++i)
+        for (unsigned int i = 0; i < batchSize; ++i)
         {
             const Tree &tree = extensions++ % 2 == 0 ? startTree_ : goalTree_;
             sampler_->sampleUniform(samples[i]);

@@ -47,7 +47,8 @@ namespace rastercheck::planners
     Parameters: "range" (longest extension; 0 = OMPL's default, a fifth of the space's maximum
     extent; arms among clutter do better with a tenth, which cut the Panda's MotionBenchMaker p95
     from 0.29 to 0.03 s, open spaces with a fifth: docs/benchmarks.md "Tuning: why the defaults"),
-    "batch_size" (samples per iteration, >= 1), "shortcut" (0 or 1: shorten the solution with
+    "batch_size" (samples per iteration; 0, the default: by the checker's backend, see
+    samplesPerBatch()), "shortcut" (0 or 1: shorten the solution with
     BatchShortcutter before returning it), "lazy" (0 or 1), "lazy_samples" (states per new edge
     in lazy mode, >= 1) and "lazy_limit" (rejected candidates before a solve turns eager). Seeded
     through OMPL's RNG like every OMPL planner: a run with the same seed and verdicts grows the
@@ -66,9 +67,24 @@ public:
 
     void setRange(double distance) { range_ = distance; }
     double getRange() const { return range_; }
-    /** \brief Samples per iteration; throws ConfigurationError for 0. */
-    void setBatchSize(unsigned int samples);
+    /** \brief Samples per iteration; 0 (the default): by the checker's backend (samplesPerBatch()). */
+    void setBatchSize(unsigned int samples) { batchSize_ = samples; }
     unsigned int getBatchSize() const { return batchSize_; }
+    /** \brief The samples per iteration a solve uses (after setup()): batch_size, or where it is 0,
+        kCpuSamplesPerBatch when the checker decides batches on the CPU, and on a GPU enough samples
+        that an iteration's new states reach the device's smallest batch (Checker::deviceBatch(),
+        lazy_samples states per sample in lazy mode, one in eager mode, whose certified edges start
+        with a midpoint each), within kDeviceSamplesPerBatch. */
+    unsigned int samplesPerBatch() const;
+    /** \brief Samples per iteration by default on the CPU (2, 4 and 8 were even on the Panda's
+        MotionBenchMaker problems: docs/benchmarks.md "Tuning: why the defaults"). */
+    static constexpr unsigned int kCpuSamplesPerBatch = 8;
+    /** \brief The fewest and most samples per iteration by default on a GPU: a device call costs
+        about the same from a thousand states to ten thousand (docs/benchmarks.md "GPU"), so an
+        iteration there takes hundreds of samples (256 solved 69 of the Panda's 70 problems where
+        8 solved 61, on an H100), and at most a few thousand (more grows trees far past what a
+        solve needs). */
+    static constexpr unsigned int kDeviceSamplesPerBatch[2] = {256, 4096};
     /** \brief Whether a solution is shortened by BatchShortcutter (its candidate shortcuts decided
         in batches, within the time left) before it is returned. */
     void setShortcut(bool shortcut) { shortcut_ = shortcut; }
@@ -138,7 +154,7 @@ private:
     std::vector<Motion *> motions_;             ///< every motion of both trees, for freeing
     std::shared_ptr<const EdgeChecker> edges_;  ///< made by setup()
     double range_ = 0.0;
-    unsigned int batchSize_ = 8;
+    unsigned int batchSize_ = 0;
     bool shortcut_ = false;
     bool lazy_ = true;
     bool lazyNow_ = true;  ///< lazy_, until this solve abandons laziness

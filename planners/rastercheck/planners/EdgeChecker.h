@@ -50,6 +50,11 @@ public:
     std::size_t rake(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
                      std::vector<std::uint8_t> &valid, bool allMustPass) const;
 
+    /** \brief The smallest batch of states that runs on the validity checker's GPU backend (or its
+        host stages): Checker::deviceBatch(); 0 when its batches run on the CPU, or the validity
+        checker is not rastercheck's. */
+    std::size_t deviceBatch() const { return states_ ? states_->getChecker().deviceBatch() : 0; }
+
     /** \brief "certified", "batched" or "one at a time": what check() runs. */
     const std::string &description() const { return description_; }
     /** \brief Whether check() certifies edges (collision-free at every point): then a rake before it

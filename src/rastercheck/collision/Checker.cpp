@@ -24,7 +24,9 @@ BackendChoice parseBackendChoice(const std::string &text)
         return BackendChoice::Cpu;
     if (text == "cuda")
         return BackendChoice::Cuda;
-    throw ConfigurationError("unknown backend '" + text + "' (expected auto, cpu or cuda)");
+    if (text == "host-stages")
+        return BackendChoice::HostStages;
+    throw ConfigurationError("unknown backend '" + text + "' (expected auto, cpu, cuda or host-stages)");
 }
 
 namespace
@@ -74,7 +76,9 @@ Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOpt
 {
     if (options.threads < 0)
         throw ConfigurationError("CheckerOptions::threads must be >= 0 (0 = all cores)");
-    if (options.backend != BackendChoice::Cpu)
+    if (options.backend == BackendChoice::HostStages)
+        backend_ = std::make_unique<StagedBackend>(model_, makeHostStageRunner(model_));
+    else if (options.backend != BackendChoice::Cpu)
     {
         std::string why;
         backend_ = makeCudaBackend(model_, options.deviceMemoryLimit, why);
@@ -88,6 +92,7 @@ Checker::Checker(RobotModelConstPtr robot, SceneConstPtr scene, const CheckerOpt
                 logOnce(LogLevel::Info, notice);
         }
     }
+    usesStages_ = backend_ != nullptr;
     if (!backend_)
         backend_ = std::make_unique<CpuBackend>(model_);
 }

@@ -20,10 +20,14 @@ enum class BackendChoice
 {
     Auto,  ///< CUDA when compiled in and a device is usable, else CPU (with a one-line notice)
     Cpu,
-    Cuda  ///< like Auto, but warns when it has to fall back to the CPU
+    Cuda,  ///< like Auto, but warns when it has to fall back to the CPU
+    /** \brief The GPU's batched stages on the host executor: the device's code path, batch sizes and
+        calls on any machine, for tests and for debugging a device setup without a device. Slower
+        than Cpu; never chosen by Auto. */
+    HostStages
 };
 
-/** \brief "auto", "cpu" or "cuda"; throws ConfigurationError otherwise. */
+/** \brief "auto", "cpu", "cuda" or "host-stages"; throws ConfigurationError otherwise. */
 BackendChoice parseBackendChoice(const std::string &text);
 
 /** \brief CheckerOptions::minDeviceBatch's automatic value per CPU thread. */
@@ -38,7 +42,7 @@ struct CheckerOptions
         all cores each on two cores decided small batches up to 15x slower, spinning for threads
         the other held). */
     int threads = 0;
-    /** \brief Smallest batch sent to the GPU backend: a smaller one (a single isValid, a short
+    /** \brief Smallest batch sent to the GPU backend (or the host stages): a smaller one (a single isValid, a short
         motion, a planner's round) runs on the CPU backend, where it does not pay the GPU pass's
         fixed latency. 0 = kDeviceBatchPerCpuThread times the CPU threads batches would use (threads,
         or every core): where the device starts to beat those threads (an H100 against 16 cores,
@@ -94,6 +98,10 @@ public:
     std::string backendName() const { return backend_->name(); }
     /** \brief The backend batches of at least minDeviceBatch states run on. */
     const Backend &backend() const { return *backend_; }
+    /** \brief The smallest batch that runs on the GPU backend (or the host stages): the options'
+        minDeviceBatch, or its automatic value; 0 when every batch runs on the CPU backend. What a
+        caller that can choose its batch sizes (BatchRRTConnect) sizes them by. */
+    std::size_t deviceBatch() const { return usesStages_ ? minDeviceBatch_ : 0; }
     const CollisionModel &collisionModel() const { return *model_; }
     /** \brief The same model, shared (to build another backend over it without rebuilding it). */
     CollisionModelConstPtr collisionModelPtr() const { return model_; }
@@ -166,6 +174,7 @@ private:
     DistanceQueries distances_;
     int threads_;
     std::size_t minDeviceBatch_;
+    bool usesStages_ = false;  // backend_ is the batched stages (GPU or host), not the CPU backend
     mutable std::atomic<bool> warnedNotFinite_{false};  // one warning per checker, not one per state
 };
 }  // namespace rastercheck
