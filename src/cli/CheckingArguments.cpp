@@ -17,8 +17,7 @@ void CheckingArguments::addBackendAndThreads(CLI::App &command, const std::strin
     command.add_option("--backend", backend, "auto, cpu or cuda")->check(CLI::IsMember({"auto", "cpu", "cuda"}));
     command.add_option("--device-batch", deviceBatch,
                        "smallest batch of states sent to the GPU; smaller ones run on the CPU (default: 4096 per CPU "
-                       "thread, where a device starts to beat the cores; planning on the GPU wants every batch "
-                       "it can take, e.g. 32)");
+                       "thread, where a device started to beat 16 cores; the planning benchmarks on a GPU use 32)");
     command.add_option("--threads", threads, threadsHelp + " (0 = all cores)")->check(CLI::NonNegativeNumber);
 }
 
