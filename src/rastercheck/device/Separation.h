@@ -648,10 +648,9 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         return HullRelation::Apart;
     };
     bool proofTried = false;
-    // The hull points' gap along v (times |v|), while it is v's: no vertex's gap along v is larger,
-    // since the hull points are vertices.
-    double gapOfV = 0.0;
-    bool gapKnown = false;
+    // The hull points' gap along v (times |v|), infinite until it is measured for the current v: no
+    // vertex's gap along v is larger, since the hull points are vertices.
+    double gapOfV = HUGE_VAL;
     for (int iteration = 0; iteration < kMaxIterations; ++iteration)
     {
         const double vv = dot(v, v);
@@ -667,7 +666,6 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         const Vec3<double> w = pointOfA - detail::worldSupport(b, poseB, v);
         const double vw = dot(v, w);
         gapOfV = vw;
-        gapKnown = true;
         // v . w / |v| is the gap the plane normal to v leaves between the hull points' hulls (it
         // bounds their distance from below). No vertex sticks out of its hull points' hull by more
         // than the piece's hull slack, so a gap that clears the margin plus both slacks is a proof
@@ -694,10 +692,10 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         if (!(dot(next, next) < vv))
             break;  // no progress left
         v = next;
-        gapKnown = false;
+        gapOfV = HUGE_VAL;
     }
     // Every vertex along v, unless the hull points' gap along it already misses the margin.
-    if (!readEveryVertex || (gapKnown && !(gapOfV > margin * std::sqrt(dot(v, v)))))
+    if (!readEveryVertex || !(gapOfV > margin * std::sqrt(dot(v, v))))
         return HullRelation::Unknown;
     return gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(dot(v, v)) ? apart(v) : HullRelation::Unknown;
 }
