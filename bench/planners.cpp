@@ -14,9 +14,13 @@
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
 //                                   [range_fraction=0] [lazy_limit=300] [backend=cpu] [threads=1]
 //                                   [edge_sizing=bisection|clearance|hullbound] [margin=0]
+//                                   [device_batch=32]
 // (backend and threads: the rastercheck checker's, CheckerOptions; threads 0 = every core; FCL
 // always runs on one core)
 // (margin: CertifiedMotionOptions::margin, scene units; 0: its default, a tenth of the robot's size)
+// (batch_size 0: BatchRRTConnect's default, by the backend; device_batch: CheckerOptions::minDeviceBatch
+// with backend cuda or host-stages, 32 = every batch the device can take, 0 = the library's automatic
+// threshold)
 // (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
 // 0: each planner's default, OMPL's fifth of the extent)
 // (a subset of planners: for profiling one of them; the others' rows stay empty; "eager" is
@@ -148,6 +152,7 @@ int main(int argc, char **argv)
     }
     const int checkerThreads = argc > 11 ? std::atoi(argv[11]) : 1;
     const double margin = argc > 13 ? std::atof(argv[13]) : 0.0;
+    const std::size_t deviceBatch = argc > 14 ? static_cast<std::size_t>(std::atol(argv[14])) : 32u;
     auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
@@ -183,8 +188,8 @@ int main(int argc, char **argv)
             options.certified.sizeByClearance = sizing != "bisection";
             options.certified.clearanceMeasure =
                 sizing == "hullbound" ? ClearanceMeasure::HullBound : ClearanceMeasure::Exact;
-            if (backend == BackendChoice::Cuda)
-                options.checker.minDeviceBatch = 32;  // planning on the device: every batch it can take
+            if (backend == BackendChoice::Cuda || backend == BackendChoice::HostStages)
+                options.checker.minDeviceBatch = deviceBatch;
             og::SimpleSetupPtr ours = rastercheck::ompl::makeSimpleSetup(problem, options);
             setStartAndGoal(*ours);
             const rastercheck::ompl::StateValidityCheckerPtr oracle = rastercheck::ompl::getStateValidityChecker(*ours);

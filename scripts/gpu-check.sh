@@ -105,9 +105,12 @@ run() {
                 step bench-raster 200 .gpu/bin/rastercheck_bench_backends 100000 raster ;;
             plan)
                 # BatchRRTConnect on Panda problems 1-10 of every scenario, certified edges, 1 s: the
-                # checker on the GPU (batches of 8 and 256 samples) and on every CPU core.
+                # checker on the GPU (batches of 8 and 256 samples, every batch of 32 states or more
+                # on the device; and the library's defaults: samples by the backend, the automatic
+                # device threshold) and on every CPU core.
                 step plan-cuda-8 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cuda 0
                 step plan-cuda-256 100 .gpu/bin/rastercheck_bench_planners panda 10 1 256 1 batch 2 0 300 cuda 0
+                step plan-cuda-auto 100 .gpu/bin/rastercheck_bench_planners panda 10 1 0 1 batch 2 0 300 cuda 0 bisection 0 0
                 step plan-cpu 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 0 ;;
             profile)
                 # Registers per thread and occupancy of every kernel of a few small and large Panda batches.
