@@ -107,7 +107,8 @@ run() {
                 # BatchRRTConnect on Panda problems 1-10 of every scenario, certified edges, 1 s: the
                 # checker on the GPU (batches of 8 and 256 samples, every batch of 32 states or more
                 # on the device; and the library's defaults: samples by the backend, the automatic
-                # device threshold) and on every CPU core.
+                # device threshold, which on 16 threads keeps rounds of 8 on the CPU) and on every
+                # CPU core.
                 step plan-cuda-8 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cuda 0
                 step plan-cuda-256 100 .gpu/bin/rastercheck_bench_planners panda 10 1 256 1 batch 2 0 300 cuda 0
                 step plan-cuda-auto 100 .gpu/bin/rastercheck_bench_planners panda 10 1 0 1 batch 2 0 300 cuda 0 bisection 0 0

@@ -267,7 +267,8 @@ TEST(BatchRRTConnect, SizesItsBatchesByTheBackend)
 {
     // batch_size 0 (the default): 8 samples per iteration on the CPU backend; on the batched stages
     // (a GPU, or here the same code on the host executor) enough that an iteration's new states
-    // reach the device's smallest batch, at least 256 and at most 4096; an explicit size stands.
+    // reach the device's smallest batch, at least 256, and 8 again where that would take more than
+    // 4096 (such iterations run on the CPU); an explicit size stands.
     auto planWith = [](rc::BackendChoice backend, std::size_t deviceBatch)
     {
         rco::SetupOptions options;
@@ -290,7 +291,8 @@ TEST(BatchRRTConnect, SizesItsBatchesByTheBackend)
                           Case{rc::BackendChoice::HostStages, 2000, true, 0, 1000},
                           Case{rc::BackendChoice::HostStages, 2000, false, 0, 2000},
                           Case{rc::BackendChoice::HostStages, 0, true, 0, 2048},  // 4096 per CPU thread
-                          Case{rc::BackendChoice::HostStages, 100000, true, 0, 4096},
+                          Case{rc::BackendChoice::HostStages, 8192, true, 0, 4096},
+                          Case{rc::BackendChoice::HostStages, 8194, true, 0, 8},  // 4097 would be needed
                           Case{rc::BackendChoice::HostStages, 64, true, 16, 16}})
     {
         og::SimpleSetupPtr setup = planWith(c.backend, c.deviceBatch);

@@ -47,8 +47,11 @@ unsigned int BatchRRTConnect::samplesPerBatch() const
         return kCpuSamplesPerBatch;
     const std::size_t statesPerSample = lazy_ ? lazySamples_ : 1;
     const std::size_t samples = (deviceBatch + statesPerSample - 1) / statesPerSample;
-    return static_cast<unsigned int>(
-        std::clamp<std::size_t>(samples, kDeviceSamplesPerBatch[0], kDeviceSamplesPerBatch[1]));
+    // Iterations that cannot reach the device (the automatic threshold on many CPU threads) run on
+    // the CPU: sized for it, not grown past what a solve needs for nothing.
+    if (samples > kDeviceSamplesPerBatch[1])
+        return kCpuSamplesPerBatch;
+    return static_cast<unsigned int>(std::max<std::size_t>(samples, kDeviceSamplesPerBatch[0]));
 }
 
 BatchRRTConnect::~BatchRRTConnect()

@@ -74,7 +74,9 @@ public:
         kCpuSamplesPerBatch when the checker decides batches on the CPU, and on a GPU enough samples
         that an iteration's new states reach the device's smallest batch (Checker::deviceBatch(),
         lazy_samples states per sample in lazy mode, one in eager mode, whose certified edges start
-        with a midpoint each), within kDeviceSamplesPerBatch. */
+        with a midpoint each), at least kDeviceSamplesPerBatch[0]; where that takes more than
+        kDeviceSamplesPerBatch[1] (the automatic threshold on many CPU threads: 4 096 states per
+        thread), the iterations run on the CPU and take kCpuSamplesPerBatch. */
     unsigned int samplesPerBatch() const;
     /** \brief Samples per iteration by default on the CPU (2, 4 and 8 were even on the Panda's
         MotionBenchMaker problems: docs/benchmarks.md "Tuning: why the defaults"). */
