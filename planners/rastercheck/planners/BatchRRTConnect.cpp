@@ -48,7 +48,7 @@ unsigned int BatchRRTConnect::samplesPerBatch() const
     const std::size_t statesPerSample = lazy_ ? lazySamples_ : 1;
     const std::size_t samples = (deviceBatch + statesPerSample - 1) / statesPerSample;
     // Iterations that cannot reach the device (the automatic threshold on many CPU threads) run on
-    // the CPU: sized for it, not grown past what a solve needs for nothing.
+    // the CPU: they take the CPU's size, since thousands of samples there would buy nothing.
     if (samples > kDeviceSamplesPerBatch[1])
         return kCpuSamplesPerBatch;
     return static_cast<unsigned int>(std::max<std::size_t>(samples, kDeviceSamplesPerBatch[0]));

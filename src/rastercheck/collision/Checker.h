@@ -42,12 +42,12 @@ struct CheckerOptions
         all cores each on two cores decided small batches up to 15x slower, spinning for threads
         the other held). */
     int threads = 0;
-    /** \brief Smallest batch sent to the GPU backend (or the host stages): a smaller one (a single isValid, a short
-        motion, a planner's round) runs on the CPU backend, where it does not pay the GPU pass's
-        fixed latency. 0 = kDeviceBatchPerCpuThread times the CPU threads batches would use (threads,
-        or every core): where the device starts to beat those threads (an H100 against 16 cores,
-        2026-11-26: a pass costs 4.5 ms from 1 000 to 10 000 Panda states, the two are even near
-        10^5; docs/benchmarks.md "GPU"). */
+    /** \brief Smallest batch sent to the GPU backend (or the host stages): a smaller one (a single
+        isValid, a short motion, a planner's round) runs on the CPU backend, where it does not pay
+        the GPU pass's fixed latency. 0 = kDeviceBatchPerCpuThread times the CPU threads batches
+        would use (threads, or every core): where the device starts to beat those threads (an H100
+        against 16 cores, 2026-11-26: a pass costs 4.5 ms from 1 000 to 10 000 Panda states, the two
+        are even near 10^5; docs/benchmarks.md "GPU"). */
     std::size_t minDeviceBatch = 0;
     /** \brief Most device memory, in bytes, the GPU backend's batch buffers may take (the model
         comes on top); 0 = half the memory free when the checker is built. A batch that needs more

@@ -695,9 +695,10 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         gapOfV = HUGE_VAL;
     }
     // Every vertex along v, unless the hull points' gap along it already misses the margin.
-    if (!readEveryVertex || !(gapOfV > margin * std::sqrt(dot(v, v))))
+    const double needed = margin * std::sqrt(dot(v, v));
+    if (!readEveryVertex || !(gapOfV > needed))
         return HullRelation::Unknown;
-    return gapAlong(v, a, poseA, b, poseB) > margin * std::sqrt(dot(v, v)) ? apart(v) : HullRelation::Unknown;
+    return gapAlong(v, a, poseA, b, poseB) > needed ? apart(v) : HullRelation::Unknown;
 }
 
 }  // namespace rastercheck::device
