@@ -10,7 +10,7 @@
 #       builds the benchmark at git revision REV (a temporary worktree, build-gpu-base) into
 #       .gpu/baseline/, so that the step "baseline" measures old and new code on the same device.
 #   On the GPU machine (device `run` with carry [".gpu"]), from the repository root:
-#       scripts/gpu-check.sh run tests bench sanitize [plan] [profile] [baseline]
+#       scripts/gpu-check.sh run tests bench sanitize [plan] [profile] [latency] [baseline]
 #   (all three took 86 s on an H200 on 2026-11-26, each step well inside its limit below; a step
 #   may also run alone)
 #   On the build machine, no GPU needed:  scripts/gpu-check.sh registers
@@ -117,11 +117,16 @@ run() {
                 # Registers per thread and occupancy of every kernel of a few small and large Panda batches.
                 step profile 200 ncu --clock-control none --section SpeedOfLight --section LaunchStats --section Occupancy --launch-count 120 \
                     .gpu/bin/test_gpu_backend --gtest_filter='*To1000States*' ;;
+            latency)
+                # Two calls of 32 Panda states past the first ones (about 23 launches a call): which
+                # kernels a small call's latency is made of.
+                step profile-32 120 ncu --clock-control none --section SpeedOfLight --section LaunchStats --section Occupancy \
+                    --launch-skip 230 --launch-count 46 .gpu/bin/test_gpu_backend --gtest_filter='*ABatchOf32States*' ;;
             baseline)
                 # The same benchmark at an earlier revision (scripts/gpu-check.sh baseline REV), same device.
                 step "baseline-$(cat .gpu/baseline/revision)" 280 env LD_LIBRARY_PATH=$PWD/.gpu/baseline/lib:$LD_LIBRARY_PATH \
                     .gpu/baseline/rastercheck_bench_backends "$bench_states" safe ;;
-            *) echo "gpu-check: unknown step $s (tests, sanitize, bench, plan, profile, baseline)" >&2; return 2 ;;
+            *) echo "gpu-check: unknown step $s (tests, sanitize, bench, plan, profile, latency, baseline)" >&2; return 2 ;;
         esac
     done
     printf '%s\n' "${summary[@]}" >"$out/summary.txt"

@@ -541,7 +541,7 @@ TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
     {
         const rc::MeshBvh a(s.a), b(s.b);
         const rc::device::ExactTree ta = a.exactTree(), tb = b.exactTree();
-        int split = 0, touching = 0;
+        int split = 0, touching = 0, stoppedByAnEarlierPart = 0;
         for (int trial = 0; trial < 60; ++trial)
         {
             const rc::device::Pose<double> poseA = rc::toDevicePose(randomPose(rng, s.reach)),
@@ -562,7 +562,21 @@ TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
                     for (std::uint32_t j = 0; j < n && !found; ++j)
                     {
                         rc::device::ExactContact contact;
-                        found = rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, &contact, nullptr, parts[j]);
+                        found = rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, &contact, nullptr,
+                                                           rc::device::WalkPart{parts[j]});
+                        if (found && j > 0)
+                        {
+                            // A part stops once an earlier part has found a contact (its own cannot
+                            // be the walk's first), and not for a later one's.
+                            const unsigned long long earlier = j - 1, itself = j;
+                            EXPECT_FALSE(rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, nullptr, nullptr,
+                                                                    rc::device::WalkPart{parts[j], j, &earlier}))
+                                << s.name << " trial " << trial;
+                            EXPECT_TRUE(rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, nullptr, nullptr,
+                                                                   rc::device::WalkPart{parts[j], j, &itself}))
+                                << s.name << " trial " << trial;
+                            ++stoppedByAnEarlierPart;
+                        }
                         if (found)
                         {
                             EXPECT_EQ(contact.triangleA, whole.triangleA) << s.name << " trial " << trial;
@@ -577,6 +591,7 @@ TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
         }
         EXPECT_GT(split, 0) << s.name << ": no walk was ever split";
         EXPECT_GT(touching, 0) << s.name;
+        EXPECT_GT(stoppedByAnEarlierPart, 0) << s.name << ": no contact was found past the first part";
     }
 }
 

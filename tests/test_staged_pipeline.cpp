@@ -59,12 +59,18 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
         pairOrder.waitForCountsFrom = 0;
         pairOrder.orderedProofsFrom = 0;
         const rc::StagedBackend ordered(model, poisonedStages(model, pairOrder));
+        // Small chunks whose split walks get fewer parts per pair (walkPartsPerPair), down to one.
+        rc::device::StageBudget fewWalkThreads;
+        fewWalkThreads.exactWalkThreads = 64;
+        const rc::StagedBackend fewParts(model, poisonedStages(model, fewWalkThreads));
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
             request.mode = mode;
             rc::test::expectSameDecisions(ordered, cpu, *model, suite.states, request,
                                           label(suite.name, mode) + " pair order");
+            rc::test::expectSameDecisions(fewParts, cpu, *model, suite.states, request,
+                                          label(suite.name, mode) + " few walk parts");
             const rc::test::Agreement counts =
                 rc::test::expectSameDecisions(staged, cpu, *model, suite.states, request, label(suite.name, mode));
             if (mode == rc::CollisionMode::Exact && suite.name.rfind("panda", 0) == 0)
@@ -74,6 +80,20 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
             }
         }
     }
+}
+
+TEST(StagedPipeline, SplitWalksKeepTheirThreadsWithinTheBudget)
+{
+    // Each open pair's walk gets as many parts as keep the pairs past the culls within the threads
+    // (StageBudget::exactWalkThreads): a chunk with pairs enough to fill the device splits none.
+    using rc::device::walkPartsPerPair;
+    EXPECT_EQ(walkPartsPerPair(0, 32, 65536), 32u);
+    EXPECT_EQ(walkPartsPerPair(100, 32, 65536), 32u);
+    EXPECT_EQ(walkPartsPerPair(2048, 32, 65536), 32u);
+    EXPECT_EQ(walkPartsPerPair(10000, 32, 65536), 6u);
+    EXPECT_EQ(walkPartsPerPair(40000, 32, 65536), 1u);
+    EXPECT_EQ(walkPartsPerPair(100000, 32, 65536), 1u);
+    EXPECT_EQ(walkPartsPerPair(10, 1, 65536), 1u);
 }
 
 TEST(StagedPipeline, PaddingAndSwitchedOffChecksMatchTheCpuBackend)

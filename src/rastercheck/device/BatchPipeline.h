@@ -261,7 +261,23 @@ struct StageBudget
         few hundred pairs leave most of a device idle. Larger chunks walk each pair in one thread:
         they have pairs enough to fill it. */
     std::uint32_t exactWalkParts = kMaxWalkParts;
+    /** Threads the split walks of a chunk below waitForCountsFrom may take together: each open pair
+        gets as many parts as keep the pairs past the culls within them (walkPartsPerPair), so a
+        chunk with pairs enough to fill the device walks each pair in one thread. There, parts only
+        add work: a part walks its subtree to the end unless an earlier one has found a contact
+        already. Measured on an H100 (2026-11-27, docs/benchmarks.md "GPU"): splitting every pair of
+        FCL's env/rob at 10^5 states made the batch half as fast. 2^16: a heavy kernel's resident
+        threads on an H100 (132 SMs, 25 % occupancy). */
+    std::size_t exactWalkThreads = std::size_t(1) << 16;
 };
+
+/** \brief Parts each open pair's walk is split into (decideOpenPairs): up to \a parts, as many as
+    keep \a pairs pairs (past the culls) within \a walkThreads threads, at least one. */
+RC_HD std::uint32_t walkPartsPerPair(std::size_t pairs, std::uint32_t parts, std::size_t walkThreads)
+{
+    const std::size_t fit = pairs > 0 ? walkThreads / pairs : parts;
+    return fit >= parts ? parts : (fit > 1 ? static_cast<std::uint32_t>(fit) : 1u);
+}
 
 /** \brief What the stages did, summed over the chunks of a runner's passes: how much work the
     culls left (benchmarks, tuning). */
@@ -588,24 +604,27 @@ RC_HD bool curvedOverlapDecidedAgain(const ModelArrays &md, const StageSettings 
 
     A pair's walk of both trees is serial, and in a small batch the slowest pair's walk is the
     call's latency, so each pair's walk is split into up to \a walkParts parts (splitSurfaceWalk),
-    one thread each; the first part in walk order that finds a contact gives the pair's first
-    contact, the one the whole walk finds. Then one thread per pair ends it: the contact, or the
-    containment test (solidsContain), and curved shapes. Three kernels; with \a walkParts 1, the
-    pair's whole walk in one thread, as a large batch takes it. */
+    one thread each, as many as keep the pairs past the culls within \a walkThreads threads
+    (walkPartsPerPair); the first part in walk order that finds a contact gives the pair's first
+    contact, the one the whole walk finds, and the parts after it stop. Then one thread per pair
+    ends it: the contact, or the containment test (solidsContain), and curved shapes. Three
+    kernels; with \a walkParts 1, the pair's whole walk in one thread, as a large batch takes it. */
 template <class Exec>
 void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
                      Extent survivors, Extent items, Extent fragments, const std::uint32_t *order,
-                     std::uint32_t walkParts, PairOutcome *decided, std::uint8_t *exactFlags)
+                     std::uint32_t walkParts, std::size_t walkThreads, PairOutcome *decided, std::uint8_t *exactFlags)
 {
     const int numLinks = md.numLinks;
     const std::uint32_t m = static_cast<std::uint32_t>(md.numComponents);
     const std::uint32_t environmentPairs = static_cast<std::uint32_t>(md.numObjects) * m;
     const std::size_t bound = survivors.bound;
     const std::uint32_t parts = walkParts < 1 ? 1 : (walkParts > kMaxWalkParts ? kMaxWalkParts : walkParts);
-    NodePair *partStarts = ex.template buffer<NodePair>(BufferWalkParts, bound * parts + 1);
+    // The parts of all pairs: survivors x parts per pair, which walkPartsPerPair keeps within both.
+    const std::size_t partThreads = parts > 1 && walkThreads > bound ? walkThreads : bound;
+    NodePair *partStarts = ex.template buffer<NodePair>(BufferWalkParts, partThreads + 1);
     std::uint32_t *partCount = ex.template buffer<std::uint32_t>(BufferWalkPartCount, bound + 1);
     unsigned long long *firstPart = ex.template buffer<unsigned long long>(BufferFirstPart, bound + 1);
-    ExactContact *partContacts = ex.template buffer<ExactContact>(BufferPartContacts, bound * parts + 1);
+    ExactContact *partContacts = ex.template buffer<ExactContact>(BufferPartContacts, partThreads + 1);
     // 1. Which pairs the exact phase decides, and their walks' parts.
     ex.forEach(bound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = order ? order[k] : k;
@@ -629,15 +648,20 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         bool closedA = false, closedB = false;
         exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
                     closedB);
+        const std::uint32_t perPair = walkPartsPerPair(survivors.size(), parts, walkThreads);
         NodePair scratch[kMaxWalkParts];
         partCount[c] = splitSurfaceWalk(a, poseA, b, poseB, pairPadding(md, st, out.state, out.pair),
-                                        partStarts + c * parts, scratch, parts);
+                                        partStarts + c * perPair, scratch, perPair);
     });
     // 2. The parts' walks, a thread each; the first contact in walk order wins.
-    ex.forEachHeavy(bound * parts, [=] RC_LAMBDA(std::size_t t) {
-        const std::size_t c = order ? order[t / parts] : t / parts;
-        const std::uint32_t j = static_cast<std::uint32_t>(t % parts);
-        if (c >= survivors.size() || j >= partCount[c])
+    ex.forEachHeavy(partThreads, [=] RC_LAMBDA(std::size_t t) {
+        const std::uint32_t perPair = walkPartsPerPair(survivors.size(), parts, walkThreads);
+        const std::size_t k = t / perPair;
+        if (k >= survivors.size())
+            return;
+        const std::size_t c = order ? order[k] : k;
+        const std::uint32_t j = static_cast<std::uint32_t>(t % perPair);
+        if (j >= partCount[c])
             return;
         const PairOutcome &out = decided[c];
         ExactTree a, b;
@@ -645,8 +669,9 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         bool closedA = false, closedB = false;
         exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
                     closedB);
+        const WalkPart part{partStarts[c * perPair + j], j, &firstPart[c]};
         if (surfacesWithin(a, poseA, b, poseB, pairPadding(md, st, out.state, out.pair),
-                           &partContacts[c * parts + j], nullptr, partStarts[c * parts + j]))
+                           &partContacts[c * perPair + j], nullptr, part))
             atomicMinimum(&firstPart[c], j);
     });
     // 3. Each pair's end: the surfaces' first contact, or containment; curved shapes.
@@ -664,7 +689,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         ExactContact contact;
         const bool surfacesMeet = firstPart[c] < parts;
         if (surfacesMeet)
-            contact = partContacts[c * parts + firstPart[c]];
+            contact = partContacts[c * walkPartsPerPair(survivors.size(), parts, walkThreads) + firstPart[c]];
         if (!surfacesMeet && !solidsContain(a, poseA, closedA, b, poseB, closedB, &contact))
         {
             out.status = PairApart;
@@ -787,8 +812,8 @@ ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, c
 {
     const std::size_t bound = survivors.bound;
     std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, bound + 1);
-    decideOpenPairs(ex, md, st, links, survivors, items, fragments, order, small ? budget.exactWalkParts : 1, decided,
-                    exactFlags);
+    decideOpenPairs(ex, md, st, links, survivors, items, fragments, order, small ? budget.exactWalkParts : 1,
+                    budget.exactWalkThreads, decided, exactFlags);
     CountGuesses &guesses = ex.guesses();
     std::size_t prefix = bound < numStates * guesses.outcomesPerState ? bound : numStates * guesses.outcomesPerState;
     const PairOutcome *kept =

@@ -297,6 +297,8 @@ struct SurfaceQuery
     Vec3<double> between{0.0, 0.0, 0.0};  // of the pair last tested: the moving node's centre less the fixed one's
     double nearestGap = HUGE_VAL;
     std::uint32_t slotFixed = 0, slotMoving = 0;
+    const unsigned long long *earliestFound = nullptr;  // a part of a split walk: WalkPart
+    unsigned long long partIndex = 0;
 
     RC_HD const PlacedNode &placed(std::int32_t index)
     {
@@ -335,6 +337,10 @@ struct SurfaceQuery
 
     RC_HD bool test(NodePair pair)
     {
+        // A part stops once an earlier part has found a contact: the walk's first contact is not
+        // in this one. Its pairs still on the stack are dropped unread.
+        if (earliestFound && atomicLoad(earliestFound) < partIndex)
+            return false;
         const TreeNode &nf = fixed.tree.nodes[pair.a], &nm = moving.tree.nodes[pair.b];
         const PlacedNode &pm = placed(pair.b);
         // Bounding spheres first: they settle most pairs that are far apart for one dot product.
@@ -405,6 +411,16 @@ struct ExactContact
     std::int32_t triangleB = -1;
 };
 
+/** \brief One part of a walk split among threads (splitSurfaceWalk): where it starts, its index in
+    walk order, and where the parts lower the index of the earliest part that found a contact
+    (atomicMinimum; null: the part runs to its end). The whole walk from the roots by default. */
+struct WalkPart
+{
+    NodePair start{0, 0};
+    std::uint32_t index = 0;
+    const unsigned long long *earliestFound = nullptr;
+};
+
 /** \brief The surface query of A (placed by \a poseA) and B (placed by \a poseB) within \a padding
     (negative counts as 0): the tree with fewer nodes is the one moved (its nodes placed once per
     query); the other's frame is the working frame, where the moved tree's triangles are placed by
@@ -443,17 +459,19 @@ RC_HD SurfaceQuery surfaceQuery(const ExactTree &a, const Pose<double> &poseA, c
     the leaf pair where the last query of the same two trees touched or came nearest; that may
     change which contact is found first, never the answer, so a query with \a contact skips it and
     its first contact does not depend on earlier queries. A tree too deep for the walk's stack
-    (which MeshBvh's builder rules out) answers true, with no triangles named. \a start: walk only
-    from that pair of nodes (a part from splitSurfaceWalk), in the query's numbering; the roots by
-    default. */
+    (which MeshBvh's builder rules out) answers true, with no triangles named. \a part: walk only
+    from its start (a part from splitSurfaceWalk, in the query's numbering), and stop with false
+    once an earlier part has found a contact; the whole walk by default. */
 RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b,
                                const Pose<double> &poseB, double padding, ExactContact *contact = nullptr,
-                               ExactScratch *scratch = nullptr, NodePair start = NodePair{0, 0})
+                               ExactScratch *scratch = nullptr, WalkPart part = WalkPart{})
 {
     if (a.empty() || b.empty())
         return false;
     Vec3<double> point{0.0, 0.0, 0.0};
     SurfaceQuery query = surfaceQuery(a, poseA, b, poseB, padding, scratch, &point);
+    query.earliestFound = part.earliestFound;
+    query.partIndex = part.index;
     const ExactTree &fixed = query.fixed, &moving = query.moving;
     const bool movingIsA = query.movingIsA;
     LeafHint *hint = query.hint;
@@ -468,7 +486,7 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
         if (query.triangles(hint->slotFixed, placedTriangle))
             return true;
     }
-    const WalkEnd end = walkPairs(fixed.tree.nodes, moving.tree.nodes, query, start);
+    const WalkEnd end = walkPairs(fixed.tree.nodes, moving.tree.nodes, query, part.start);
     if (end == WalkEnd::Finished)
         return false;
     const Pose<double> &fixedPose = movingIsA ? poseB : poseA;

@@ -16,3 +16,32 @@
 #define RC_HD inline
 #define RC_HD_CALL inline
 #endif
+
+namespace rastercheck::device
+{
+/** \brief Lowers *address to value atomically (the per-pair "first hit pixel" reduction, the first
+    part of a split walk to find a contact). */
+RC_HD void atomicMinimum(unsigned long long *address, unsigned long long value)
+{
+#if defined(__CUDA_ARCH__)
+    atomicMin(address, value);
+#else
+    unsigned long long current = __atomic_load_n(address, __ATOMIC_RELAXED);
+    while (value < current &&
+           !__atomic_compare_exchange_n(address, &current, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED))
+    {
+    }
+#endif
+}
+
+/** \brief Reads a value other threads lower with atomicMinimum while this one runs (a relaxed load:
+    a stale value only delays what the reader would skip). */
+RC_HD unsigned long long atomicLoad(const unsigned long long *address)
+{
+#if defined(__CUDA_ARCH__)
+    return *static_cast<const volatile unsigned long long *>(address);
+#else
+    return __atomic_load_n(address, __ATOMIC_RELAXED);
+#endif
+}
+}  // namespace rastercheck::device

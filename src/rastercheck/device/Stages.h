@@ -232,18 +232,4 @@ RC_HD float depthFromKey(std::uint32_t key)
     memcpy(&depth, &bits, sizeof depth);
     return depth;
 }
-
-/** \brief Lowers *address to value atomically (the per-pair "first hit pixel" reduction). */
-RC_HD void atomicMinimum(unsigned long long *address, unsigned long long value)
-{
-#if defined(__CUDA_ARCH__)
-    atomicMin(address, value);
-#else
-    unsigned long long current = __atomic_load_n(address, __ATOMIC_RELAXED);
-    while (value < current &&
-           !__atomic_compare_exchange_n(address, &current, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED))
-    {
-    }
-#endif
-}
 }  // namespace rastercheck::device
