@@ -161,13 +161,15 @@ int main(int argc, char **argv)
             const int repeats = batch <= 1000 ? 20 : 2;
             const double cpuRate = batch <= 100000 ? statesPerSecond(cpu, q, batch, request, repeats) : 0;
             const auto *staged = dynamic_cast<const StagedBackend *>(&gpu.backend());
+            if (haveGpu)  // the first call of a size allocates and measures: the columns give later calls'
+                statesPerSecond(gpu.backend(), q, batch, request, 1);
             const device::ExecutorCounts before = staged ? staged->executorCounts() : device::ExecutorCounts{};
             double gpuSeconds = 0;
             const double gpuRate = haveGpu ? statesPerSecond(gpu.backend(), q, batch, request, repeats, &gpuSeconds) : 0;
             // The share of the calls spent in the stages' passes (kernels, copies, waits); the rest is
             // the host's: the bounds check, the per-state reduction and the open pairs' exact phase.
-            // And what a call costs its executor: waits for the device, launches, allocations (the
-            // first call allocates and measures; later ones of a small batch wait once).
+            // And what a call costs its executor: waits for the device, launches, allocations, after
+            // the call above (a small batch then waits once and allocates nothing).
             const device::ExecutorCounts used =
                 staged ? staged->executorCounts().since(before) : device::ExecutorCounts{};
             const double passShare = used.seconds / std::max(1e-12, gpuSeconds);
