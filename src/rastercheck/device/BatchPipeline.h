@@ -619,8 +619,10 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     const std::uint32_t environmentPairs = static_cast<std::uint32_t>(md.numObjects) * m;
     const std::size_t bound = survivors.bound;
     const std::uint32_t parts = walkParts < 1 ? 1 : (walkParts > kMaxWalkParts ? kMaxWalkParts : walkParts);
-    // The parts of all pairs: survivors x parts per pair, which walkPartsPerPair keeps within both.
-    const std::size_t partThreads = parts > 1 && walkThreads > bound ? walkThreads : bound;
+    // The parts of all pairs: survivors x parts per pair, which walkPartsPerPair keeps within
+    // walkThreads (or the survivors, one part each) and which is at most bound x parts.
+    const std::size_t splitThreads = bound * parts < walkThreads ? bound * parts : walkThreads;
+    const std::size_t partThreads = parts > 1 && splitThreads > bound ? splitThreads : bound;
     NodePair *partStarts = ex.template buffer<NodePair>(BufferWalkParts, partThreads + 1);
     std::uint32_t *partCount = ex.template buffer<std::uint32_t>(BufferWalkPartCount, bound + 1);
     unsigned long long *firstPart = ex.template buffer<unsigned long long>(BufferFirstPart, bound + 1);
