@@ -4,9 +4,11 @@
 // Scenes: three Panda MotionBenchMaker scenes, the crane in the plant, and FCL's env.obj / rob.obj
 // (a free-flying non-convex mesh among non-convex meshes, both open: the real-mesh case).
 //
-// usage: rastercheck_bench_backends [max_batch=1000000] [mode=safe]
+// usage: rastercheck_bench_backends [max_batch=1000000] [mode=safe] [staged=cuda]
 //   CPU and FCL are timed on batches up to 10^4 states (their rate no longer depends on the batch
-//   size there); the GPU on every batch size up to max_batch.
+//   size there); the GPU on every batch size up to max_batch. staged host-stages runs the GPU's
+//   columns on the host executor (the device's code path and its launches and waits, on any
+//   machine: its times say how much work a batch is, not how fast a device does it).
 #include <cstdio>
 #include <cstdlib>
 #include <thread>
@@ -107,6 +109,12 @@ int main(int argc, char **argv)
 {
     const std::size_t maxBatch = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 1000000;
     const CollisionMode mode = argc > 2 ? parseCollisionMode(argv[2]) : CollisionMode::Safe;
+    const BackendChoice staged = argc > 3 ? parseBackendChoice(argv[3]) : BackendChoice::Cuda;
+    if (staged != BackendChoice::Cuda && staged != BackendChoice::HostStages)
+    {
+        std::fprintf(stderr, "rastercheck_bench_backends: staged must be cuda or host-stages\n");
+        return 2;
+    }
     const std::string root = bench::sharedDataOrExit();
     const RobotModelConstPtr panda = bench::loadMbmRobot(root, "panda");
     std::vector<SceneCase> cases;
@@ -121,7 +129,8 @@ int main(int argc, char **argv)
 
     CollisionRequest request;
     request.mode = mode;
-    std::printf("mode %s, %u CPU threads\n\n", toString(mode).c_str(), std::thread::hardware_concurrency());
+    std::printf("mode %s, %u CPU threads, staged backend %s\n\n", toString(mode).c_str(), std::thread::hardware_concurrency(),
+                staged == BackendChoice::Cuda ? "cuda" : "host-stages");
 
     // States/s against batch size and scene size.
     std::printf("| scene | triangles (robot / scene) | batch | FCL 1 core | CPU backend | GPU backend | GPU / FCL | "
@@ -130,7 +139,7 @@ int main(int argc, char **argv)
     for (const SceneCase &c : cases)
     {
         CheckerOptions gpuOptions;
-        gpuOptions.backend = BackendChoice::Cuda;
+        gpuOptions.backend = staged;
         gpuOptions.minDeviceBatch = 1;
         const Checker gpu(c.robot, c.scene, gpuOptions);
         const bool haveGpu = gpu.backendName() != "cpu";
