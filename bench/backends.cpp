@@ -109,8 +109,9 @@ int main(int argc, char **argv)
 {
     const std::size_t maxBatch = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 1000000;
     const CollisionMode mode = argc > 2 ? parseCollisionMode(argv[2]) : CollisionMode::Safe;
-    const BackendChoice staged = argc > 3 ? parseBackendChoice(argv[3]) : BackendChoice::Cuda;
-    if (staged != BackendChoice::Cuda && staged != BackendChoice::HostStages)
+    const std::string stagedName = argc > 3 ? argv[3] : "cuda";
+    const BackendChoice stagedChoice = parseBackendChoice(stagedName);
+    if (stagedChoice != BackendChoice::Cuda && stagedChoice != BackendChoice::HostStages)
     {
         std::fprintf(stderr, "rastercheck_bench_backends: staged must be cuda or host-stages\n");
         return 2;
@@ -129,8 +130,8 @@ int main(int argc, char **argv)
 
     CollisionRequest request;
     request.mode = mode;
-    std::printf("mode %s, %u CPU threads, staged backend %s\n\n", toString(mode).c_str(), std::thread::hardware_concurrency(),
-                staged == BackendChoice::Cuda ? "cuda" : "host-stages");
+    std::printf("mode %s, %u CPU threads, staged backend %s\n\n", toString(mode).c_str(),
+                std::thread::hardware_concurrency(), stagedName.c_str());
 
     // States/s against batch size and scene size.
     std::printf("| scene | triangles (robot / scene) | batch | FCL 1 core | CPU backend | GPU backend | GPU / FCL | "
@@ -139,7 +140,7 @@ int main(int argc, char **argv)
     for (const SceneCase &c : cases)
     {
         CheckerOptions gpuOptions;
-        gpuOptions.backend = staged;
+        gpuOptions.backend = stagedChoice;
         gpuOptions.minDeviceBatch = 1;
         const Checker gpu(c.robot, c.scene, gpuOptions);
         const bool haveGpu = gpu.backendName() != "cpu";

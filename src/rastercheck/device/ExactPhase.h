@@ -279,6 +279,16 @@ RC_HD_CALL bool boxesMayMeet(const TreeNode &nf, const PlacedNode &pm, const Tre
     return true;
 }
 
+/** \brief One part of a walk split among threads (splitSurfaceWalk): where it starts, its index in
+    walk order, and where the parts lower the index of the earliest part that found a contact
+    (atomicMinimum; null: the part runs to its end). The whole walk from the roots by default. */
+struct WalkPart
+{
+    NodePair start{0, 0};
+    std::uint32_t index = 0;
+    const unsigned long long *earliestFound = nullptr;
+};
+
 /** \brief The surface query for walkPairs, with the fixed tree's frame as the working frame and the
     moving tree placed there by \a place: bounding spheres, then boxesMayMeet(), both grown by
     \a reach; leaf pairs by the triangle tests, in the caller's order (a, b) (\a movingIsA says which
@@ -297,8 +307,7 @@ struct SurfaceQuery
     Vec3<double> between{0.0, 0.0, 0.0};  // of the pair last tested: the moving node's centre less the fixed one's
     double nearestGap = HUGE_VAL;
     std::uint32_t slotFixed = 0, slotMoving = 0;
-    const unsigned long long *earliestFound = nullptr;  // a part of a split walk: WalkPart
-    unsigned long long partIndex = 0;
+    WalkPart part{};  // the walk's part (its start is walkPairs' argument)
 
     RC_HD const PlacedNode &placed(std::int32_t index)
     {
@@ -339,7 +348,7 @@ struct SurfaceQuery
     {
         // A part stops once an earlier part has found a contact: the walk's first contact is not
         // in this one. Its pairs still on the stack are dropped unread.
-        if (earliestFound && atomicLoad(earliestFound) < partIndex)
+        if (part.earliestFound && atomicLoad(part.earliestFound) < part.index)
             return false;
         const TreeNode &nf = fixed.tree.nodes[pair.a], &nm = moving.tree.nodes[pair.b];
         const PlacedNode &pm = placed(pair.b);
@@ -411,16 +420,6 @@ struct ExactContact
     std::int32_t triangleB = -1;
 };
 
-/** \brief One part of a walk split among threads (splitSurfaceWalk): where it starts, its index in
-    walk order, and where the parts lower the index of the earliest part that found a contact
-    (atomicMinimum; null: the part runs to its end). The whole walk from the roots by default. */
-struct WalkPart
-{
-    NodePair start{0, 0};
-    std::uint32_t index = 0;
-    const unsigned long long *earliestFound = nullptr;
-};
-
 /** \brief The surface query of A (placed by \a poseA) and B (placed by \a poseB) within \a padding
     (negative counts as 0): the tree with fewer nodes is the one moved (its nodes placed once per
     query); the other's frame is the working frame, where the moved tree's triangles are placed by
@@ -470,8 +469,7 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
         return false;
     Vec3<double> point{0.0, 0.0, 0.0};
     SurfaceQuery query = surfaceQuery(a, poseA, b, poseB, padding, scratch, &point);
-    query.earliestFound = part.earliestFound;
-    query.partIndex = part.index;
+    query.part = part;
     const ExactTree &fixed = query.fixed, &moving = query.moving;
     const bool movingIsA = query.movingIsA;
     LeafHint *hint = query.hint;
