@@ -83,18 +83,6 @@ RC_HD void computeLayerBounds(const Box *componentBounds, const int *subtreeEnd,
         [](Box &layer, const Box &child) { extend(layer, child); });
 }
 
-/** \brief Whether the descent through the layers reaches component k for an object: every layer
-    that contains k (its own and its ancestors') meets the object's box. The CPU backend walks the
-    layers and skips whole subtrees; a GPU thread decides one (component, object) element, with the
-    same outcome. */
-RC_HD bool layersReach(const Box *layers, const int *subtreeEnd, int k, const Box &objectBox, float padding)
-{
-    for (int j = 0; j <= k; ++j)
-        if (subtreeEnd[j] > k && !boxesOverlap(layers[j], objectBox, padding))
-            return false;
-    return true;
-}
-
 /** \brief Where a pair can meet: A's bounds grown by the padding, cut by B's (may be empty). */
 RC_HD Box pairWindow(const Box &a, const Box &b, float padding)
 {
