@@ -9,9 +9,9 @@
 //
 // Stages per chunk of states:
 //   1. forward kinematics (one element per state), component poses, OBBs and AABBs (per state x
-//      component), the robot's bounding sphere (per state);
-//   2. culls per (state, pair): distance filter, the component's AABB and OBB tests (which imply
-//      its layers' AABB tests); compaction of survivors;
+//      component);
+//   2. culls per (state, pair): the component's AABB and OBB tests (which imply the CPU backend's
+//      distance filter and layer tests); compaction of survivors;
 //   3. per surviving pair (in pair order when there are many): image window, the convex
 //      separation proof, the grid, and the candidate triangles (both meshes' trees walked with the
 //      node culls, counted, scanned, written); per (pair, candidate triangle): the per-triangle
@@ -187,22 +187,6 @@ RC_HD double pairPadding(const ModelArrays &model, const StageSettings &settings
     return paddingOfPair(settings.padding, extra.any() ? extra.environment + row * m : nullptr,
                          extra.any() ? extra.self + row * static_cast<std::size_t>(model.numSelfPairs) : nullptr, m,
                          static_cast<std::size_t>(model.numObjects) * m, pair);
-}
-
-/** \brief The largest padding of state \a s's environment pairs: the distance filter and the layer
-    culls stand for many pairs at once (the CPU backend takes the largest per layer; one per state
-    is coarser, never wrong: the pair's own test follows). */
-RC_HD double environmentReachPadding(const ModelArrays &model, const StageSettings &settings, std::size_t s)
-{
-    const PairPaddingRows &extra = settings.extraPadding;
-    double largest = settings.padding;
-    if (extra.any())
-    {
-        const double *row = extra.environment + (extra.rowPerState ? s : 0) * static_cast<std::size_t>(model.numComponents);
-        for (int k = 0; k < model.numComponents; ++k)
-            largest = row[k] + settings.padding > largest ? row[k] + settings.padding : largest;
-    }
-    return largest;
 }
 
 /** \brief Where a pair stands after the stages. */
@@ -395,8 +379,6 @@ enum StageBuffer : int
     BufferComponentPose,
     BufferComponentBox,
     BufferComponentBounds,
-    BufferRobotSphere,
-    BufferReachPadding,
     BufferExtraEnvironment,
     BufferExtraSelf,
     BufferPairFlags,
@@ -905,8 +887,6 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     Pose<float> *poses = ex.template buffer<Pose<float>>(BufferComponentPose, componentElements + 1);
     OrientedBox *boxes = ex.template buffer<OrientedBox>(BufferComponentBox, componentElements + 1);
     Box *bounds = ex.template buffer<Box>(BufferComponentBounds, componentElements + 1);
-    Sphere *robotSphere = ex.template buffer<Sphere>(BufferRobotSphere, numStates);
-    float *reachPadding = ex.template buffer<float>(BufferReachPadding, numStates);
     const ModelArrays md = model;
     ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) {
         if (admissible[s])
@@ -921,22 +901,13 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
         boxes[i] = transformBox(poses[i], md.componentLocalBoxes[c]);
         bounds[i] = boundsOf(boxes[i]);
     });
-    ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) {
-        if (!admissible[s] || m == 0)
-            return;
-        Box all = emptyBox();
-        for (int c = 0; c < m; ++c)
-            extend(all, bounds[s * m + c]);
-        robotSphere[s] = boundingSphere(all);
-        reachPadding[s] = floatPadding(environmentReachPadding(md, st, s));
-    });
 
-    // 2. Culls per (state, pair), then compaction: the survivors in (state, pair) order. No layer
-    // boxes: every layer that holds component k contains k's bounds, so the bounds' test at the
-    // pair's padding (no larger than the reach padding) passes only where each layer's would. The
-    // CPU backend's walk tests layers to skip whole subtrees; a thread per pair would only repeat
-    // its component's ancestors' tests (O(m^2) box tests per state and object: a fifth of the
-    // stages' work at 10^4 Panda states on the host executor).
+    // 2. Culls per (state, pair), then compaction: the survivors in (state, pair) order. Each pair
+    // is tested by its component's boxes alone. The CPU backend's walk first tests the robot's
+    // bounding sphere against the object (the distance filter) and then the layers, to skip many
+    // pairs at once; a thread per pair would only repeat those tests for each pair, and they pass
+    // wherever the component's own box test at the pair's padding passes (the sphere and every
+    // layer that holds component k contain k's bounds, and their padding is no smaller).
     std::uint8_t *flags = ex.template buffer<std::uint8_t>(BufferPairFlags, pairElements + 1);
     ex.forEach(pairElements, [=] RC_LAMBDA(std::size_t i) {
         const std::size_t s = i / pairs;
@@ -948,7 +919,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             {
                 const int o = static_cast<int>(pair / m), k = static_cast<int>(pair % m);
                 const Box &objectBox = md.objectBoxes[o];
-                survives = st.checkEnvironment && objectWithinReach(robotSphere[s], objectBox, reachPadding[s]) &&
+                survives = st.checkEnvironment &&
                            solidsMayMeet(bounds[s * m + k], boxes[s * m + k], objectBox, md.objectOrientedBoxes[o],
                                          floatPadding(pairPadding(md, st, s, pair)));
             }
