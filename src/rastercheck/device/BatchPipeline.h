@@ -1100,20 +1100,21 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                               });
     });
     // Pair c's fragments; past the survivors (or when a count outgrew its bound) empty segments.
+    // Each pair's first hit pixel (step 5) starts at none, in the same pass.
     std::uint32_t *segmentStart = ex.template buffer<std::uint32_t>(BufferSegmentStart, survivorBound + 1);
+    unsigned long long *hit = ex.template buffer<unsigned long long>(BufferHit, survivorBound + 1);
     ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t c) {
         segmentStart[c] =
             items.fits() && fragmentExtent.fits() ? static_cast<std::uint32_t>(fragmentStart[itemStart[c]]) : 0u;
+        hit[c] = ~0ull;
     });
     ex.sortSegments(keys, values, fragmentBound, segmentStart, numSegments);  // may move them to other buffers
 
     // 5. Sort_Search_Pair on each pixel's run; the first hit pixel of each pair.
     Fragment *fragments = ex.template buffer<Fragment>(BufferFragments, fragmentBound + 1);
-    unsigned long long *hit = ex.template buffer<unsigned long long>(BufferHit, survivorBound + 1);
     ex.forEach(fragmentExtent, [=] RC_LAMBDA(std::size_t f) {
         fragments[f] = Fragment{depthFromKey(static_cast<std::uint32_t>(keys[f])), values[f]};
     });
-    ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) { hit[c] = ~0ull; });
     ex.forEach(fragmentExtent, [=] RC_LAMBDA(std::size_t f) {
         const std::uint32_t c = findSegment(segmentStart, numSegments, static_cast<std::uint32_t>(f));
         const unsigned long long pixel = keys[f] >> 32;
