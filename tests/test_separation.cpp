@@ -685,11 +685,11 @@ double nearestNormOfHull(const std::vector<Vec> &points)
 }
 }  // namespace
 
-TEST(Separation, GjksSimplexStepFindsTheNearestPointOfTheHullFromTheFacesOfTheNewestPoint)
+TEST(Separation, GjksSimplexStepFindsTheNearestPointOfTheHull)
 {
     // As GJK calls it: the simplex kept from the last step (whose nearest point is v), plus a point w
-    // that gets closer along v (v . w < v . v). Only the faces holding w are searched first; the
-    // answer must be the hull's nearest point all the same.
+    // that gets closer along v (v . w < v . v). Only the faces that face the origin are searched
+    // (signed volumes); the answer must be the hull's nearest point all the same.
     std::mt19937 rng(17);
     std::normal_distribution<double> normal;
     int origins = 0, steps = 0;
@@ -727,6 +727,79 @@ TEST(Separation, GjksSimplexStepFindsTheNearestPointOfTheHullFromTheFacesOfTheNe
     }
     EXPECT_GT(steps, 20000);
     EXPECT_GT(origins, 100);
+}
+
+TEST(Separation, GjksSimplexStepFindsTheNearestPointOfFlatSimplices)
+{
+    // Rounding and touching solids give GJK flat simplices: a tetrahedron in a plane, a triangle on
+    // a line, a point twice. The nearest point of the hull must come back all the same (from the
+    // faces the flat simplex is made of), never a claim that the origin lies inside.
+    using V = rc::device::Vec3<double>;
+    const std::vector<std::vector<V>> cases = {
+        {{1, -1, 0.5}, {1, 1, 0.5}, {3, 0, 0.5}, {2, 0, 0.5}},     // a flat tetrahedron above the origin
+        {{-1, -1, 0}, {1, -1, 0}, {0, 2, 0}, {0, 0.5, 0}},         // flat, around the origin
+        {{-1, 1, 1}, {1, 1, 1}, {3, 1, 1}},                        // a triangle on a line
+        {{2, 0, 0}, {2, 0, 0}, {2, 1, 0}},                         // a point twice
+        {{2, 0, 0}, {2, 0, 0}},                                    // a segment of no length
+        {{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}},  // one point four times
+        {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}},            // flat, the origin inside it
+    };
+    for (std::size_t c = 0; c < cases.size(); ++c)
+    {
+        V simplex[4];
+        std::vector<Vec> points;
+        for (std::size_t i = 0; i < cases[c].size(); ++i)
+        {
+            simplex[i] = cases[c][i];
+            points.emplace_back(simplex[i].x, simplex[i].y, simplex[i].z);
+        }
+        int count = static_cast<int>(cases[c].size());
+        V next{};
+        double weights[4];
+        V companion[4] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
+        ASSERT_EQ(rc::device::detail::closestOnSimplex(simplex, count, next, companion, weights),
+                  rc::device::detail::SimplexStep::Closer)
+            << "case " << c;
+        EXPECT_NEAR(std::sqrt(rc::device::dot(next, next)), nearestNormOfHull(points), 1e-12) << "case " << c;
+        // The kept points, their companions and weights say the same point.
+        ASSERT_GE(count, 1);
+        V fromWeights{0, 0, 0};
+        double sum = 0.0;
+        for (int i = 0; i < count; ++i)
+        {
+            EXPECT_GE(weights[i], 0.0) << "case " << c;
+            sum += weights[i];
+            fromWeights = fromWeights + weights[i] * simplex[i];
+            const auto original = static_cast<std::size_t>(companion[i].x);
+            EXPECT_EQ(simplex[i].x, cases[c][original].x) << "case " << c;
+            EXPECT_EQ(simplex[i].y, cases[c][original].y) << "case " << c;
+            EXPECT_EQ(simplex[i].z, cases[c][original].z) << "case " << c;
+        }
+        EXPECT_NEAR(sum, 1.0, 1e-12) << "case " << c;
+        EXPECT_NEAR(fromWeights.x, next.x, 1e-12) << "case " << c;
+        EXPECT_NEAR(fromWeights.y, next.y, 1e-12) << "case " << c;
+        EXPECT_NEAR(fromWeights.z, next.z, 1e-12) << "case " << c;
+    }
+}
+
+TEST(Separation, GjksSimplexStepWritesNothingForNaNCoordinates)
+{
+    // A NaN support point (a NaN pose) must not leave a simplex of no points behind: nothing is
+    // written, and the caller, seeing no progress, stops.
+    using V = rc::device::Vec3<double>;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (int count0 = 1; count0 <= 4; ++count0)
+    {
+        V simplex[4] = {{nan, 0, 0}, {nan, 1, 0}, {nan, 0, 1}, {nan, 1, 1}};
+        int count = count0;
+        V next{3.0, 4.0, 5.0};
+        EXPECT_EQ(rc::device::detail::closestOnSimplex(simplex, count, next),
+                  rc::device::detail::SimplexStep::Closer);
+        EXPECT_EQ(count, count0);
+        EXPECT_EQ(next.x, 3.0);
+        EXPECT_EQ(next.y, 4.0);
+        EXPECT_EQ(next.z, 5.0);
+    }
 }
 
 namespace

@@ -107,19 +107,11 @@ RC_HD double closestPoints(const SupportA &a, const SupportB &b, Vec3<double> &o
             overlap = true;
             break;
         }
-        if (result == detail::SimplexStep::Flat)
-        {
-            // Nothing written: the old simplex and weights stand. The origin on it within rounding
-            // is a contact.
-            --count;
-            overlap = vv <= 1e-24 * size * size;
-            break;
-        }
         if (!(dot(closest, closest) < vv))
         {
             // No progress left: v is the nearest within rounding, on the simplex before this step
-            // (the reduced one may hold a farther point: the origin on a face, the new point's
-            // faces all past it). The origin itself within rounding is a contact.
+            // (rounding may leave the reduced one's point no nearer, or a flat simplex's a little
+            // farther). The origin itself within rounding is a contact.
             for (int k = 0; k < previousCount; ++k)
             {
                 simplex[k] = previous[k];

@@ -263,123 +263,159 @@ RC_HD double gapAlong(const Vec3<double> &v, const ConvexProxy &a, const Pose<do
 
 namespace detail
 {
-/** \brief Closest point to the origin of the convex hull of simplex[0..count) (count 1 to 4), and
-    the smallest sub-simplex whose hull holds it, written back in place. The faces that hold the last
-    point (the one GJK just added) are tried, 8 at most, and the others only when none of those is
-    usable: the projection of the origin on a face's affine hull, when it falls inside the face, is
-    a point of the hull, and the nearest of those is the closest point. Degenerate faces are
-    skipped: their sub-faces hold the answer. \a companion (optional) is kept in step with the
-    simplex; \a weights (optional, 4) receives the barycentric weights of the closest point on the
-    kept sub-simplex, or of the origin in the tetrahedron that holds it. */
+/** \brief What closestOnSimplex() found. */
 enum class SimplexStep
 {
-    Closer,        ///< \a closest and the sub-simplex are written
-    OriginInside,  ///< the origin lies inside a full tetrahedron (the hulls meet)
-    Flat           ///< no face was usable (numerically flat): nothing written
+    Closer,       ///< \a closest and the sub-simplex are written (NaN coordinates: nothing); the caller
+                  ///< checks that it got closer
+    OriginInside  ///< the origin lies inside a full tetrahedron (the hulls meet)
 };
 
+/** \brief The nearest point to the origin found so far among faces of a simplex: its squared norm,
+    the face holding it (\a mask: bit i for simplex point i) and its barycentric weights there, in
+    the order of the face's points in the simplex. */
+struct FaceNearest
+{
+    Vec3<double> point{0.0, 0.0, 0.0};
+    double norm = HUGE_VAL;
+    double weights[3] = {0.0, 0.0, 0.0};
+    int mask = 0;
+
+    /** \brief Keeps point \a p of face \a faceMask, with weights \a w0 .. \a w2 of the face's points
+        (in simplex order), when it is nearer. */
+    RC_HD void keep(const Vec3<double> &p, int faceMask, double w0, double w1 = 0.0, double w2 = 0.0)
+    {
+        const double pp = dot(p, p);
+        if (!(pp < norm))
+            return;
+        point = p;
+        norm = pp;
+        weights[0] = w0;
+        weights[1] = w1;
+        weights[2] = w2;
+        mask = faceMask;
+    }
+};
+
+/** \brief Keeps the nearest point of segment simplex[i] simplex[j] (i < j) in \a best when it is
+    nearer. */
+RC_HD void nearestOnSegment(const Vec3<double> *simplex, int i, int j, FaceNearest &best)
+{
+    const Vec3<double> t = simplex[j] - simplex[i];
+    const double tt = dot(t, t);
+    const double u = tt > 0.0 ? -dot(simplex[i], t) / tt : 0.0;  // the weight of j
+    if (!(u > 0.0))
+        best.keep(simplex[i], 1 << i, 1.0);
+    else if (!(u < 1.0))
+        best.keep(simplex[j], 1 << j, 1.0);
+    else
+        best.keep(simplex[i] + u * t, (1 << i) | (1 << j), 1.0 - u, u);
+}
+
+/** \brief Keeps the nearest point of triangle simplex[i] simplex[j] simplex[k] (i < j < k) in \a best when it is
+    nearer: the origin's projection on its plane when that falls inside, else the nearest point of
+    the edges opposite the corners whose weight is not positive (the edges whose lines part the
+    projection from the triangle); of every edge when the triangle is flat. */
+RC_HD void nearestOnTriangle(const Vec3<double> *simplex, int i, int j, int k, FaceNearest &best)
+{
+    const Vec3<double> s0 = simplex[i], e0 = simplex[j] - s0, e1 = simplex[k] - s0;
+    const double a00 = dot(e0, e0), a01 = dot(e0, e1), a11 = dot(e1, e1);
+    const double det = a00 * a11 - a01 * a01;
+    bool opposite[3] = {true, true, true};  // the edges to search: opposite corner i, j, k
+    if (det > 1e-12 * a00 * a11)
+    {
+        const double b0 = -dot(e0, s0), b1 = -dot(e1, s0);
+        const double lj = (b0 * a11 - b1 * a01) / det, lk = (a00 * b1 - a01 * b0) / det, li = 1.0 - lj - lk;
+        if (li > 0.0 && lj > 0.0 && lk > 0.0)
+        {
+            best.keep(s0 + lj * e0 + lk * e1, (1 << i) | (1 << j) | (1 << k), li, lj, lk);
+            return;
+        }
+        opposite[0] = !(li > 0.0);
+        opposite[1] = !(lj > 0.0);
+        opposite[2] = !(lk > 0.0);
+    }
+    if (opposite[0])
+        nearestOnSegment(simplex, j, k, best);
+    if (opposite[1])
+        nearestOnSegment(simplex, i, k, best);
+    if (opposite[2])
+        nearestOnSegment(simplex, i, j, best);
+}
+
+/** \brief Closest point to the origin of the convex hull of simplex[0..count) (count 1 to 4), and
+    the smallest sub-simplex whose hull holds it, written back in place: the signed-volume
+    sub-algorithm (Montanari, Petrinic and Barbieri, "Improving the GJK algorithm for faster and more
+    robust distance queries between convex objects", ACM TOG 2017). The origin's barycentric
+    weights in the full simplex say which faces can hold the nearest point (those opposite a corner
+    whose weight is not positive: only they face the origin), and only those are searched, down to
+    edges and corners; a flat simplex searches all of its faces. \a companion (optional) is kept in
+    step with the simplex; \a weights (optional, 4) receives the barycentric weights of the closest
+    point on the kept sub-simplex, or of the origin in the tetrahedron that holds it. Where no face
+    gives a number (NaN coordinates) nothing is written: \a closest stays as given, which the
+    callers read as no progress. */
 RC_HD SimplexStep closestOnSimplex(Vec3<double> *simplex, int &count, Vec3<double> &closest,
                                    Vec3<double> *companion = nullptr, double *weights = nullptr)
 {
-    double bestNorm = -1.0;
-    int bestMask = 0;
-    double bestWeights[4] = {};
-    // The faces that hold the newest point (the last; GJK adds a point only where it gets closer)
-    // come first: every other face's closest point lies no nearer than the last one, so the answer
-    // is on one of them. The others are tried only when rounding leaves none of those usable.
-    // Order: newest | k for k < newest, then the masks 1 .. newest - 1 without it.
-    const int newest = 1 << (count - 1);
-    for (int k = 0; k < 2 * newest - 1; ++k)
+    FaceNearest best;
+    if (count == 1)
+        best.keep(simplex[0], 1, 1.0);
+    else if (count == 2)
+        nearestOnSegment(simplex, 0, 1, best);
+    else if (count == 3)
+        nearestOnTriangle(simplex, 0, 1, 2, best);
+    else
     {
-        if (k == newest && bestNorm >= 0.0)
-            break;
-        const int mask = k < newest ? (newest | k) : k - newest + 1;
-        int index[4] = {0, 0, 0, 0}, size = 0;
-        for (int i = 0; i < count; ++i)
-            if (mask & (1 << i))
-                index[size++] = i;
-        // Solve for weights of p = s0 + sum_k lambda_k (s_k - s0) with p orthogonal to the face.
-        const Vec3<double> s0 = simplex[index[0]];
-        Vec3<double> e[3];
-        for (int k = 1; k < size; ++k)
-            e[k - 1] = simplex[index[k]] - s0;
-        double lambda[3] = {};
-        const int n = size - 1;
-        if (n == 1)
+        const Vec3<double> s0 = simplex[0], e0 = simplex[1] - s0, e1 = simplex[2] - s0, e2 = simplex[3] - s0;
+        const double det = dot(e0, cross(e1, e2));
+        const double scale = sqrt(dot(e0, e0) * dot(e1, e1) * dot(e2, e2));
+        bool opposite[4] = {true, true, true, true};  // the faces to search: opposite corner 0 .. 3
+        if (det > 1e-9 * scale || -det > 1e-9 * scale)
         {
-            const double ee = dot(e[0], e[0]);
-            if (!(ee > 0.0))
-                continue;
-            lambda[0] = -dot(e[0], s0) / ee;
-        }
-        else if (n == 2)
-        {
-            const double a00 = dot(e[0], e[0]), a01 = dot(e[0], e[1]), a11 = dot(e[1], e[1]);
-            const double b0 = -dot(e[0], s0), b1 = -dot(e[1], s0);
-            const double det = a00 * a11 - a01 * a01;
-            if (!(det > 1e-12 * a00 * a11))
-                continue;
-            lambda[0] = (b0 * a11 - b1 * a01) / det;
-            lambda[1] = (a00 * b1 - a01 * b0) / det;
-        }
-        else if (n == 3)
-        {
-            // Full tetrahedron: barycentric coordinates of the origin by signed volumes.
-            const double det = dot(e[0], cross(e[1], e[2]));
-            const double scale = std::sqrt(dot(e[0], e[0]) * dot(e[1], e[1]) * dot(e[2], e[2]));
-            if (!(det > 1e-9 * scale || -det > 1e-9 * scale))
-                continue;
             const Vec3<double> minusS0 = {-s0.x, -s0.y, -s0.z};
-            lambda[0] = dot(minusS0, cross(e[1], e[2])) / det;
-            lambda[1] = dot(e[0], cross(minusS0, e[2])) / det;
-            lambda[2] = dot(e[0], cross(e[1], minusS0)) / det;
-        }
-        double weight0 = 1.0;
-        bool inside = true;
-        for (int k = 0; k < n; ++k)
-        {
-            inside = inside && lambda[k] > 0.0;
-            weight0 -= lambda[k];
-        }
-        if (!inside || !(weight0 > 0.0))
-            continue;
-        Vec3<double> p = s0;
-        for (int k = 0; k < n; ++k)
-            p = p + lambda[k] * e[k];
-        if (n == 3)
-        {
-            if (weights)
+            const double l1 = dot(minusS0, cross(e1, e2)) / det;
+            const double l2 = dot(e0, cross(minusS0, e2)) / det;
+            const double l3 = dot(e0, cross(e1, minusS0)) / det;
+            const double l0 = 1.0 - l1 - l2 - l3;
+            if (l0 > 0.0 && l1 > 0.0 && l2 > 0.0 && l3 > 0.0)
             {
-                weights[0] = weight0;
-                for (int k = 0; k < 3; ++k)
-                    weights[k + 1] = lambda[k];
+                if (weights)
+                {
+                    weights[0] = l0;
+                    weights[1] = l1;
+                    weights[2] = l2;
+                    weights[3] = l3;
+                }
+                return SimplexStep::OriginInside;
             }
-            return SimplexStep::OriginInside;
+            opposite[0] = !(l0 > 0.0);
+            opposite[1] = !(l1 > 0.0);
+            opposite[2] = !(l2 > 0.0);
+            opposite[3] = !(l3 > 0.0);
         }
-        const double norm = dot(p, p);
-        if (bestNorm < 0.0 || norm < bestNorm)
-        {
-            bestNorm = norm;
-            bestMask = mask;
-            closest = p;
-            bestWeights[0] = weight0;
-            for (int k = 0; k < n; ++k)
-                bestWeights[k + 1] = lambda[k];
-        }
+        if (opposite[0])
+            nearestOnTriangle(simplex, 1, 2, 3, best);
+        if (opposite[1])
+            nearestOnTriangle(simplex, 0, 2, 3, best);
+        if (opposite[2])
+            nearestOnTriangle(simplex, 0, 1, 3, best);
+        if (opposite[3])
+            nearestOnTriangle(simplex, 0, 1, 2, best);
     }
-    if (bestNorm < 0.0)
-        return SimplexStep::Flat;
-    if (weights)
-        for (int k = 0; k < 4; ++k)
-            weights[k] = bestWeights[k];
+    if (best.mask == 0)
+        return SimplexStep::Closer;  // no face gave a number (NaN coordinates): no progress
+    closest = best.point;
     int kept = 0;
     for (int i = 0; i < count; ++i)
-        if (bestMask & (1 << i))
+        if (best.mask & (1 << i))
         {
             if (companion)
                 companion[kept] = companion[i];
             simplex[kept++] = simplex[i];
         }
+    if (weights)
+        for (int i = 0; i < 4; ++i)
+            weights[i] = i < 3 ? best.weights[i] : 0.0;
     count = kept;
     return SimplexStep::Closer;
 }
@@ -535,7 +571,7 @@ RC_HD double hullDistanceBound(const Vec3<double> &x, const double *points, std:
         const detail::SimplexStep step = detail::closestOnSimplex(simplex, size, next);
         if (step == detail::SimplexStep::OriginInside)
             return 0.0;
-        if (step == detail::SimplexStep::Flat || !(dot(next, next) < vv))
+        if (!(dot(next, next) < vv))
             break;
         v = next;
     }
@@ -687,8 +723,6 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         const detail::SimplexStep step = detail::closestOnSimplex(simplex, count, next, onA, weights);
         if (step == detail::SimplexStep::OriginInside)
             return overlapProven() ? HullRelation::Overlapping : HullRelation::Unknown;
-        if (step != detail::SimplexStep::Closer)
-            return HullRelation::Unknown;  // the hull points' hulls meet, or GJK lost its footing
         if (!(dot(next, next) < vv))
             break;  // no progress left
         v = next;
