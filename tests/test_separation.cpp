@@ -736,13 +736,13 @@ TEST(Separation, GjksSimplexStepFindsTheNearestPointOfFlatSimplices)
     // faces the flat simplex is made of), never a claim that the origin lies inside.
     using V = rc::device::Vec3<double>;
     const std::vector<std::vector<V>> cases = {
-        {{1, -1, 0.5}, {1, 1, 0.5}, {3, 0, 0.5}, {2, 0, 0.5}},     // a flat tetrahedron above the origin
-        {{-1, -1, 0}, {1, -1, 0}, {0, 2, 0}, {0, 0.5, 0}},         // flat, around the origin
-        {{-1, 1, 1}, {1, 1, 1}, {3, 1, 1}},                        // a triangle on a line
-        {{2, 0, 0}, {2, 0, 0}, {2, 1, 0}},                         // a point twice
-        {{2, 0, 0}, {2, 0, 0}},                                    // a segment of no length
+        {{1, -1, 0.5}, {1, 1, 0.5}, {3, 0, 0.5}, {2, 0, 0.5}},                 // a flat tetrahedron above the origin
+        {{-1, -1, 0}, {1, -1, 0}, {0, 2, 0}, {0, 0.5, 0}},                     // flat, around the origin
+        {{-1, 1, 1}, {1, 1, 1}, {3, 1, 1}},                                    // a triangle on a line
+        {{2, 0, 0}, {2, 0, 0}, {2, 1, 0}},                                     // a point twice
+        {{2, 0, 0}, {2, 0, 0}},                                                // a segment of no length
         {{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}},  // one point four times
-        {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}},            // flat, the origin inside it
+        {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}},                        // flat, the origin inside it
     };
     for (std::size_t c = 0; c < cases.size(); ++c)
     {
@@ -793,8 +793,7 @@ TEST(Separation, GjksSimplexStepWritesNothingForNaNCoordinates)
         V simplex[4] = {{nan, 0, 0}, {nan, 1, 0}, {nan, 0, 1}, {nan, 1, 1}};
         int count = count0;
         V next{3.0, 4.0, 5.0};
-        EXPECT_EQ(rc::device::detail::closestOnSimplex(simplex, count, next),
-                  rc::device::detail::SimplexStep::Closer);
+        EXPECT_EQ(rc::device::detail::closestOnSimplex(simplex, count, next), rc::device::detail::SimplexStep::Closer);
         EXPECT_EQ(count, count0);
         EXPECT_EQ(next.x, 3.0);
         EXPECT_EQ(next.y, 4.0);
