@@ -23,9 +23,11 @@ namespace rastercheck
     gap does not clear it. The support search reads only the few hull points of a direction's cell
     (device::supportCell), so more points cost little there and shrink the slack: 256 instead of
     128 took a fifth of the instructions off the Panda's certified edges and a quarter off its free
-    states (docs/benchmarks.md, "The support search by direction cells"). At most 256: the cells
-    number hull points in bytes. */
-constexpr std::size_t kConvexHullDirections = 256;
+    states, 1024 instead of 256 a fifth off the UR5's free states (its links have thousands of
+    vertices), at 0.37 s more per UR5 model (docs/benchmarks.md, "The support search by direction
+    cells", "1024 hull directions"). Meshes of up to this many vertices have no slack. At most
+    65536: the cells number hull points in 16 bits. */
+constexpr std::size_t kConvexHullDirections = 1024;
 
 /** \brief Most shells a solid is split into for the separation cull: shell pairs grow as the
     product, and a solid of more shells (a scene mesh of loose parts) is tried whole only. */
@@ -108,7 +110,7 @@ private:
     std::vector<double> planes_;                     // n_planes x 4
     std::vector<std::uint32_t> edges_;               // n_edges x 2
     std::vector<std::uint32_t> supportCellStart_;    // per piece with cells, kSupportCells + 1
-    std::vector<std::uint8_t> supportCandidates_;    // hull point numbers within their piece
+    std::vector<std::uint16_t> supportCandidates_;    // hull point numbers within their piece
     std::vector<device::PatchNode> patchNodes_;      // per solid, root first
     std::vector<std::uint32_t> solidPatchNodes_{0};  // n_solids + 1
     std::vector<device::ConvexPiece> patchPieces_;   // n_patches

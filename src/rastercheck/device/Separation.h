@@ -138,7 +138,7 @@ struct ConvexArrays
     const double *planes;                   ///< n_planes x 4: unit outward normal and offset (n . x = d on the face)
     const std::uint32_t *edges;             ///< n_edges x 2: vertex numbers within the piece
     const std::uint32_t *supportCellStart;  ///< per piece with cells, kSupportCells + 1 offsets
-    const std::uint8_t *supportCandidates;  ///< hull point numbers within the piece, ascending per cell
+    const std::uint16_t *supportCandidates;  ///< hull point numbers within the piece, ascending per cell
     /** \brief Solid s's patch tree is patchNodes[solidPatchNodes[s] .. solidPatchNodes[s + 1]),
         root first; an empty range: the solid has none (it is small, or close to convex). */
     const PatchNode *patchNodes;
@@ -163,7 +163,7 @@ struct ConvexProxy
     const std::uint32_t *edges;
     std::uint32_t numEdges;
     const std::uint32_t *supportCellStart;  ///< null: every hull point is searched
-    const std::uint8_t *supportCandidates;
+    const std::uint16_t *supportCandidates;
 };
 
 RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, const ConvexPiece &p)
@@ -434,8 +434,8 @@ RC_HD std::uint32_t hullSupportIndex(const ConvexProxy &solid, const Vec3<double
         supportValue(solid.hullPoints, solid.numHullPoints, d, &index);
         return index;
     }
-    const std::uint8_t *candidate = solid.supportCandidates + solid.supportCellStart[cell];
-    const std::uint8_t *end = solid.supportCandidates + solid.supportCellStart[cell + 1];
+    const std::uint16_t *candidate = solid.supportCandidates + solid.supportCellStart[cell];
+    const std::uint16_t *end = solid.supportCandidates + solid.supportCellStart[cell + 1];
     index = *candidate;
     const double *first = solid.hullPoints + 3 * index;
     double best = d.x * first[0] + d.y * first[1] + d.z * first[2];
@@ -587,7 +587,7 @@ RC_HD double hullDistanceBound(const Vec3<double> &x, const double *points, std:
     direction that looks good enough and once along the converged one. Apart or Overlapping only
     with a proof, so the answer is conservative whatever GJK does; Unknown sends the pair on to the
     exact narrow phase. For convex meshes of no more than rastercheck::kConvexHullDirections
-    (128) vertices, every vertex is a hull point and the proof is found whenever the solids are
+    (1024) vertices, every vertex is a hull point and the proof is found whenever the solids are
     apart by more than the padding; finer meshes need a little more (the hull points' direction is
     off by up to the directions' spacing: two unit spheres of 60 000 vertices, 0.0499 apart, are
     proven apart up to a padding of 0.0493). A GJK over every vertex closes that gap but did not
