@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "rastercheck/model/Kinematics.h"
+
 namespace rastercheck
 {
 namespace
@@ -111,8 +113,8 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         if (driver.firstCoordinate < 0)
             continue;  // held by nothing: cannot move
         movingIndex[j] = static_cast<int>(moving_.size());
-        moving_.push_back({joint.kind, driver.firstCoordinate, driver.continuous, joint.mimicOf >= 0,
-                           joint.mimicOf >= 0 ? joint.mimicMultiplier : 1.0});
+        moving_.push_back({joint.kind, joint.childLink, joint.axis.normalized(), driver.firstCoordinate,
+                           driver.continuous, joint.mimicOf >= 0, joint.mimicOf >= 0 ? joint.mimicMultiplier : 1.0});
     }
     // Per component, up its chain: how far its points can lie from each joint's centre (its own
     // radius, then each joint's offset and shift on the way up). A joint near the base turns a
@@ -134,7 +136,20 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
             link = joint.parentLink;
         }
         std::sort(above.begin(), above.end(), [](const Carrier &a, const Carrier &b) { return a.joint < b.joint; });
+        firstCarrier_.push_back(c == 0 ? 0 : firstCarrier_.back() + above_.back().size());
         above_.push_back(std::move(above));
+        // A sphere about the vertices' box centre: what sweeps() about a reference measures.
+        const Aabb &box = component.localAabb;
+        const Eigen::Vector3d centre = box.empty() ? Eigen::Vector3d::Zero() : box.center();
+        double sphere = 0.0;
+        for (const Eigen::Vector3d &v : component.mesh.vertices)
+            sphere = std::max(sphere, (v - centre).norm());
+        for (const Carrier &carrier : above_.back())
+            tightens_ = tightens_ || above_.back().size() > 1 ||
+                        moving_[static_cast<std::size_t>(carrier.joint)].kind == JointKind::Revolute;
+        componentLink_.push_back(component.link);
+        sphereCentre_.push_back(centre);
+        sphereRadius_.push_back(sphere);
     }
 }
 
@@ -194,9 +209,9 @@ void MotionBound::forEachPairCarrier(int first, int second, F &&f) const
     while (x < a.size() || y < b.size())
     {
         if (y == b.size() || (x < a.size() && a[x].joint < b[y].joint))
-            f(a[x++]);
+            f(first, x++);
         else if (x == a.size() || b[y].joint < a[x].joint)
-            f(b[y++]);
+            f(second, y++);
         else
             ++x, ++y;  // above both
     }
@@ -215,25 +230,72 @@ double MotionBound::sweep(const double *qa, const double *qb) const
 void MotionBound::sweeps(const double *qa, const double *qb, const std::vector<std::pair<int, int>> &pairs,
                          double *componentSweeps, double *pairSweeps) const
 {
-    std::vector<Travel> travel;
+    sweepsAlong(qa, qb, nullptr, 0.0, pairs, componentSweeps, pairSweeps);
+}
+
+void MotionBound::sweeps(const double *qa, const double *qb, const RobotData &reference, double halfSpan,
+                         const std::vector<std::pair<int, int>> &pairs, double *componentSweeps,
+                         double *pairSweeps) const
+{
+    sweepsAlong(qa, qb, &reference, halfSpan, pairs, componentSweeps, pairSweeps);
+}
+
+void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotData *reference, double halfSpan,
+                              const std::vector<std::pair<int, int>> &pairs, double *componentSweeps,
+                              double *pairSweeps) const
+{
+    // Per thread, kept between calls: a certified edge asks for these once per part of the edge.
+    thread_local std::vector<Travel> travel;
+    thread_local std::vector<double> moved;
+    thread_local std::vector<Eigen::Vector3d> axes;  // each turning joint's axis at the reference
     travels(qa, qb, travel);
-    // How far joint carrier.joint moves a point carrier.distance from its centre. A joint that
-    // does not turn adds only its slide, even at an infinite distance (a held floating base).
-    auto moved = [&](const Carrier &carrier)
+    if (reference)
     {
-        const Travel &t = travel[static_cast<std::size_t>(carrier.joint)];
-        return t.slide + (t.turn == 0.0 ? 0.0 : t.turn * carrier.distance);
-    };
+        axes.resize(moving_.size());
+        for (std::size_t k = 0; k < moving_.size(); ++k)
+            axes[k] = reference->oMl[static_cast<std::size_t>(moving_[k].childLink)].linear() * moving_[k].axis;
+    }
+    // How far each carrier's joint moves its component's points, per component from the joint
+    // nearest to it up to the base: a joint that does not turn adds only its slide, even at an
+    // infinite distance (a held floating base).
+    moved.resize(above_.empty() ? 0 : firstCarrier_.back() + above_.back().size());
     for (std::size_t c = 0; c < above_.size(); ++c)
     {
-        componentSweeps[c] = 0.0;
-        for (const Carrier &carrier : above_[c])
-            componentSweeps[c] += moved(carrier);
+        const std::vector<Carrier> &above = above_[c];
+        Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+        if (reference)
+            centre = reference->oMl[static_cast<std::size_t>(componentLink_[c])] * sphereCentre_[c];
+        double inner = 0.0;  // what the joints between the carrier and the component move its points
+        for (std::size_t i = above.size(); i-- > 0;)
+        {
+            const auto k = static_cast<std::size_t>(above[i].joint);
+            const Travel &t = travel[k];
+            double reach = above[i].distance;
+            if (reference && t.turn != 0.0)
+            {
+                // Turning about its axis keeps a point's distance from it; only the joints between
+                // them change it, by at most their travel over the half span on either side.
+                const MovingJoint &joint = moving_[k];
+                const Eigen::Vector3d offset =
+                    centre - reference->oMl[static_cast<std::size_t>(joint.childLink)].translation();
+                double measured = offset.norm();  // planar and floating joints turn about the centre
+                if (joint.kind == JointKind::Revolute)
+                    measured = (offset - offset.dot(axes[k]) * axes[k]).norm();
+                const double tightened = measured + sphereRadius_[c] + halfSpan * inner;
+                if (tightened < reach)  // false for NaN: the chain's bound stands
+                    reach = tightened;
+            }
+            const double m = t.slide + (t.turn == 0.0 ? 0.0 : t.turn * reach);
+            moved[firstCarrier_[c] + i] = m;
+            inner += m;
+        }
+        componentSweeps[c] = inner;
     }
     for (std::size_t i = 0; i < pairs.size(); ++i)
     {
         double sum = 0.0;
-        forEachPairCarrier(pairs[i].first, pairs[i].second, [&](const Carrier &carrier) { sum += moved(carrier); });
+        forEachPairCarrier(pairs[i].first, pairs[i].second,
+                           [&](int c, std::size_t k) { sum += moved[firstCarrier_[static_cast<std::size_t>(c)] + k]; });
         pairSweeps[i] = sum;
     }
 }
@@ -242,8 +304,9 @@ std::vector<MotionBound::PairJoint> MotionBound::pairJoints(int a, int b) const
 {
     std::vector<PairJoint> joints;
     forEachPairCarrier(a, b,
-                       [&](const Carrier &carrier)
+                       [&](int c, std::size_t i)
                        {
+                           const Carrier &carrier = above_[static_cast<std::size_t>(c)][i];
                            const MovingJoint &joint = moving_[static_cast<std::size_t>(carrier.joint)];
                            joints.push_back({joint.kind, joint.firstCoordinate, joint.wraps, joint.mimic});
                        });

@@ -7,6 +7,8 @@
 
 namespace rastercheck
 {
+struct RobotData;
+
 /** \brief Bounds how far a robot's collision geometry can travel along a straight edge in
     configuration space: the basis of certified (continuous) edge checking.
 
@@ -29,7 +31,10 @@ namespace rastercheck
         |x(t) - x(s)| <= |t - s| * sweep(qa, qb),
 
     in the model's length unit. The bound is conservative, never tight on purpose: it ignores the
-    directions of the axes. Immutable; thread-safe. */
+    directions of the axes. About a configuration whose link poses are known, reach(j) can be
+    measured instead of bounded by the chain (the second sweeps(): distance from the axis at that
+    configuration, plus what the joints below j move the point within a span of the edge around
+    it): the certified validator pads refined intervals that way. Immutable; thread-safe. */
 class MotionBound
 {
 public:
@@ -53,6 +58,25 @@ public:
         distance is the same in their common ancestor's frame). Infinite where sweep() would be. */
     void sweeps(const double *qa, const double *qb, const std::vector<std::pair<int, int>> &pairs,
                 double *componentSweeps, double *pairSweeps) const;
+
+    /** \brief The same bounds (per unit of the edge) for the part of the edge within \a halfSpan
+        (a fraction of it) of a configuration on it, tightened by where the links are there
+        (\a reference: forwardKinematics at that configuration, as the state space interpolates the
+        edge). A revolute joint moves a point by its turn times the point's distance from the
+        joint's axis (not its centre); that distance is measured at the reference, for the
+        component's bounding sphere, and within the span it changes by at most what the joints
+        between that joint and the component move the point there. Each reach is the smaller of
+        that and the chain's bound, so these sweeps never exceed sweeps()'s. An arm's hand is
+        turned by its base joint at its distance from the base's axis, not at the arm's full length;
+        the shorter the span, the tighter. */
+    void sweeps(const double *qa, const double *qb, const RobotData &reference, double halfSpan,
+                const std::vector<std::pair<int, int>> &pairs, double *componentSweeps, double *pairSweeps) const;
+
+    /** \brief Whether sweeps about a reference can be smaller than sweeps(): some component is turned
+        by a revolute joint, or by a joint with other moving joints between it and the component. A
+        lone floating or planar body never is (its points' distance from the joint's centre is the
+        chain's bound already), so callers can skip the forward kinematics. */
+    bool tightensAboutReferences() const { return tightens_; }
 
     /** \brief A joint that moves two components relative to each other (pairJoints()). */
     struct PairJoint
@@ -80,6 +104,8 @@ private:
     struct MovingJoint
     {
         JointKind kind;
+        int childLink;
+        Eigen::Vector3d axis;  ///< unit, in the child link's frame (revolute and prismatic joints)
         int firstCoordinate;  ///< of the joint itself, or of the joint it mimics
         bool wraps;           ///< a continuous revolute joint (its angle turns the shorter way round)
         bool mimic;
@@ -100,12 +126,21 @@ private:
     };
 
     void travels(const double *qa, const double *qb, std::vector<Travel> &travel) const;
-    /** \brief Calls \a f with each Carrier above exactly one of components \a a and \a b. */
+    /** \brief Both sweeps() overloads: \a reference null for the chain's bounds alone. */
+    void sweepsAlong(const double *qa, const double *qb, const RobotData *reference, double halfSpan,
+                     const std::vector<std::pair<int, int>> &pairs, double *componentSweeps, double *pairSweeps) const;
+    /** \brief Calls \a f(c, i) for each Carrier above_[c][i] above exactly one of components \a a
+        and \a b. */
     template <class F>
     void forEachPairCarrier(int a, int b, F &&f) const;
 
     std::vector<MovingJoint> moving_;
     std::vector<std::vector<Carrier>> above_;  ///< per component, by ascending joint
+    std::vector<std::size_t> firstCarrier_;    ///< per component: where its carriers start in a flat array
+    std::vector<int> componentLink_;
+    std::vector<Eigen::Vector3d> sphereCentre_;  ///< per component, a sphere holding its vertices (link frame)
+    std::vector<double> sphereRadius_;
+    bool tightens_ = false;
     std::vector<double> reach_;
     double size_ = 0.0;
 };

@@ -55,8 +55,11 @@ struct CertifiedMotionOptions
     joints between the two links count). Over an interval of fractions of length h, a component then
     moves at most its sweep x h / 2 from where it is at the interval's midpoint, and a self pair closes
     in by at most its sweep x h / 2: a midpoint whose every pair is clear by that much more than the
-    padding p certifies the whole interval. The edge is covered by intervals of equal length, the
-    longest for which no pair needs more than the margin. Each midpoint is checked once, in the
+    padding p certifies the whole interval. The sweeps are measured about the links' poses halfway
+    along the edge (MotionBound::sweeps about a reference: a joint turns a point by its distance
+    from the joint's axis there, which the chain's lengths only bound), and for the refinements of
+    each coarse interval about its own middle, tighter still. The edge is covered by intervals of
+    equal length, the longest for which no pair needs more than the margin. Each midpoint is checked once, in the
     request's own mode, at two paddings (Checker::checkTwoPaddings: the request's, and its interval's
     sweeps on top, per pair): clear by the sweeps certifies the interval; in collision at p ends the
     search (a real collision); valid but nearer than the sweeps halves the interval, each half needing
@@ -124,6 +127,14 @@ private:
     /** \brief Ends the search's current level: what is left of its intervals whose midpoints missed
         their margin becomes the next level's (or the search finishes). */
     void endLevel(EdgeSearch &search) const;
+    /** \brief The sweeps (per unit of the edge) of \a search's edge for the part within \a halfSpan
+        of \a fraction: MotionBound::sweeps about the links' poses there. */
+    void sweepsAbout(const EdgeSearch &search, double fraction, double halfSpan, double *componentSweeps,
+                     double *pairSweeps) const;
+    /** \brief The sweeps that pad the refined midpoints within coarse interval \a coarse: those of
+        its span of the edge, measured the first time one is asked. */
+    void intervalSweeps(EdgeSearch &search, std::uint32_t coarse, const double *&componentSweeps,
+                        const double *&pairSweeps) const;
 
     /** \brief The robot configurations of the midpoints of the batches of \a searches, in order. */
     void midpointRows(const std::vector<EdgeSearch *> &searches, bool closeOnly, std::vector<double> &rows) const;
