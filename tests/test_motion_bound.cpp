@@ -320,4 +320,12 @@ TEST(MotionBound, AHeldUnboundedBaseDoesNotMakeEveryEdgeUnbounded)
     EXPECT_NEAR(bound.sweep(qa, qb), 5.0 + 0.1 * std::sqrt(6.75), 1e-9);
     const double qc[] = {0.1, 1, 2, 3, 0, 0, 0, 1};
     EXPECT_EQ(bound.sweep(qa, qc), std::numeric_limits<double>::infinity());
+    // About the links' poses on that edge the yaw turns the box at its distance from the yaw axis:
+    // its centre (3, 2, 3) is sqrt(13) from it, its corners sqrt(0.75) from the centre.
+    rc::RobotData middle(*robot);
+    const double qm[] = {0.05, 1, 2, 3, 0, 0, 0, 1};
+    rc::forwardKinematics(*robot, middle, qm);
+    double componentSweep = 0.0;
+    bound.sweeps(qa, qc, middle, 0.5, {}, &componentSweep, nullptr);
+    EXPECT_NEAR(componentSweep, 0.1 * (std::sqrt(13.0) + std::sqrt(0.75)), 1e-9);
 }
