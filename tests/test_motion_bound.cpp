@@ -29,6 +29,38 @@ rc::RobotModelPtr robotFrom(const std::string &body)
     return rc::loadUrdfString(rc::test::urdfRobot(body), ".");
 }
 
+/** \brief A uniform configuration within \a robot's bounds, as a state of \a mapping's space. */
+void sampleUniform(const rc::RobotModel &robot, const rc::ompl::StateMapping &mapping, std::mt19937 &rng,
+                   ob::State *state)
+{
+    std::vector<double> q(robot.numCoordinates());
+    for (std::size_t i = 0; i < q.size(); ++i)
+        q[i] = std::uniform_real_distribution<double>(robot.lowerBounds[i], robot.upperBounds[i])(rng);
+    mapping.fromConfiguration(q, state);
+}
+
+/** \brief The largest change, from poses \a x to poses \a y, of the distance between a vertex of
+    component \a a and one of component \a b (every so many of each, about \a samples, to keep the
+    pairs' product small). */
+double largestDistanceChange(const rc::RobotModel &robot, std::pair<int, int> pair, const rc::RobotData &x,
+                             const rc::RobotData &y, std::size_t samples)
+{
+    const rc::Component &ca = robot.components[static_cast<std::size_t>(pair.first)];
+    const rc::Component &cb = robot.components[static_cast<std::size_t>(pair.second)];
+    const auto la = static_cast<std::size_t>(ca.link), lb = static_cast<std::size_t>(cb.link);
+    const std::size_t strideA = ca.mesh.vertices.size() / samples + 1, strideB = cb.mesh.vertices.size() / samples + 1;
+    double largest = 0.0;
+    for (std::size_t i = 0; i < ca.mesh.vertices.size(); i += strideA)
+        for (std::size_t j = 0; j < cb.mesh.vertices.size(); j += strideB)
+        {
+            const Eigen::Vector3d &va = ca.mesh.vertices[i], &vb = cb.mesh.vertices[j];
+            const double then = (x.oMl[la] * va - x.oMl[lb] * vb).norm();
+            const double now = (y.oMl[la] * va - y.oMl[lb] * vb).norm();
+            largest = std::max(largest, std::abs(now - then));
+        }
+    return largest;
+}
+
 /** \brief \a worst: the largest ratio (distance a vertex moved between consecutive samples) / (the bound's share
     of that step) over \a edges random edges of \a robot's planning space, each sampled at \a steps
     + 1 fractions by the space's own interpolate. Fails the test where a vertex moves farther than
@@ -39,13 +71,7 @@ void measureSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps, do
     const rc::MotionBound bound(*robot);
     const ob::StateSpacePtr &space = mapping.getStateSpace();
     std::mt19937 rng(7);
-    auto sample = [&](ob::State *state)
-    {
-        std::vector<double> q(robot->numCoordinates());
-        for (std::size_t i = 0; i < q.size(); ++i)
-            q[i] = std::uniform_real_distribution<double>(robot->lowerBounds[i], robot->upperBounds[i])(rng);
-        mapping.fromConfiguration(q, state);
-    };
+    auto sample = [&](ob::State *state) { sampleUniform(*robot, mapping, rng, state); };
     ob::ScopedState<> a(space), b(space), s(space);
     rc::RobotData previous(*robot), current(*robot), start(*robot);
     worst = 0.0;
@@ -89,22 +115,10 @@ void measureSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps, do
             // Distances between points of two components change by at most the pair's sweep (a
             // sample of vertices of each, to keep the pairs' product small).
             for (std::size_t p = 0; p < pairs.size(); ++p)
-            {
-                const rc::Component &ca = robot->components[static_cast<std::size_t>(pairs[p].first)];
-                const rc::Component &cb = robot->components[static_cast<std::size_t>(pairs[p].second)];
-                const auto la = static_cast<std::size_t>(ca.link), lb = static_cast<std::size_t>(cb.link);
-                const std::size_t strideA = ca.mesh.vertices.size() / 12 + 1,
-                                  strideB = cb.mesh.vertices.size() / 12 + 1;
-                for (std::size_t i = 0; i < ca.mesh.vertices.size(); i += strideA)
-                    for (std::size_t j = 0; j < cb.mesh.vertices.size(); j += strideB)
-                    {
-                        const Eigen::Vector3d &va = ca.mesh.vertices[i], &vb = cb.mesh.vertices[j];
-                        const double now = (current.oMl[la] * va - current.oMl[lb] * vb).norm();
-                        const double then = (start.oMl[la] * va - start.oMl[lb] * vb).norm();
-                        ASSERT_LE(std::abs(now - then), slack(pairSweeps[p] * t))
-                            << ca.name << " / " << cb.name << " edge " << e << " step " << k;
-                    }
-            }
+                ASSERT_LE(largestDistanceChange(*robot, pairs[p], start, current, 12), slack(pairSweeps[p] * t))
+                    << robot->components[static_cast<std::size_t>(pairs[p].first)].name << " / "
+                    << robot->components[static_cast<std::size_t>(pairs[p].second)].name << " edge " << e << " step "
+                    << k;
             std::swap(previous, current);
         }
     }
@@ -122,13 +136,7 @@ void measureSpanSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps
     const rc::MotionBound bound(*robot);
     const ob::StateSpacePtr &space = mapping.getStateSpace();
     std::mt19937 rng(11);
-    auto sample = [&](ob::State *state)
-    {
-        std::vector<double> q(robot->numCoordinates());
-        for (std::size_t i = 0; i < q.size(); ++i)
-            q[i] = std::uniform_real_distribution<double>(robot->lowerBounds[i], robot->upperBounds[i])(rng);
-        mapping.fromConfiguration(q, state);
-    };
+    auto sample = [&](ob::State *state) { sampleUniform(*robot, mapping, rng, state); };
     const std::size_t m = robot->numComponents();
     std::vector<std::pair<int, int>> pairs;
     for (int i = 0; i < static_cast<int>(m); ++i)
@@ -183,22 +191,10 @@ void measureSpanSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps
                             << component.name << " edge " << e << " samples " << i << ", " << j;
                 }
                 for (std::size_t p = 0; p < pairs.size(); ++p)
-                {
-                    const rc::Component &ca = robot->components[static_cast<std::size_t>(pairs[p].first)];
-                    const rc::Component &cb = robot->components[static_cast<std::size_t>(pairs[p].second)];
-                    const auto la = static_cast<std::size_t>(ca.link), lb = static_cast<std::size_t>(cb.link);
-                    const std::size_t strideA = ca.mesh.vertices.size() / 8 + 1,
-                                      strideB = cb.mesh.vertices.size() / 8 + 1;
-                    for (std::size_t u = 0; u < ca.mesh.vertices.size(); u += strideA)
-                        for (std::size_t w = 0; w < cb.mesh.vertices.size(); w += strideB)
-                        {
-                            const Eigen::Vector3d &va = ca.mesh.vertices[u], &vb = cb.mesh.vertices[w];
-                            const double then = (x.oMl[la] * va - x.oMl[lb] * vb).norm();
-                            const double now = (y.oMl[la] * va - y.oMl[lb] * vb).norm();
-                            ASSERT_LE(std::abs(now - then), slack(spanPairs[p] * dt))
-                                << ca.name << " / " << cb.name << " edge " << e << " samples " << i << ", " << j;
-                        }
-                }
+                    ASSERT_LE(largestDistanceChange(*robot, pairs[p], x, y, 8), slack(spanPairs[p] * dt))
+                        << robot->components[static_cast<std::size_t>(pairs[p].first)].name << " / "
+                        << robot->components[static_cast<std::size_t>(pairs[p].second)].name << " edge " << e
+                        << " samples " << i << ", " << j;
             }
     }
     tightened = ratioSum / std::max(1, ratios);
