@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "rastercheck/geometry/Obb.h"
 #include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
@@ -150,6 +151,13 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         componentLink_.push_back(component.link);
         sphereCentre_.push_back(centre);
         sphereRadius_.push_back(sphere);
+        const Obb &obb = component.localObb;
+        Eigen::Index longest = 0;
+        obb.halfExtents.maxCoeff(&longest);
+        const Eigen::Vector3d half = obb.halfExtents(longest) * obb.axes.col(longest);
+        capsuleEnds_.emplace_back(obb.center - half, obb.center + half);
+        capsuleRadius_.push_back(
+            std::sqrt(obb.halfExtents.squaredNorm() - obb.halfExtents(longest) * obb.halfExtents(longest)));
     }
 }
 
@@ -262,9 +270,14 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
     for (std::size_t c = 0; c < above_.size(); ++c)
     {
         const std::vector<Carrier> &above = above_[c];
-        Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+        Eigen::Vector3d centre = Eigen::Vector3d::Zero(), ends[2];
         if (reference)
-            centre = reference->oMl[static_cast<std::size_t>(componentLink_[c])] * sphereCentre_[c];
+        {
+            const Eigen::Isometry3d &pose = reference->oMl[static_cast<std::size_t>(componentLink_[c])];
+            centre = pose * sphereCentre_[c];
+            ends[0] = pose * capsuleEnds_[c].first;
+            ends[1] = pose * capsuleEnds_[c].second;
+        }
         double inner = 0.0;  // what the joints between the carrier and the component move its points
         for (std::size_t i = above.size(); i-- > 0;)
         {
@@ -275,13 +288,19 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
             {
                 // Turning about its axis keeps a point's distance from it; only the joints between
                 // them change it, by at most their travel over the half span on either side.
+                // The farthest point of the sphere or of the capsule (whose ends are its farthest
+                // from a line or a point), the nearer bound.
                 const MovingJoint &joint = moving_[k];
-                const Eigen::Vector3d offset =
-                    centre - reference->oMl[static_cast<std::size_t>(joint.childLink)].translation();
-                double measured = offset.norm();  // planar and floating joints turn about the centre
-                if (joint.kind == JointKind::Revolute)
-                    measured = (offset - offset.dot(axes[k]) * axes[k]).norm();
-                const double tightened = measured + sphereRadius_[c] + halfSpan * inner;
+                const Eigen::Vector3d &pivot = reference->oMl[static_cast<std::size_t>(joint.childLink)].translation();
+                const bool aboutAxis = joint.kind == JointKind::Revolute;  // planar, floating: about the centre
+                auto distance = [&](const Eigen::Vector3d &point)
+                {
+                    const Eigen::Vector3d offset = point - pivot;
+                    return aboutAxis ? (offset - offset.dot(axes[k]) * axes[k]).norm() : offset.norm();
+                };
+                const double measured = std::min(distance(centre) + sphereRadius_[c],
+                                                 std::max(distance(ends[0]), distance(ends[1])) + capsuleRadius_[c]);
+                const double tightened = measured + halfSpan * inner;
                 if (tightened < reach)  // false for NaN: the chain's bound stands
                     reach = tightened;
             }

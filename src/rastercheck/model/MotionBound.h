@@ -138,8 +138,13 @@ private:
     std::vector<std::vector<Carrier>> above_;  ///< per component, by ascending joint
     std::vector<std::size_t> firstCarrier_;    ///< per component: where its carriers start in a flat array
     std::vector<int> componentLink_;
-    std::vector<Eigen::Vector3d> sphereCentre_;  ///< per component, a sphere holding its vertices (link frame)
+    /** \brief Per component (link frame), a sphere and a capsule (a segment along its box's longest
+        axis, widened by the other two half extents) that hold its vertices: what sweeps() about a
+        reference measures, the nearer of the two. */
+    std::vector<Eigen::Vector3d> sphereCentre_;
     std::vector<double> sphereRadius_;
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> capsuleEnds_;
+    std::vector<double> capsuleRadius_;
     bool tightens_ = false;
     std::vector<double> reach_;
     double size_ = 0.0;
