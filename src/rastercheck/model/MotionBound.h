@@ -63,8 +63,8 @@ public:
         (a fraction of it) of a configuration on it, tightened by where the links are there
         (\a reference: forwardKinematics at that configuration, as the state space interpolates the
         edge). A revolute joint moves a point by its turn times the point's distance from the
-        joint's axis (not its centre); that distance is measured at the reference, for the
-        component's bounding sphere, and within the span it changes by at most what the joints
+        joint's axis (not its centre); that distance is measured at the reference, for a sphere
+        and a capsule holding the component (the nearer bound), and within the span it changes by at most what the joints
         between that joint and the component move the point there. Each reach is the smaller of
         that and the chain's bound, so these sweeps never exceed sweeps()'s. An arm's hand is
         turned by its base joint at its distance from the base's axis, not at the arm's full length;
