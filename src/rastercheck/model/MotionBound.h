@@ -64,11 +64,11 @@ public:
         (\a reference: forwardKinematics at that configuration, as the state space interpolates the
         edge). A revolute joint moves a point by its turn times the point's distance from the
         joint's axis (not its centre); that distance is measured at the reference, for a sphere
-        and a capsule holding the component (the nearer bound), and within the span it changes by at most what the joints
-        between that joint and the component move the point there. Each reach is the smaller of
-        that and the chain's bound, so these sweeps never exceed sweeps()'s. An arm's hand is
-        turned by its base joint at its distance from the base's axis, not at the arm's full length;
-        the shorter the span, the tighter. */
+        and a capsule holding the component (the nearer bound), and within the span it changes by
+        at most what the joints between that joint and the component move the point there. Each
+        reach is the smaller of that and the chain's bound, so these sweeps never exceed
+        sweeps()'s. An arm's hand is turned by its base joint at its distance from the base's axis,
+        not at the arm's full length; the shorter the span, the tighter. */
     void sweeps(const double *qa, const double *qb, const RobotData &reference, double halfSpan,
                 const std::vector<std::pair<int, int>> &pairs, double *componentSweeps, double *pairSweeps) const;
 
