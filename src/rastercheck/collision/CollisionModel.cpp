@@ -359,7 +359,6 @@ device::ConvexPiece ConvexSolids::makePiece(const Mesh &mesh, bool closedShell)
         }
         supportCellStart_.push_back(static_cast<std::uint32_t>(supportCandidates_.size()));
     }
-    const std::size_t firstHullDouble = hullPoints_.size();
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (std::uint32_t i : extreme)
     {
@@ -375,14 +374,13 @@ device::ConvexPiece ConvexSolids::makePiece(const Mesh &mesh, bool closedShell)
         std::vector<std::uint8_t> isHullPoint(mesh.numVertices(), 0);
         for (std::uint32_t i : extreme)
             isHullPoint[i] = 1;
-        const double *hull = hullPoints_.data() + firstHullDouble;
+        const device::ConvexProxy hull = device::convexProxy(arrays(), piece);  // its cells too
         for (std::size_t i = 0; i < mesh.numVertices(); ++i)
             if (!isHullPoint[i])
             {
                 const Eigen::Vector3d &v = mesh.vertices[i];
-                piece.hullSlack = std::max(
-                    piece.hullSlack,
-                    device::hullDistanceBound({v.x(), v.y(), v.z()}, hull, piece.numHullPoints, piece.hullSlack));
+                piece.hullSlack =
+                    std::max(piece.hullSlack, device::hullDistanceBound({v.x(), v.y(), v.z()}, hull, piece.hullSlack));
             }
         piece.hullSlack += 1e-6 * piece.radius;
     }

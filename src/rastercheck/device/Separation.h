@@ -539,22 +539,22 @@ RC_HD bool surfaceEdgeInside(const ConvexProxy &p, const Pose<double> &poseP, co
 }
 }  // namespace detail
 
-/** \brief An upper bound on the distance from \a x to the convex hull of \a points (count >= 1):
-    GJK on the set x - hull, whose point nearest the origin is x less the hull's point nearest x.
-    Every v it visits lies in that set, so |v| bounds the distance however early it stops: at
-    convergence, at \a enough (the caller keeps a maximum over many points and needs no less), or
-    after 64 steps. 0 when the origin is found inside a tetrahedron of hull points: the barycentric
-    test rounds, so the caller adds a slack (ConvexSolids: 1e-6 of the piece's radius). For
+/** \brief An upper bound on the distance from \a x to the convex hull of \a piece's hull points
+    (at least one): GJK on the set x - hull, whose point nearest the origin is x less the hull's
+    point nearest x. Every v it visits lies in that set, so |v| bounds the distance however early
+    it stops: at convergence, at \a enough (the caller keeps a maximum over many points and needs
+    no less), or after 64 steps. 0 when the origin is found inside a tetrahedron of hull points: the
+    barycentric test rounds, so the caller adds a slack (ConvexSolids: 1e-6 of the piece's radius).
+    The support search reads the piece's cells where it has them (hullSupportIndex). For
     ConvexSolids at load time, on the host. */
-RC_HD double hullDistanceBound(const Vec3<double> &x, const double *points, std::uint32_t count, double enough)
+RC_HD double hullDistanceBound(const Vec3<double> &x, const ConvexProxy &piece, double enough)
 {
     const auto pointOfSet = [&](const Vec3<double> &d)  // the point of x - hull extreme along d
     {
-        std::uint32_t index = 0;
-        supportValue(points, count, Vec3<double>{-d.x, -d.y, -d.z}, &index);
-        const double *p = points + 3 * index;
+        const double *p = piece.hullPoints + 3 * detail::hullSupportIndex(piece, Vec3<double>{-d.x, -d.y, -d.z});
         return x - Vec3<double>{p[0], p[1], p[2]};
     };
+    const double *points = piece.hullPoints;
     Vec3<double> v = x - Vec3<double>{points[0], points[1], points[2]};
     Vec3<double> simplex[4] = {v};
     int size = 1;
