@@ -150,7 +150,7 @@ std::vector<double> facePlanes(const Mesh &mesh)
     1e-6 (far beyond the rounding of the cell a direction is put in), and a point counts as
     beaten only by a ten-billionth of the points' size (far beyond the rounding of the dot
     products, which compare the points as placed, not relative to o). */
-std::vector<std::vector<std::uint16_t>> supportCellCandidates(const std::vector<Eigen::Vector3d> &points)
+std::vector<std::vector<device::HullPointNumber>> supportCellCandidates(const std::vector<Eigen::Vector3d> &points)
 {
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     double size = 0.0;
@@ -188,7 +188,7 @@ std::vector<std::vector<std::uint16_t>> supportCellCandidates(const std::vector<
     };
     constexpr std::uint32_t side = device::kSupportCellsPerSide;
     constexpr double grown = 1e-6;
-    std::vector<std::vector<std::uint16_t>> cells;
+    std::vector<std::vector<device::HullPointNumber>> cells;
     for (std::uint32_t face = 0; face < 6; ++face)
         for (std::uint32_t row = 0; row < side; ++row)
             for (std::uint32_t column = 0; column < side; ++column)
@@ -212,22 +212,23 @@ std::vector<std::vector<std::uint16_t>> supportCellCandidates(const std::vector<
                     atCentre[i] = relative[i].dot(centre);
                     best = std::max(best, atCentre[i] - distance[i] * reach);
                 }
-                std::vector<std::uint16_t> near;
+                std::vector<device::HullPointNumber> near;
                 for (std::size_t i = 0; i < points.size(); ++i)
                     if (atCentre[i] + distance[i] * reach >= best - tolerance)
-                        near.push_back(static_cast<std::uint16_t>(i));
+                        near.push_back(static_cast<device::HullPointNumber>(i));
                 // A point beaten by another of near is beaten by one kept before it: the winner has the
                 // higher value at the centre (a positive sum of the corners), and a dropped winner was
                 // itself beaten by a kept point, which then beats the loser too. So the points are
                 // taken best first and tried against those kept.
                 std::sort(near.begin(), near.end(),
-                          [&](std::uint16_t a, std::uint16_t b) { return atCentre[a] > atCentre[b]; });
-                std::vector<std::uint16_t> cell;
-                for (const std::uint16_t q : near)
+                          [&](device::HullPointNumber a, device::HullPointNumber b)
+                          { return atCentre[a] > atCentre[b]; });
+                std::vector<device::HullPointNumber> cell;
+                for (const device::HullPointNumber q : near)
                 {
                     const bool beaten =
                         std::any_of(cell.begin(), cell.end(),
-                                    [&](std::uint16_t p)
+                                    [&](device::HullPointNumber p)
                                     {
                                         return std::all_of(corners.begin(), corners.end(),
                                                            [&](const Eigen::Vector3d &corner)
@@ -345,14 +346,15 @@ device::ConvexPiece ConvexSolids::makePiece(const Mesh &mesh, bool closedShell)
     piece.numHullPoints = static_cast<std::uint32_t>(extreme.size());
     if (piece.numHullPoints >= device::kSupportCellsMinPoints)
     {
-        // Hull points are numbered in 16 bits in the cells (Mesh::extremeVertices gives at most one a direction).
-        static_assert(kConvexHullDirections <= 65536, "hull point numbers must fit the cells' 16 bits");
+        // The cells number hull points in HullPointNumber (Mesh::extremeVertices gives at most one a direction).
+        static_assert(kConvexHullDirections - 1 <= std::numeric_limits<device::HullPointNumber>::max(),
+                      "hull point numbers must fit the cells' HullPointNumber");
         std::vector<Eigen::Vector3d> points;
         for (std::uint32_t i : extreme)
             points.push_back(mesh.vertices[i]);
         piece.firstSupportCell = static_cast<std::uint32_t>(supportCellStart_.size());
         piece.hasSupportCells = 1;
-        for (const std::vector<std::uint16_t> &cell : supportCellCandidates(points))
+        for (const std::vector<device::HullPointNumber> &cell : supportCellCandidates(points))
         {
             supportCellStart_.push_back(static_cast<std::uint32_t>(supportCandidates_.size()));
             supportCandidates_.insert(supportCandidates_.end(), cell.begin(), cell.end());
@@ -454,7 +456,8 @@ std::size_t ConvexSolids::bytes() const
     return vertices_.size() * sizeof(double) + hullPoints_.size() * sizeof(double) +
            pieces_.size() * sizeof(device::ConvexPiece) + solidPieces_.size() * sizeof(std::uint32_t) +
            planes_.size() * sizeof(double) + edges_.size() * sizeof(std::uint32_t) +
-           supportCellStart_.size() * sizeof(std::uint32_t) + supportCandidates_.size() * sizeof(std::uint16_t) +
+           supportCellStart_.size() * sizeof(std::uint32_t) +
+           supportCandidates_.size() * sizeof(device::HullPointNumber) +
            patchNodes_.size() * sizeof(device::PatchNode) + solidPatchNodes_.size() * sizeof(std::uint32_t) +
            patchPieces_.size() * sizeof(device::ConvexPiece) + solidPatches_.size() * sizeof(std::uint32_t) +
            patchTriangles_.size() * sizeof(std::uint32_t);

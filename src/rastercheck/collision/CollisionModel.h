@@ -110,7 +110,7 @@ private:
     std::vector<double> planes_;                     // n_planes x 4
     std::vector<std::uint32_t> edges_;               // n_edges x 2
     std::vector<std::uint32_t> supportCellStart_;    // per piece with cells, kSupportCells + 1
-    std::vector<std::uint16_t> supportCandidates_;   // hull point numbers within their piece
+    std::vector<device::HullPointNumber> supportCandidates_;  // hull point numbers within their piece
     std::vector<device::PatchNode> patchNodes_;      // per solid, root first
     std::vector<std::uint32_t> solidPatchNodes_{0};  // n_solids + 1
     std::vector<device::ConvexPiece> patchPieces_;   // n_patches

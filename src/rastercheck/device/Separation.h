@@ -23,6 +23,9 @@ constexpr std::uint32_t kSupportCellsPerSide = 8;
 constexpr std::uint32_t kSupportCells = 6 * kSupportCellsPerSide * kSupportCellsPerSide;
 /** \brief Fewest hull points for which a piece gets cells; fewer are searched one by one. */
 constexpr std::uint32_t kSupportCellsMinPoints = 32;
+/** \brief A hull point's number within its piece, as the cells list them (so a piece has at most
+    65536 hull points: rastercheck::kConvexHullDirections). */
+using HullPointNumber = std::uint16_t;
 
 /** \brief The cell of direction \a d (supportCellStart's order: face +x, -x, +y, -y, +z, -z, then row
     and column), or kSupportCells for a direction with no cell: zero, infinite or NaN. */
@@ -138,7 +141,7 @@ struct ConvexArrays
     const double *planes;                   ///< n_planes x 4: unit outward normal and offset (n . x = d on the face)
     const std::uint32_t *edges;             ///< n_edges x 2: vertex numbers within the piece
     const std::uint32_t *supportCellStart;  ///< per piece with cells, kSupportCells + 1 offsets
-    const std::uint16_t *supportCandidates;  ///< hull point numbers within the piece, ascending per cell
+    const HullPointNumber *supportCandidates;  ///< hull point numbers within the piece, ascending per cell
     /** \brief Solid s's patch tree is patchNodes[solidPatchNodes[s] .. solidPatchNodes[s + 1]),
         root first; an empty range: the solid has none (it is small, or close to convex). */
     const PatchNode *patchNodes;
@@ -163,7 +166,7 @@ struct ConvexProxy
     const std::uint32_t *edges;
     std::uint32_t numEdges;
     const std::uint32_t *supportCellStart;  ///< null: every hull point is searched
-    const std::uint16_t *supportCandidates;
+    const HullPointNumber *supportCandidates;
 };
 
 RC_HD ConvexProxy convexProxy(const ConvexArrays &arrays, const ConvexPiece &p)
@@ -434,8 +437,8 @@ RC_HD std::uint32_t hullSupportIndex(const ConvexProxy &solid, const Vec3<double
         supportValue(solid.hullPoints, solid.numHullPoints, d, &index);
         return index;
     }
-    const std::uint16_t *candidate = solid.supportCandidates + solid.supportCellStart[cell];
-    const std::uint16_t *end = solid.supportCandidates + solid.supportCellStart[cell + 1];
+    const HullPointNumber *candidate = solid.supportCandidates + solid.supportCellStart[cell];
+    const HullPointNumber *end = solid.supportCandidates + solid.supportCellStart[cell + 1];
     index = *candidate;
     const double *first = solid.hullPoints + 3 * index;
     double best = d.x * first[0] + d.y * first[1] + d.z * first[2];
