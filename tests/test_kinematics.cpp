@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/device/Pose.h"
 #include "rastercheck/device/SinCos.h"
 #include "rastercheck/model/Kinematics.h"
 
@@ -108,6 +109,34 @@ TEST(Kinematics, SinCosIsWithinOneUlpOfTheCLibrary)
     EXPECT_TRUE(std::isnan(sine) && std::isnan(cosine));
     rc::device::sinCos(-INFINITY, sine, cosine);
     EXPECT_TRUE(std::isnan(sine) && std::isnan(cosine));
+}
+
+// Revolute joints about a coordinate axis turn two columns of the parent's pose instead of
+// composing a rotation matrix: the same pose, every axis and sign, within rounding.
+TEST(Kinematics, ATurnAboutACoordinateAxisEqualsComposingItsRotation)
+{
+    std::mt19937_64 random(5);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    const double norm = std::sqrt(0.3 * 0.3 + 0.5 * 0.5 + 0.8 * 0.8);
+    const rc::device::Vec3<double> general{0.3 / norm, -0.5 / norm, 0.8 / norm};
+    const rc::device::Vec3<double> axes[] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0},
+                                             {0, 0, 1}, {0, 0, -1}, general};
+    for (int trial = 0; trial < 200; ++trial)
+    {
+        const rc::device::Pose<double> pose =
+            rc::device::compose(rc::device::axisAngle(general, 3.0 * unit(random)),
+                                rc::device::fromQuaternion(unit(random), unit(random), unit(random), unit(random),
+                                                           unit(random), unit(random), 1.0));
+        for (const rc::device::Vec3<double> &axis : axes)
+        {
+            const double angle = 4.0 * unit(random);
+            const rc::device::Pose<double> expected = rc::device::compose(pose, rc::device::axisAngle(axis, angle));
+            const rc::device::Pose<double> turned = rc::device::rotateAbout(pose, axis, angle);
+            for (int k = 0; k < 12; ++k)
+                ASSERT_NEAR(turned.m[k], expected.m[k], 1e-14)
+                    << "axis (" << axis.x << ", " << axis.y << ", " << axis.z << "), entry " << k;
+        }
+    }
 }
 
 TEST(Kinematics, RevoluteAndPrismaticMatchHandComputedPoses)
