@@ -556,6 +556,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
             box.max[k] = static_cast<float>(grown.max[k]);
         }
         objectBoxes.push_back(box);
+        objectSpheres.push_back(device::boundingSphere(box));
         Obb fitted = Obb::fit(object.mesh);
         fitted.center -= origin;
         fitted.halfExtents.array() += 1e-5 * fitted.halfExtents.norm() + 1e-6 * distance + 1e-9;

@@ -12,6 +12,7 @@
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
+#include "rastercheck/device/Stages.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/model/RobotModel.h"
 #include "rastercheck/model/Scene.h"
@@ -156,6 +157,7 @@ public:
     std::vector<MeshSlice> objects;                        // n_objects
     std::vector<device::Box> objectBoxes;                  // n_objects, world frame - origin
     std::vector<device::OrientedBox> objectOrientedBoxes;  // n_objects, world frame - origin
+    std::vector<device::Sphere> objectSpheres;             // n_objects: device::boundingSphere of the box
 
     /** \brief Component pairs (a < b) checked for self-collision: those the ACM does not allow. */
     std::vector<std::pair<int, int>> selfPairs;

@@ -481,7 +481,7 @@ std::uint8_t CpuBackend::isValid(const double *q, const CollisionRequest &reques
         for (std::size_t o = 0; o < model.numObjects(); ++o)
         {
             const device::Box &objectBox = model.objectBoxes[o];
-            if (!device::objectWithinReach(robotSphere, objectBox, device::floatPadding(reachPadding)))
+            if (!device::objectWithinReach(robotSphere, model.objectSpheres[o], device::floatPadding(reachPadding)))
                 continue;
             const Solid object = objectSolid(model, o);
             for (std::size_t k = 0; k < m;)

@@ -47,9 +47,8 @@ RC_HD Sphere boundingSphere(const Box &box)
 
 /** \brief The distance filter over obstacles: false when the object's bounding sphere lies farther
     from the robot's than their radii plus the padding. */
-RC_HD bool objectWithinReach(const Sphere &robot, const Box &objectBox, float padding)
+RC_HD bool objectWithinReach(const Sphere &robot, const Sphere &object, float padding)
 {
-    const Sphere object = boundingSphere(objectBox);
     float distance2 = 0;
     for (int k = 0; k < 3; ++k)
     {
@@ -57,6 +56,13 @@ RC_HD bool objectWithinReach(const Sphere &robot, const Box &objectBox, float pa
         distance2 += d * d;
     }
     return !(sqrtf(distance2) > robot.radius + object.radius + padding);
+}
+
+/** \brief As above, the object's sphere made from its box (boundingSphere; the CPU backend keeps
+    them in CollisionModel::objectSpheres). */
+RC_HD bool objectWithinReach(const Sphere &robot, const Box &objectBox, float padding)
+{
+    return objectWithinReach(robot, boundingSphere(objectBox), padding);
 }
 
 /** \brief Layer values of the hybrid hierarchy: layers[k] = own(k) joined with every layer of a
