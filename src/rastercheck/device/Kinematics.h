@@ -56,12 +56,13 @@ RC_HD Pose<float> toFloatPose(const Pose<double> &pose, const double origin[3])
 {
     const double largest = 3.4028234663852886e38;  // FLT_MAX
     Pose<float> p;
-    for (int k = 0; k < 12; ++k)
+    for (int r = 0; r < 3; ++r)
     {
-        double value = pose.m[k];
-        if (k % 4 == 3)
-            value -= origin[k / 4];
-        p.m[k] = static_cast<float>(value < -largest ? -largest : (value > largest ? largest : value));
+        // Rotation entries are within [-1, 1] (rounding aside): only the translation can overflow.
+        for (int c = 0; c < 3; ++c)
+            p.m[4 * r + c] = static_cast<float>(pose.m[4 * r + c]);
+        const double value = pose.m[4 * r + 3] - origin[r];
+        p.m[4 * r + 3] = static_cast<float>(value < -largest ? -largest : (value > largest ? largest : value));
     }
     return p;
 }
