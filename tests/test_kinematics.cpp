@@ -111,8 +111,8 @@ TEST(Kinematics, SinCosIsWithinOneUlpOfTheCLibrary)
     EXPECT_TRUE(std::isnan(sine) && std::isnan(cosine));
 }
 
-// Revolute joints about a coordinate axis turn two columns of the parent's pose instead of
-// composing a rotation matrix: the same pose, every axis and sign, within rounding.
+// A revolute joint about a coordinate axis turns two columns of its origin (device::rotateAbout)
+// instead of composing a rotation matrix: the same pose, every axis and sign, within rounding.
 TEST(Kinematics, ATurnAboutACoordinateAxisEqualsComposingItsRotation)
 {
     std::mt19937_64 random(5);

@@ -12,7 +12,6 @@
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
-#include "rastercheck/device/Stages.h"
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/model/RobotModel.h"
 #include "rastercheck/model/Scene.h"
