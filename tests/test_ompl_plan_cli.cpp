@@ -6,7 +6,10 @@
 
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -226,6 +229,58 @@ TEST(PlanCli, MotionBenchMakerProblem)
     const CliRun batch = plan("--planner batchrrtconnect --param batchrrtconnect.shortcut=1");
     ASSERT_EQ(batch.status, 0) << batch.output;
     EXPECT_TRUE(contains(batch.output, "batchrrtconnect       2/2         0")) << batch.output;
+}
+
+// OMPL's Benchmark simplifies every run's solution with one PathSimplifier per setup: unless it is
+// reseeded per run, a run's simplified path and the states it checks depend on whether the planner
+// before it in the same process solved (a sweep's Slurm and local runs then disagreed).
+TEST(PlanCli, ARunDoesNotDependOnWhetherThePlannerBeforeItSolved)
+{
+    RASTERCHECK_REQUIRE_DATA(root);
+    const std::string panda = root + "/mbm/panda";
+    const std::string problems = panda + "/problems/bookshelf_tall_panda";
+    const std::string folder = makeTempDir("plan_cli_reseeded");
+    // RRTConnect's properties in an OMPL benchmark log: name -> value.
+    auto rrtConnectRun = [](const std::string &log)
+    {
+        std::ifstream in(log);
+        std::string line;
+        while (std::getline(in, line) && line != "geometric_RRTConnect")
+        {
+        }
+        while (std::getline(in, line) && line.find("properties for each run") == std::string::npos)
+        {
+        }
+        std::vector<std::string> names;
+        for (int k = std::atoi(line.c_str()); k > 0 && std::getline(in, line); --k)
+            names.push_back(line);
+        std::getline(in, line);  // the run count
+        std::getline(in, line);
+        std::map<std::string, std::string> run;
+        std::istringstream values(line);
+        for (const std::string &name : names)
+            std::getline(values, run[name], ';');
+        return run;
+    };
+    std::map<std::string, std::string> runs[2];
+    const char *first[2] = {"batchrrtconnect.range=0.5", "batchrrtconnect.range=0.00001"};  // solves, cannot
+    for (int k = 0; k < 2; ++k)
+    {
+        const std::string log = folder + "/run" + std::to_string(k) + ".log";
+        const CliRun run = runCli("plan --robot " + panda + "/panda.urdf --srdf " + panda + "/panda.srdf --scene " +
+                                  problems + "/scene0001.yaml --request " + problems +
+                                  "/request0001.yaml --planner batchrrtconnect --planner rrtconnect --param " +
+                                  first[k] + " --runs 1 --time-limit 2 --seed 1 --threads 1 --log " + log);
+        ASSERT_EQ(run.status, 0) << run.output;
+        EXPECT_TRUE(contains(run.output, k == 0 ? "batchrrtconnect       1/1" : "batchrrtconnect       0/1"))
+            << run.output;
+        runs[k] = rrtConnectRun(log);
+    }
+    for (const char *property : {"solution length REAL", "simplified solution length REAL", "states checked INTEGER"})
+    {
+        ASSERT_TRUE(runs[0].count(property)) << property;
+        EXPECT_EQ(runs[0][property], runs[1][property]) << property;
+    }
 }
 
 TEST(PlanCli, BadArgumentsAreErrors)

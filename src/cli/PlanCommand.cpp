@@ -12,6 +12,7 @@
 
 #include <ompl/base/goals/GoalState.h>
 #include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/PathSimplifier.h>
 #include <ompl/tools/benchmark/Benchmark.h>
 #include <ompl/util/RandomNumbers.h>
 
@@ -37,6 +38,17 @@ const char *const kRecheckValid = "exact recheck collision free BOOLEAN";
 const char *const kRecheckStates = "exact recheck states INTEGER";
 // States the checker decided in the run (single states and edge states; not the re-check's).
 const char *const kStatesChecked = "states checked INTEGER";
+
+/** \brief OMPL's Benchmark simplifies every run's solution with the setup's one PathSimplifier, whose
+    random numbers would go on from the runs before it: a run's simplified path and the states it
+    checks would depend on whether the planner before it (in this process) solved in time. Reseeded
+    before each run, they depend on the seed alone, so a sweep's runs agree wherever they ran. */
+class ReseededPathSimplifier : public og::PathSimplifier
+{
+public:
+    using og::PathSimplifier::PathSimplifier;
+    void reseed(std::uint_fast32_t seed) { rng_.setLocalSeed(seed); }
+};
 
 struct PlanOptions
 {
@@ -234,7 +246,22 @@ int runPlan(const PlanOptions &options)
     int collidingPaths = 0;
     int runIndex = 0;
     ob::PlannerPtr previous;
-    benchmark.setPreRunEvent([&](const ob::PlannerPtr &) { ompl::resetCheckedStates(*setup); });
+    std::shared_ptr<ReseededPathSimplifier> simplifier;
+    benchmark.setPreRunEvent(
+        [&](const ob::PlannerPtr &)
+        {
+            ompl::resetCheckedStates(*setup);
+            // After the benchmark's setup, which makes the setup's own simplifier.
+            if (!simplifier)
+            {
+                const ob::ProblemDefinitionPtr &problemDefinition = setup->getProblemDefinition();
+                simplifier =
+                    std::make_shared<ReseededPathSimplifier>(setup->getSpaceInformation(), problemDefinition->getGoal(),
+                                                             problemDefinition->getOptimizationObjective());
+                setup->getPathSimplifier() = simplifier;
+            }
+            simplifier->reseed(static_cast<std::uint_fast32_t>(options.seed >= 0 ? options.seed : 0));
+        });
     benchmark.setPostRunEvent(
         [&](const ob::PlannerPtr &planner, ot::Benchmark::RunProperties &run)
         {
