@@ -40,11 +40,8 @@ RC_HD void linkPoses(const KinematicJoint *joints, int numJoints, const double *
         const double *values = joint.mimicOf >= 0 || coordinateCount(joint.kind) == 1
                                    ? &jointValues[j]
                                    : (joint.firstCoordinate >= 0 ? q + joint.firstCoordinate : nullptr);
-        if (joint.kind == JointKind::Revolute)
-            links[joint.childLink] = compose(links[joint.parentLink], rotateAbout(joint.origin, joint.axis, values[0]));
-        else
-            links[joint.childLink] =
-                compose(links[joint.parentLink], jointPose(joint.kind, joint.origin, joint.axis, values));
+        links[joint.childLink] =
+            compose(links[joint.parentLink], jointPose(joint.kind, joint.origin, joint.axis, values));
     }
 }
 

@@ -210,7 +210,7 @@ RC_HD Pose<T> jointPose(JointKind kind, const Pose<T> &origin, const Vec3<T> &ax
     switch (kind)
     {
         case JointKind::Revolute:
-            return compose(origin, axisAngle(axis, values[0]));
+            return rotateAbout(origin, axis, values[0]);
         case JointKind::Prismatic:
         {
             Pose<T> p = origin;

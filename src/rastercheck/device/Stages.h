@@ -58,13 +58,6 @@ RC_HD bool objectWithinReach(const Sphere &robot, const Sphere &object, float pa
     return !(sqrtf(distance2) > robot.radius + object.radius + padding);
 }
 
-/** \brief As above, the object's sphere made from its box (boundingSphere; the CPU backend keeps
-    them in CollisionModel::objectSpheres). */
-RC_HD bool objectWithinReach(const Sphere &robot, const Box &objectBox, float padding)
-{
-    return objectWithinReach(robot, boundingSphere(objectBox), padding);
-}
-
 /** \brief Layer values of the hybrid hierarchy: layers[k] = own(k) joined with every layer of a
     child of k, so that it stands for component k's whole subtree. Children before parents; in
     depth-first order k's children are k + 1, then each one's subtree end. With an exact join (min,
