@@ -1,6 +1,8 @@
 // The collision engine end to end on the CPU backend: known answers, every mode against the exact
 // oracle on the blind-spot suites and the Panda MotionBenchMaker scenes, determinism across threads.
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <cstdlib>
 #include <limits>
 #include <random>
@@ -255,6 +257,99 @@ TEST(Checker, SelfCollisionRespectsTheAllowedCollisionMatrix)
     // Allowing the pair silences it.
     shared->setCollisionAllowed(0, 2, true);
     EXPECT_TRUE(rc::Checker(shared, nullptr).isValid(std::vector<double>{0.0, M_PI}));
+}
+
+TEST(RobotParts, ModelsOfRobotsWithEqualContentShareTheRobotsTrees)
+{
+    // Two robots loaded apart with the same content: the second model's component trees are the
+    // first's. A cube of another size gets trees of its own, and its verdicts.
+    const rc::CollisionModel first(cubeRobot(0.2), tableScene());
+    const rc::CollisionModel second(cubeRobot(0.2), nullptr);
+    const rc::CollisionModel larger(cubeRobot(0.3), tableScene());
+    ASSERT_EQ(first.componentBvhs.size(), 1u);
+    EXPECT_EQ(first.componentBvhs[0].get(), second.componentBvhs[0].get());
+    EXPECT_NE(first.componentBvhs[0].get(), larger.componentBvhs[0].get());
+    EXPECT_EQ(first.componentTrees.nodes.size(), second.componentTrees.nodes.size());
+    // The copied arrays are the shared tree's own.
+    EXPECT_EQ(0, std::memcmp(first.componentTrees.nodes.data(), first.componentBvhs[0]->nodes(),
+                             first.componentTrees.nodes.size() * sizeof(rc::MeshBvh::Node)));
+    // 12 cm above the table top: the 0.2 m cube is clear of it, the 0.3 m cube is in it.
+    EXPECT_TRUE(rc::Checker(cubeRobot(0.2), tableScene()).isValid(at(0, 0, 0.12)));
+    EXPECT_FALSE(rc::Checker(cubeRobot(0.3), tableScene()).isValid(at(0, 0, 0.12)));
+}
+
+TEST(RobotParts, ARobotChangedAfterAModelWasBuiltGetsPartsOfItsOwn)
+{
+    // The caller's robot changes in place after a checker was built from it (the parts were built
+    // for a copy): the next checker sees the change, the first keeps its own verdicts.
+    auto robot = std::make_shared<rc::RobotModel>(*cubeRobot(0.2));
+    const rc::Checker before(robot, tableScene());
+    for (Eigen::Vector3d &v : robot->components[0].mesh.vertices)
+        v *= 1.5;  // a 0.3 m cube
+    robot->components[0].localObb.halfExtents *= 1.5;
+    robot->components[0].localAabb = robot->components[0].mesh.bounds();
+    const rc::Checker after(robot, tableScene());
+    EXPECT_TRUE(before.isValid(at(0, 0, 0.12)));
+    EXPECT_FALSE(after.isValid(at(0, 0, 0.12)));
+    EXPECT_NE(before.collisionModel().componentBvhs[0].get(), after.collisionModel().componentBvhs[0].get());
+}
+
+TEST(RobotParts, TheLastUsedPartsStayBuiltAndOthersAreFreed)
+{
+    std::weak_ptr<const rc::MeshBvh> tree;
+    const rc::MeshBvh *address = nullptr;
+    {
+        const rc::CollisionModel model(cubeRobot(0.25), nullptr);
+        tree = model.componentBvhs[0];
+        address = model.componentBvhs[0].get();
+    }
+    // Dropped by every model, kept: the next model of that robot reuses it.
+    ASSERT_FALSE(tree.expired());
+    EXPECT_EQ(rc::CollisionModel(cubeRobot(0.25), nullptr).componentBvhs[0].get(), address);
+    // Once kKeptRobotParts other robots were used since, it is freed.
+    for (std::size_t k = 0; k < rc::CollisionModel::kKeptRobotParts; ++k)
+        rc::CollisionModel(cubeRobot(0.26 + 0.01 * static_cast<double>(k)), nullptr);
+    EXPECT_TRUE(tree.expired());
+}
+
+TEST(RobotParts, EveryFieldOfTheRobotCountsTowardsItsContent)
+{
+    // Each change below, however small, must give the robot other parts (contentBytes differs);
+    // a copy must not.
+    const rc::RobotModel &crane = *rc::test::plant().robot;
+    const std::string original = rc::contentBytes(crane);
+    EXPECT_TRUE(rc::contentBytes(rc::RobotModel(crane)) == original);
+    ASSERT_GE(crane.components.size(), 2u);
+    ASSERT_GE(crane.joints.size(), 2u);
+    const std::vector<std::pair<std::string, std::function<void(rc::RobotModel &)>>> changes = {
+        {"name", [](rc::RobotModel &r) { r.name += "x"; }},
+        {"link name", [](rc::RobotModel &r) { r.links[1].name += "x"; }},
+        {"link component", [](rc::RobotModel &r) { r.links[0].component = -2; }},
+        {"joint origin", [](rc::RobotModel &r) { r.joints[1].origin.translation().x() += 1e-12; }},
+        {"joint axis", [](rc::RobotModel &r) { r.joints[1].axis.z() = -r.joints[1].axis.z(); }},
+        {"joint lower bound", [](rc::RobotModel &r) { r.joints[1].lower.push_back(0.0); }},
+        {"joint kind", [](rc::RobotModel &r) { r.joints[0].kind = rc::JointKind::Revolute; }},
+        {"joint continuity", [](rc::RobotModel &r) { r.joints[0].continuous = !r.joints[0].continuous; }},
+        {"mimic", [](rc::RobotModel &r) { r.joints[1].mimicOffset += 1.0; }},
+        {"component vertex", [](rc::RobotModel &r) { r.components[1].mesh.vertices[0].y() += 1e-12; }},
+        {"component triangle", [](rc::RobotModel &r) { std::swap(r.components[1].mesh.triangles[0][0], r.components[1].mesh.triangles[0][1]); }},
+        {"component closed", [](rc::RobotModel &r) { r.components[0].topology.closed = !r.components[0].topology.closed; }},
+        {"component box", [](rc::RobotModel &r) { r.components[0].localObb.halfExtents.x() *= 2.0; }},
+        {"component bounds", [](rc::RobotModel &r) { r.components[0].localAabb.max.x() += 1.0; }},
+        {"component shapes", [](rc::RobotModel &r) { r.components[0].shapes.emplace_back(); }},
+        {"component link", [](rc::RobotModel &r) { r.components[0].link += 1; }},
+        {"subtree ends", [](rc::RobotModel &r) { r.componentSubtreeEnd[0] += 1; }},
+        {"coordinate bound", [](rc::RobotModel &r) { r.upperBounds[0] = std::nextafter(r.upperBounds[0], 1e9); }},
+        {"coordinate name", [](rc::RobotModel &r) { r.coordinateNames[0] += "x"; }},
+        {"allowed collisions", [](rc::RobotModel &r) { r.setCollisionAllowed(0, 1, !r.isCollisionAllowed(0, 1)); }},
+        {"kinematic joint", [](rc::RobotModel &r) { r.kinematicJoints[1].axis.x += 1e-9; }},
+    };
+    for (const auto &[what, change] : changes)
+    {
+        rc::RobotModel changed = crane;
+        change(changed);
+        EXPECT_TRUE(rc::contentBytes(changed) != original) << what;
+    }
 }
 
 TEST(Checker, ComponentOfOverlappingShellsContainsWhatEitherShellContains)

@@ -13,6 +13,7 @@
 #include <atomic>
 #include <cstdlib>
 #include <functional>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <sstream>
@@ -24,6 +25,7 @@
 #include <ompl/base/SpaceInformation.h>
 
 #include "TestSupport.h"
+#include "rastercheck/collision/Checker.h"
 #include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/MotionValidator.h"
 #include "rastercheck/ompl/Setup.h"
@@ -449,4 +451,31 @@ TEST_F(CraneInPlant, EightThreadsOnOneCheckerDecideStatesAndEdgesAsOneThread)
 TEST_F(CraneInPlant, SameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts)
 {
     sameVerdictsAndFirstContactsAcrossRunsAndOpenMpThreadCounts();
+}
+
+TEST(RobotParts, EightThreadsBuildingCheckersOfEqualRobotsShareOnePartAndAgree)
+{
+    // Each thread builds a checker of its own copy of the crane at once: the robot parts are built
+    // at most once per thread that found none, and every model ends up with the one kept.
+    const rc::Problem &plant = rc::test::plant();
+    const std::vector<double> boomInRack = {0, 0, 0, 1.570796326795, 0.3, 5, 1};
+    rc::CheckerOptions options;
+    options.backend = rc::BackendChoice::Cpu;
+    std::vector<std::unique_ptr<rc::Checker>> checkers(kThreads);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t)
+        threads.emplace_back(
+            [&, t]
+            {
+                checkers[t] = std::make_unique<rc::Checker>(std::make_shared<rc::RobotModel>(*plant.robot),
+                                                            plant.scene, options);
+            });
+    for (std::thread &thread : threads)
+        thread.join();
+    for (const std::unique_ptr<rc::Checker> &checker : checkers)
+    {
+        EXPECT_EQ(checker->collisionModel().componentBvhs[0].get(),
+                  checkers[0]->collisionModel().componentBvhs[0].get());
+        EXPECT_FALSE(checker->isValid(boomInRack));
+    }
 }

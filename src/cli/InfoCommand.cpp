@@ -178,7 +178,7 @@ void printProofArrays(const CollisionModel &model, std::ostream &out)
         << (triangles > 0 ? model.convex.bytes() / triangles : 0) << " per triangle)\n";
     std::size_t treeBytes = 0;
     for (const auto *trees : {&model.componentBvhs, &model.objectBvhs})
-        for (const std::unique_ptr<MeshBvh> &bvh : *trees)
+        for (const std::shared_ptr<const MeshBvh> &bvh : *trees)
             treeBytes += bvh->bytes();
     out << "triangle trees (exact phase and raster stages): " << treeBytes << " bytes ("
         << (triangles > 0 ? treeBytes / triangles : 0) << " per triangle)\n";

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <string>
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/geometry/MeshTopology.h"
@@ -45,11 +48,11 @@ constexpr unsigned kLeafTriangles = 2;
 
 /** \brief Moves the trees' nodes and triangle orders into one flat pair of arrays (the slices say
     where each mesh's part starts) and points every tree at its part, so each node is stored once. */
-void shareTrees(const std::vector<std::unique_ptr<MeshBvh>> &trees, std::vector<CollisionModel::MeshSlice> &slices,
+void shareTrees(const std::vector<std::shared_ptr<MeshBvh>> &trees, std::vector<CollisionModel::MeshSlice> &slices,
                 CollisionModel::TreeArrays &arrays)
 {
     std::size_t numNodes = 0, numTriangles = 0, numCells = 0;
-    for (const std::unique_ptr<MeshBvh> &tree : trees)
+    for (const std::shared_ptr<MeshBvh> &tree : trees)
     {
         numNodes += tree->numNodes();
         numTriangles += tree->mesh().triangles.size();
@@ -499,6 +502,18 @@ void ConvexSolids::add(const MeshBvh &tree, bool closed, double patchThickness)
     solidPatches_.push_back(static_cast<std::uint32_t>(patchPieces_.size()));
 }
 
+namespace
+{
+/** \brief The diagonal of each component's box, in component order. */
+std::vector<double> componentDiagonals(const RobotModel &robot)
+{
+    std::vector<double> diagonals;
+    for (const Component &component : robot.components)
+        diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
+    return diagonals;
+}
+}  // namespace
+
 CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr sceneModel)
     : robot(std::move(robotModel)), scene(std::move(sceneModel))
 {
@@ -506,6 +521,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         throw ConfigurationError("CollisionModel needs a robot model");
     if (!scene)
         scene = std::make_shared<Scene>();
+    copyRobotPart(sharedRobotPart(*robot));
 
     if (!scene->objects.empty())
         origin = 0.5 * (scene->bounds().min + scene->bounds().max);
@@ -517,28 +533,12 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
             origin += data.oMl[component.link].translation() / static_cast<double>(robot->components.size());
     }
 
-    std::vector<double> diagonals;
-    for (const Component &component : robot->components)
-    {
-        components.push_back(appendMesh(component.mesh, component.topology.closed, Eigen::Vector3d::Zero(),
-                                        componentVertices, componentTriangles));
-        // Float rounding of the transformed box must not cut off geometry: grow by a relative 1e-5.
-        Obb box = component.localObb;
-        box.halfExtents.array() += 1e-5 * box.halfExtents.norm() + 1e-9;
-        componentLocalBoxes.push_back(toDeviceBox(box));
-        componentLink.push_back(component.link);
-        componentBvhs.push_back(std::make_unique<MeshBvh>(component.mesh, kLeafTriangles, component.topology.closed));
-        diagonals.push_back(2.0 * component.localObb.halfExtents.norm());
-        // The component's own tree: its patches are a cut of it (one tree per mesh).
-        convex.add(*componentBvhs.back(), component.topology.closed, kPatchFlatness * diagonals.back());
-    }
     // Objects' patches are held to the robot's scale: a patch as thick as a link hides gaps
     // the size of one.
-    std::vector<double> sorted = diagonals;
-    std::sort(sorted.begin(), sorted.end());
-    const double robotScale = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
-    componentSubtreeEnd = robot->componentSubtreeEnd;
-
+    std::vector<double> diagonals = componentDiagonals(*robot);
+    std::sort(diagonals.begin(), diagonals.end());
+    const double robotScale = diagonals.empty() ? 0.0 : diagonals[diagonals.size() / 2];
+    std::vector<std::shared_ptr<MeshBvh>> trees;
     for (const SceneObject &object : scene->objects)
     {
         objects.push_back(appendMesh(object.mesh, object.topology.closed, origin, objectVertices, objectTriangles));
@@ -561,15 +561,50 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         fitted.center -= origin;
         fitted.halfExtents.array() += 1e-5 * fitted.halfExtents.norm() + 1e-6 * distance + 1e-9;
         objectOrientedBoxes.push_back(toDeviceBox(fitted));
-        objectBvhs.push_back(std::make_unique<MeshBvh>(object.mesh, kLeafTriangles, object.topology.closed));
-        convex.add(*objectBvhs.back(), object.topology.closed,
+        trees.push_back(std::make_shared<MeshBvh>(object.mesh, kLeafTriangles, object.topology.closed));
+        convex.add(*trees.back(), object.topology.closed,
                    kPatchFlatness * (robotScale > 0.0 ? robotScale : (object.bounds.max - object.bounds.min).norm()));
     }
-
-    shareTrees(componentBvhs, components, componentTrees);
-    shareTrees(objectBvhs, objects, objectTrees);
+    shareTrees(trees, objects, objectTrees);
+    objectBvhs.assign(trees.begin(), trees.end());
     for (int k = 0; k < 3; ++k)
         objectTreePlacement.m[4 * k + 3] = static_cast<float>(-origin[k]);
+
+    curved = CurvedSolids(*this);  // reads selfPairs and the trees
+
+    if (!diagonals.empty())
+        defaultPixelSize = diagonals[diagonals.size() / 2] / 32.0;
+    if (!(defaultPixelSize > 0))
+        defaultPixelSize = 1e-3;
+}
+
+CollisionModel::CollisionModel(RobotModelConstPtr robotModel, RobotPartOnly)
+    : robot(std::move(robotModel)), scene(std::make_shared<Scene>())
+{
+    buildRobotPart();
+}
+
+void CollisionModel::buildRobotPart()
+{
+    const std::vector<double> diagonals = componentDiagonals(*robot);
+    std::vector<std::shared_ptr<MeshBvh>> trees;
+    for (std::size_t k = 0; k < robot->components.size(); ++k)
+    {
+        const Component &component = robot->components[k];
+        components.push_back(appendMesh(component.mesh, component.topology.closed, Eigen::Vector3d::Zero(),
+                                        componentVertices, componentTriangles));
+        // Float rounding of the transformed box must not cut off geometry: grow by a relative 1e-5.
+        Obb box = component.localObb;
+        box.halfExtents.array() += 1e-5 * box.halfExtents.norm() + 1e-9;
+        componentLocalBoxes.push_back(toDeviceBox(box));
+        componentLink.push_back(component.link);
+        trees.push_back(std::make_shared<MeshBvh>(component.mesh, kLeafTriangles, component.topology.closed));
+        // The component's own tree: its patches are a cut of it (one tree per mesh).
+        convex.add(*trees.back(), component.topology.closed, kPatchFlatness * diagonals[k]);
+    }
+    componentSubtreeEnd = robot->componentSubtreeEnd;
+    shareTrees(trees, components, componentTrees);
+    componentBvhs.assign(trees.begin(), trees.end());
 
     for (std::size_t a = 0; a < components.size(); ++a)
         for (std::size_t b = a + 1; b < components.size(); ++b)
@@ -586,16 +621,71 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
         if (joint.kind == JointKind::Floating)
             quaternionStarts.push_back(joint.firstCoordinate + 3);
     }
-    selfPairTables = SelfPairTables(*this);  // reads selfPairs, convex, componentLink, quaternionStarts
-    curved = CurvedSolids(*this);            // reads selfPairs and the trees
+    selfPairTables = SelfPairTables(*this);  // reads selfPairs, convex (the components' solids), componentLink,
+                                             // quaternionStarts
+}
 
-    if (!diagonals.empty())
+void CollisionModel::copyRobotPart(const std::shared_ptr<const CollisionModel> &part)
+{
+    componentVertices = part->componentVertices;
+    componentTriangles = part->componentTriangles;
+    components = part->components;
+    componentLocalBoxes = part->componentLocalBoxes;
+    componentLink = part->componentLink;
+    componentSubtreeEnd = part->componentSubtreeEnd;
+    componentTrees = part->componentTrees;
+    // The trees read the part's own arrays (equal to the copies): each keeps the part alive.
+    for (const std::shared_ptr<const MeshBvh> &tree : part->componentBvhs)
+        componentBvhs.emplace_back(part, tree.get());
+    convex = part->convex;  // the components' solids; the objects' follow
+    selfPairs = part->selfPairs;
+    boundedCoordinates = part->boundedCoordinates;
+    quaternionStarts = part->quaternionStarts;
+    selfPairTables = part->selfPairTables;
+}
+
+std::shared_ptr<const CollisionModel> CollisionModel::sharedRobotPart(const RobotModel &robot)
+{
+    struct Entry
     {
-        std::nth_element(diagonals.begin(), diagonals.begin() + diagonals.size() / 2, diagonals.end());
-        defaultPixelSize = diagonals[diagonals.size() / 2] / 32.0;
+        std::string content;
+        std::weak_ptr<const CollisionModel> part;
+    };
+    static std::mutex mutex;
+    static std::vector<Entry> entries;                             // every part some model may hold
+    static std::deque<std::shared_ptr<const CollisionModel>> kept;  // the last used, newest first
+    std::string content = contentBytes(robot);
+    auto find = [&]() -> std::shared_ptr<const CollisionModel>
+    {
+        entries.erase(std::remove_if(entries.begin(), entries.end(), [](const Entry &e) { return e.part.expired(); }),
+                      entries.end());
+        for (const Entry &entry : entries)
+            if (entry.content == content)
+                if (std::shared_ptr<const CollisionModel> part = entry.part.lock())
+                {
+                    kept.erase(std::remove(kept.begin(), kept.end(), part), kept.end());
+                    kept.push_front(part);
+                    kept.resize(std::min(kept.size(), kKeptRobotParts));
+                    return part;
+                }
+        return nullptr;
+    };
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (std::shared_ptr<const CollisionModel> part = find())
+            return part;
     }
-    if (!(defaultPixelSize > 0))
-        defaultPixelSize = 1e-3;
+    // Built outside the lock (seconds for a large robot); a model built meanwhile by another
+    // thread for the same content wins, so that both share one.
+    std::shared_ptr<const CollisionModel> built(
+        new CollisionModel(std::make_shared<const RobotModel>(robot), RobotPartOnly{}));
+    std::lock_guard<std::mutex> lock(mutex);
+    if (std::shared_ptr<const CollisionModel> part = find())
+        return part;
+    entries.push_back(Entry{std::move(content), built});
+    kept.push_front(built);
+    kept.resize(std::min(kept.size(), kKeptRobotParts));
+    return built;
 }
 
 int CollisionModel::firstInadmissibleCoordinate(const double *q) const

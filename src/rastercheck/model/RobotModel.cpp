@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <type_traits>
 
 #include "rastercheck/core/Error.h"
 
@@ -18,6 +19,145 @@ Component makeComponent(const std::string &name, std::vector<Mesh> parts)
     component.localObb = Obb::fit(component.mesh);
     component.localAabb = component.mesh.bounds();
     return component;
+}
+
+namespace
+{
+/** \brief Appends fields one by one (never a struct whole: padding bytes are not content). */
+class ContentWriter
+{
+public:
+    template <class T>
+    void value(const T &field)
+    {
+        static_assert(std::is_arithmetic_v<T> || std::is_enum_v<T>, "write a struct's fields one by one");
+        bytes.append(reinterpret_cast<const char *>(&field), sizeof(T));
+    }
+    template <class Derived>
+    void matrix(const Eigen::DenseBase<Derived> &m)
+    {
+        for (Eigen::Index i = 0; i < m.size(); ++i)
+            value(static_cast<double>(m.derived().data()[i]));
+    }
+    void text(const std::string &s)
+    {
+        value(s.size());
+        bytes.append(s);
+    }
+    template <class T>
+    void values(const std::vector<T> &fields)
+    {
+        value(fields.size());
+        for (const T &field : fields)
+            value(field);
+    }
+    void texts(const std::vector<std::string> &fields)
+    {
+        value(fields.size());
+        for (const std::string &field : fields)
+            text(field);
+    }
+    std::string bytes;
+};
+
+#if defined(__x86_64__) && defined(__GLIBCXX__) && !defined(_GLIBCXX_DEBUG)
+// A field added to one of these types must be written by contentBytes too: else two robots that
+// differ only in it would share collision parts built for one of them.
+static_assert(sizeof(Joint) == 304, "a new Joint field: write it in contentBytes");
+static_assert(sizeof(Link) == 40, "a new Link field: write it in contentBytes");
+static_assert(sizeof(Component) == 344, "a new Component field: write it in contentBytes");
+static_assert(sizeof(Mesh) == 48, "a new Mesh field: write it in contentBytes");
+static_assert(sizeof(MeshTopology) == 64, "a new MeshTopology field: write it in contentBytes");
+static_assert(sizeof(PrimitiveShape) == 160, "a new PrimitiveShape field: write it in contentBytes");
+static_assert(sizeof(device::KinematicJoint) == 160, "a new KinematicJoint field: write it in contentBytes");
+static_assert(sizeof(RobotModel) == 264, "a new RobotModel field: write it in contentBytes");
+#endif
+}  // namespace
+
+std::string contentBytes(const RobotModel &robot)
+{
+    ContentWriter out;
+    out.text(robot.name);
+    out.value(robot.links.size());
+    for (const Link &link : robot.links)
+    {
+        out.text(link.name);
+        out.value(link.parentJoint);
+        out.value(link.component);
+    }
+    out.value(robot.joints.size());
+    for (const Joint &joint : robot.joints)
+    {
+        out.text(joint.name);
+        out.value(joint.kind);
+        out.value(joint.parentLink);
+        out.value(joint.childLink);
+        out.matrix(joint.origin.matrix());
+        out.matrix(joint.axis);
+        out.value(joint.continuous);
+        out.texts(joint.coordinateNames);
+        out.values(joint.lower);
+        out.values(joint.upper);
+        out.value(joint.firstCoordinate);
+        out.value(joint.mimicOf);
+        out.value(joint.mimicMultiplier);
+        out.value(joint.mimicOffset);
+    }
+    out.value(robot.components.size());
+    for (const Component &component : robot.components)
+    {
+        out.text(component.name);
+        out.value(component.link);
+        out.value(component.mesh.vertices.size());
+        for (const Eigen::Vector3d &v : component.mesh.vertices)
+            out.matrix(v);
+        out.value(component.mesh.triangles.size());
+        for (const Mesh::Triangle &t : component.mesh.triangles)
+            for (std::uint32_t corner : t)
+                out.value(corner);
+        const MeshTopology &topology = component.topology;
+        for (std::size_t count : {topology.boundaryEdges, topology.nonManifoldEdges, topology.misorientedEdges,
+                                  topology.degenerateTriangles, topology.mergedVertices,
+                                  topology.removedDuplicateFaces, topology.shells})
+            out.value(count);
+        out.value(topology.closed);
+        out.matrix(component.localObb.center);
+        out.matrix(component.localObb.axes);
+        out.matrix(component.localObb.halfExtents);
+        out.matrix(component.localAabb.min);
+        out.matrix(component.localAabb.max);
+        out.value(component.shapes.size());
+        for (const PrimitiveShape &shape : component.shapes)
+        {
+            out.value(shape.kind);
+            out.matrix(shape.size);
+            out.matrix(shape.pose.matrix());
+        }
+    }
+    out.values(robot.componentSubtreeEnd);
+    out.texts(robot.coordinateNames);
+    out.values(robot.lowerBounds);
+    out.values(robot.upperBounds);
+    out.value(robot.allowedCollisions.size());
+    for (bool allowed : robot.allowedCollisions)
+        out.value(allowed);
+    out.value(robot.kinematicJoints.size());
+    for (const device::KinematicJoint &joint : robot.kinematicJoints)
+    {
+        out.value(joint.kind);
+        out.value(joint.parentLink);
+        out.value(joint.childLink);
+        out.value(joint.firstCoordinate);
+        out.value(joint.mimicOf);
+        out.value(joint.mimicMultiplier);
+        out.value(joint.mimicOffset);
+        for (double entry : joint.origin.m)
+            out.value(entry);
+        out.value(joint.axis.x);
+        out.value(joint.axis.y);
+        out.value(joint.axis.z);
+    }
+    return std::move(out.bytes);
 }
 
 void RobotModel::setCollisionAllowed(int a, int b, bool allowed)

@@ -143,6 +143,13 @@ public:
     std::vector<double> neutralConfiguration() const;
 };
 
+/** \brief Every field of \a robot as bytes: two robots hold the same content exactly when their
+    strings are equal (a double's bits count, so -0.0 and 0.0 differ). CollisionModel shares what it
+    builds from a robot alone (its meshes' trees and hulls, the self-pair tables) between robots whose
+    content is equal, loaded once or several times, and builds it anew for a robot changed in any
+    field. */
+std::string contentBytes(const RobotModel &robot);
+
 using RobotModelPtr = std::shared_ptr<RobotModel>;
 using RobotModelConstPtr = std::shared_ptr<const RobotModel>;
 }  // namespace rastercheck
