@@ -58,7 +58,9 @@ struct CheckerOptions
 
 /** \brief Decides whether robot configurations collide with the scene or themselves, one state or
     a batch at a time. Immutable after construction; every method is thread-safe (each call uses
-    its own pooled scratch). */
+    its own pooled scratch). Checkers of one robot (or of robots loaded apart with the same content)
+    share what depends on the robot alone, built with the first of them: a checker per scene costs
+    about the scene's part (CollisionModel). */
 class Checker
 {
 public:
