@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/core/Parallel.h"
 #include "rastercheck/device/Kinematics.h"
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/model/MotionBound.h"
@@ -63,8 +64,7 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
         ladder.push_back(p);
     const double target = size / 512;  // the largest sweep to a node, per axis, where nodes allow
 
-    std::vector<double> q, jointValues(robot.kinematicJoints.size() + 1), componentSweeps(model.components.size());
-    std::vector<device::Pose<double>> links(robot.links.size());
+    std::vector<double> componentSweeps(model.components.size());
     const device::ConvexArrays arrays = model.convex.arrays();
     std::vector<bool> followed(dof, false);
     for (const Joint &joint : robot.joints)
@@ -109,43 +109,49 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
             continue;
         table.firstClearance = clearance_.size();
         clearance_.resize(clearance_.size() + numNodes);
-        q = canonical;
-        for (std::size_t node = 0; node < numNodes; ++node)
-        {
-            std::size_t rest = node;
-            for (int k = table.numAxes; k-- > 0;)
-            {
-                const Axis &axis = table.axes[k];
-                const auto index = static_cast<int>(rest % static_cast<std::size_t>(axis.nodes));
-                rest /= static_cast<std::size_t>(axis.nodes);
-                q[static_cast<std::size_t>(axis.coordinate)] = axis.lower + index * axis.step;  // as apart() places it
-            }
-            device::linkPoses(robot.kinematicJoints.data(), static_cast<int>(robot.kinematicJoints.size()), q.data(),
-                              jointValues.data(), links.data());
-            const auto provenApart = [&](double padding)
-            {
-                return device::relateSolids(arrays, static_cast<std::uint32_t>(a), links[model.componentLink[a]],
-                                            static_cast<std::uint32_t>(b), links[model.componentLink[b]], padding,
-                                            false) == device::HullRelation::Apart;
-            };
-            // The largest padding on the ladder proven (a binary search: the proofs hold for every
-            // smaller padding in practice; any value proven is sound either way).
-            double clearance = -std::numeric_limits<double>::infinity();
-            if (provenApart(0.0))
-            {
-                std::size_t low = 0, high = ladder.size();  // ladder[low] proven; ladder[high] not (or past)
-                while (high - low > 1)
-                {
-                    const std::size_t middle = (low + high) / 2;
-                    (provenApart(ladder[middle]) ? low : high) = middle;
-                }
-                clearance = ladder[low];
-            }
-            float stored = static_cast<float>(clearance);
-            if (static_cast<double>(stored) > clearance)
-                stored = std::nextafter(stored, -std::numeric_limits<float>::infinity());
-            clearance_[table.firstClearance + node] = stored;
-        }
+        // The nodes on OpenMP's threads: each is a few proofs of its own (about 11 ms per table for
+        // the Panda's, half a second in all for the UR5's).
+        parallelFor(numNodes,
+                    [&](std::size_t node)
+                    {
+                        std::vector<double> q = canonical, jointValues(robot.kinematicJoints.size() + 1);
+                        std::vector<device::Pose<double>> links(robot.links.size());
+                        std::size_t rest = node;
+                        for (int k = table.numAxes; k-- > 0;)
+                        {
+                            const Axis &axis = table.axes[k];
+                            const auto index = static_cast<int>(rest % static_cast<std::size_t>(axis.nodes));
+                            rest /= static_cast<std::size_t>(axis.nodes);
+                            q[static_cast<std::size_t>(axis.coordinate)] =
+                                axis.lower + index * axis.step;  // as apart() places it
+                        }
+                        device::linkPoses(robot.kinematicJoints.data(), static_cast<int>(robot.kinematicJoints.size()),
+                                          q.data(), jointValues.data(), links.data());
+                        const auto provenApart = [&](double padding)
+                        {
+                            return device::relateSolids(arrays, static_cast<std::uint32_t>(a),
+                                                        links[model.componentLink[a]], static_cast<std::uint32_t>(b),
+                                                        links[model.componentLink[b]], padding,
+                                                        false) == device::HullRelation::Apart;
+                        };
+                        // The largest padding on the ladder proven (a binary search: the proofs hold
+                        // for every smaller padding in practice; any value proven is sound either way).
+                        double clearance = -std::numeric_limits<double>::infinity();
+                        if (provenApart(0.0))
+                        {
+                            std::size_t low = 0, high = ladder.size();  // ladder[low] proven; ladder[high] not
+                            while (high - low > 1)
+                            {
+                                const std::size_t middle = (low + high) / 2;
+                                (provenApart(ladder[middle]) ? low : high) = middle;
+                            }
+                            clearance = ladder[low];
+                        }
+                        float stored = static_cast<float>(clearance);
+                        if (static_cast<double>(stored) > clearance)
+                            stored = std::nextafter(stored, -std::numeric_limits<float>::infinity());
+                        clearance_[table.firstClearance + node] = stored;
+                    });
         tableOf_[p] = static_cast<int>(tables_.size());
         tables_.push_back(table);
     }
