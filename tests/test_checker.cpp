@@ -312,6 +312,26 @@ TEST(RobotParts, TheLastUsedPartsStayBuiltAndOthersAreFreed)
     EXPECT_TRUE(tree.expired());
 }
 
+TEST(RobotParts, AMalformedComponentMeshIsAnErrorFromTheParallelBuild)
+{
+    // The trees are built on OpenMP's threads: an error in one (a triangle naming a vertex the mesh
+    // does not have, from a model edited by hand) reaches the caller as a ConfigurationError.
+    auto robot = std::make_shared<rc::RobotModel>(*rc::test::plant().robot);
+    robot->components[1].mesh.triangles[0][2] = static_cast<std::uint32_t>(robot->components[1].mesh.numVertices());
+    try
+    {
+        const rc::Checker checker(robot, nullptr);
+        FAIL() << "a mesh with a missing vertex was accepted";
+    }
+    catch (const rc::ConfigurationError &e)
+    {
+        EXPECT_NE(std::string(e.what()).find("component '" + robot->components[1].name +
+                                             "': MeshBvh: triangle 0 names vertex"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
 TEST(RobotParts, EveryFieldOfTheRobotCountsTowardsItsContent)
 {
     // Each change below, however small, must give the robot other parts (contentBytes differs);

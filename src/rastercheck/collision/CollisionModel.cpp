@@ -47,6 +47,20 @@ CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, const Eigen:
     2.55-2.89). Four: bugtrap's distance 25.8 -> 29.6 us. */
 constexpr unsigned kLeafTriangles = 2;
 
+/** \brief The triangle tree of the mesh of \a kind \a name; its errors (a mesh edited by hand that
+    names a missing vertex) name it. */
+std::shared_ptr<MeshBvh> buildTree(const Mesh &mesh, bool closed, const char *kind, const std::string &name)
+{
+    try
+    {
+        return std::make_shared<MeshBvh>(mesh, kLeafTriangles, closed);
+    }
+    catch (const ConfigurationError &e)
+    {
+        throw ConfigurationError(std::string(kind) + " '" + name + "': " + e.what());
+    }
+}
+
 /** \brief Moves the trees' nodes and triangle orders into one flat pair of arrays (the slices say
     where each mesh's part starts) and points every tree at its part, so each node is stored once. */
 void shareTrees(const std::vector<std::shared_ptr<MeshBvh>> &trees, std::vector<CollisionModel::MeshSlice> &slices,
@@ -544,7 +558,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
                 [&](std::size_t o)
                 {
                     const SceneObject &object = scene->objects[o];
-                    trees[o] = std::make_shared<MeshBvh>(object.mesh, kLeafTriangles, object.topology.closed);
+                    trees[o] = buildTree(object.mesh, object.topology.closed, "scene object", object.name);
                 });
     for (std::size_t o = 0; o < scene->objects.size(); ++o)
     {
@@ -601,7 +615,7 @@ void CollisionModel::buildRobotPart()
                 [&](std::size_t k)
                 {
                     const Component &component = robot->components[k];
-                    trees[k] = std::make_shared<MeshBvh>(component.mesh, kLeafTriangles, component.topology.closed);
+                    trees[k] = buildTree(component.mesh, component.topology.closed, "component", component.name);
                 });
     for (std::size_t k = 0; k < robot->components.size(); ++k)
     {
