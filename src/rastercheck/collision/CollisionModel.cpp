@@ -47,18 +47,28 @@ CollisionModel::MeshSlice appendMesh(const Mesh &mesh, bool closed, const Eigen:
     2.55-2.89). Four: bugtrap's distance 25.8 -> 29.6 us. */
 constexpr unsigned kLeafTriangles = 2;
 
-/** \brief The triangle tree of the mesh of \a kind \a name; its errors (a mesh edited by hand that
-    names a missing vertex) name it. */
-std::shared_ptr<MeshBvh> buildTree(const Mesh &mesh, bool closed, const char *kind, const std::string &name)
+/** \brief The triangle tree of each of \a parts (Component or SceneObject), each on an OpenMP
+    thread: they are independent, and a few large meshes take most of the time (a UR5's gripper and
+    force sensor 80 % of its trees'). A tree's error (a mesh edited by hand that names a missing
+    vertex) names its \a kind and part. */
+template <class Part>
+std::vector<std::shared_ptr<MeshBvh>> buildTrees(const std::vector<Part> &parts, const char *kind)
 {
-    try
-    {
-        return std::make_shared<MeshBvh>(mesh, kLeafTriangles, closed);
-    }
-    catch (const ConfigurationError &e)
-    {
-        throw ConfigurationError(std::string(kind) + " '" + name + "': " + e.what());
-    }
+    std::vector<std::shared_ptr<MeshBvh>> trees(parts.size());
+    parallelFor(parts.size(),
+                [&](std::size_t k)
+                {
+                    const Part &part = parts[k];
+                    try
+                    {
+                        trees[k] = std::make_shared<MeshBvh>(part.mesh, kLeafTriangles, part.topology.closed);
+                    }
+                    catch (const ConfigurationError &e)
+                    {
+                        throw ConfigurationError(std::string(kind) + " '" + part.name + "': " + e.what());
+                    }
+                });
+    return trees;
 }
 
 /** \brief Moves the trees' nodes and triangle orders into one flat pair of arrays (the slices say
@@ -553,13 +563,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, SceneConstPtr scen
     std::vector<double> diagonals = componentDiagonals(*robot);
     std::sort(diagonals.begin(), diagonals.end());
     const double robotScale = diagonals.empty() ? 0.0 : diagonals[diagonals.size() / 2];
-    std::vector<std::shared_ptr<MeshBvh>> trees(scene->objects.size());  // as the components' trees
-    parallelFor(trees.size(),
-                [&](std::size_t o)
-                {
-                    const SceneObject &object = scene->objects[o];
-                    trees[o] = buildTree(object.mesh, object.topology.closed, "scene object", object.name);
-                });
+    const std::vector<std::shared_ptr<MeshBvh>> trees = buildTrees(scene->objects, "scene object");
     for (std::size_t o = 0; o < scene->objects.size(); ++o)
     {
         const SceneObject &object = scene->objects[o];
@@ -608,15 +612,7 @@ CollisionModel::CollisionModel(RobotModelConstPtr robotModel, RobotPartOnly)
 void CollisionModel::buildRobotPart()
 {
     const std::vector<double> diagonals = componentDiagonals(*robot);
-    // Each component's tree on a thread of its own: they are independent, and a robot's largest
-    // meshes take most of the time (a UR5's gripper and force sensor 80 % of its trees').
-    std::vector<std::shared_ptr<MeshBvh>> trees(robot->components.size());
-    parallelFor(trees.size(),
-                [&](std::size_t k)
-                {
-                    const Component &component = robot->components[k];
-                    trees[k] = buildTree(component.mesh, component.topology.closed, "component", component.name);
-                });
+    const std::vector<std::shared_ptr<MeshBvh>> trees = buildTrees(robot->components, "component");
     for (std::size_t k = 0; k < robot->components.size(); ++k)
     {
         const Component &component = robot->components[k];
