@@ -1,6 +1,7 @@
 // The exact oracle over whole meshes: BVH structure, surfacesWithin against brute force and FCL,
 // point-in-solid parity (grazing rays included) and containment in solidsOverlap.
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <limits>
 #include <map>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/math/bv/OBBRSS.h>
@@ -26,6 +28,7 @@
 #include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/geometry/Obb.h"
+#include "rastercheck/geometry/Primitives.h"
 #include "rastercheck/geometry/TriangleTests.h"
 #include "rastercheck/model/Kinematics.h"
 #include "NonConvex.h"
@@ -1107,5 +1110,39 @@ TEST(Traversal, APairWalkWithAShrinkingReachFindsTheNearestPairAsADistanceQueryW
         EXPECT_DOUBLE_EQ(query.best, b.front() - a.back()) << trial;
         EXPECT_LT(query.leafPairs, 50) << "the reach did not shrink: " << query.leafPairs << " of "
                                        << a.size() * b.size();
+    }
+}
+
+TEST(MeshBvh, ALargeMeshBuiltOnManyThreadsIsTheTreeOneThreadBuilds)
+{
+    // Above 2 x kMinJobTriangles triangles the subtrees below the upper levels are built as jobs on
+    // OpenMP's threads and laid out again in one build's order: node for node the same tree.
+    rc::Mesh bumpy;
+    const int side = 130;  // 2 x 129^2 = 33 282 triangles
+    for (int i = 0; i < side; ++i)
+        for (int j = 0; j < side; ++j)
+            bumpy.vertices.emplace_back(0.01 * i, 0.01 * j,
+                                        0.05 * std::sin(0.3 * i) * std::cos(0.17 * j) + 0.01 * ((7 * i + 13 * j) % 5));
+    for (int i = 0; i + 1 < side; ++i)
+        for (int j = 0; j + 1 < side; ++j)
+        {
+            const auto v = static_cast<std::uint32_t>(i * side + j);
+            bumpy.triangles.push_back({v, v + side, v + 1});
+            bumpy.triangles.push_back({v + 1, v + side, v + side + 1});
+        }
+    for (const rc::Mesh &mesh : {bumpy, rc::makeSphere(1.0, 1e-7)})
+    {
+        ASSERT_GT(mesh.numTriangles(), 4 * rc::MeshBvh::kMinJobTriangles);
+        const int threads = omp_get_max_threads();
+        omp_set_num_threads(1);
+        const rc::MeshBvh serial(mesh, 2, false);
+        omp_set_num_threads(4);
+        const rc::MeshBvh parallel(mesh, 2, false);
+        omp_set_num_threads(threads);
+        ASSERT_EQ(serial.numNodes(), parallel.numNodes());
+        EXPECT_EQ(serial.depth(), parallel.depth());
+        EXPECT_EQ(0, std::memcmp(serial.nodes(), parallel.nodes(), serial.numNodes() * sizeof(rc::MeshBvh::Node)));
+        EXPECT_EQ(0, std::memcmp(serial.triangleOrder(), parallel.triangleOrder(),
+                                 mesh.numTriangles() * sizeof(std::uint32_t)));
     }
 }

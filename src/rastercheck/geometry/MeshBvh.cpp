@@ -8,8 +8,10 @@
 #include <string>
 
 #include <Eigen/Eigenvalues>
+#include <omp.h>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/core/Parallel.h"
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/geometry/BoxFit.h"
 #include "rastercheck/model/Kinematics.h"
@@ -131,7 +133,7 @@ std::size_t MeshBvh::bytes() const
     fit's scratch. */
 struct MeshBvh::BuildScratch
 {
-    std::vector<Vec> centroids;  // per triangle (mesh order)
+    const std::vector<Vec> *centroids = nullptr;  // per triangle (mesh order), shared by the threads
     std::vector<Vec> fitPoints, fitNormals;
     std::vector<std::uint32_t> fitVertices;
     BoxFitScratch fit;
@@ -144,9 +146,7 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
         return;
     if (n > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 2))
         throw ConfigurationError("MeshBvh: " + std::to_string(n) + " triangles exceed the index range");
-    BuildScratch scratch;
-    std::vector<Vec> &centroids = scratch.centroids;
-    centroids.resize(n);
+    std::vector<Vec> centroids(n);
     for (std::size_t i = 0; i < n; ++i)
     {
         for (std::uint32_t v : mesh.triangles[i])
@@ -165,9 +165,39 @@ MeshBvh::MeshBvh(const Mesh &mesh, unsigned maxLeafTriangles, bool insideGrid) :
     ownTriangleOrder_.resize(n);
     std::iota(ownTriangleOrder_.begin(), ownTriangleOrder_.end(), 0u);
     const unsigned leafSize = std::max(1u, maxLeafTriangles);
-    ownNodes_.reserve(2 * (n / leafSize + 1));
-    ownNodes_.emplace_back();
-    depth_ = build(0, static_cast<std::uint32_t>(n), 0, 0, scratch, leafSize);
+    BuildScratch scratch;
+    scratch.centroids = &centroids;
+    // A large mesh (a site, a terrain) on every thread: the upper levels here, the subtrees below
+    // them as jobs (about 8 per thread), then laid out as this thread alone would have (the same
+    // nodes in the same order). Not within another parallel region (a model's meshes already
+    // build side by side there).
+    const int threads = omp_in_parallel() ? 1 : omp_get_max_threads();
+    const std::uint32_t jobTriangles =
+        threads > 1 && n > 2 * kMinJobTriangles
+            ? static_cast<std::uint32_t>(std::max<std::size_t>(kMinJobTriangles, n / (8 * threads)))
+            : 0;
+    std::vector<BuildJob> jobs;
+    std::vector<Node> upper;
+    upper.reserve(jobTriangles > 0 ? 4 * (n / jobTriangles + 1) : 2 * (n / leafSize + 1));
+    upper.emplace_back();
+    depth_ = build(0, static_cast<std::uint32_t>(n), upper, 0, 0, scratch, leafSize, jobTriangles,
+                   jobTriangles > 0 ? &jobs : nullptr);
+    if (jobs.empty())
+        ownNodes_ = std::move(upper);
+    else
+    {
+        std::vector<std::vector<Node>> subtrees(jobs.size());
+        parallelFor(jobs.size(),
+                    [&](std::size_t j)
+                    {
+                        BuildScratch own;
+                        own.centroids = &centroids;
+                        subtrees[j].reserve(2 * ((jobs[j].end - jobs[j].begin) / leafSize + 1));
+                        subtrees[j].emplace_back();
+                        build(jobs[j].begin, jobs[j].end, subtrees[j], 0, jobs[j].level, own, leafSize);
+                    });
+        layOutDepthFirst(upper, jobs, subtrees);
+    }
     ownNodes_.shrink_to_fit();
     nodes_ = ownNodes_.data();
     numNodes_ = ownNodes_.size();
@@ -442,10 +472,16 @@ Eigen::Matrix3d MeshBvh::fitAxes(std::uint32_t begin, std::uint32_t end, const E
     return leastAreaAxes(points, principal, normals, scratch.fit);
 }
 
-int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level, BuildScratch &scratch,
-                   unsigned maxLeafTriangles)
+int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::vector<Node> &nodes, std::int32_t node, int level,
+                   BuildScratch &scratch, unsigned maxLeafTriangles, std::uint32_t jobTriangles,
+                   std::vector<BuildJob> *jobs)
 {
-    const std::vector<Vec> &centroids = scratch.centroids;
+    if (jobs && end - begin <= jobTriangles)
+    {
+        jobs->push_back(BuildJob{begin, end, node, level});
+        return 0;
+    }
+    const std::vector<Vec> &centroids = *scratch.centroids;
     // The box: its axes fitted (fitAxes, starting from the principal axes of the corners'
     // covariance), rounded to float first, then the centre and extents about those axes (rounded
     // outwards), so the stored box holds every corner.
@@ -462,7 +498,7 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
     forEachCorner([&](const Vec &p) { covariance += (p - mean) * (p - mean).transpose(); });
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
-    Node &box = ownNodes_[node];
+    Node &box = nodes[node];
     Eigen::Matrix3d axes = fitAxes(
         begin, end, solver.info() == Eigen::Success ? solver.eigenvectors() : Eigen::Matrix3d::Identity(), scratch);
     for (int r = 0; r < 3; ++r)
@@ -527,14 +563,59 @@ int MeshBvh::build(std::uint32_t begin, std::uint32_t end, std::int32_t node, in
                          [&centroids, &axis](std::uint32_t i, std::uint32_t j)
                          { return axis.dot(centroids[i]) < axis.dot(centroids[j]); });
     }
-    const auto child = static_cast<std::int32_t>(ownNodes_.size());
-    ownNodes_.emplace_back();
-    ownNodes_.emplace_back();
-    ownNodes_[node].first = child;
-    ownNodes_[node].count = 0;
-    const int left = build(begin, middle, child, level + 1, scratch, maxLeafTriangles);
-    const int right = build(middle, end, child + 1, level + 1, scratch, maxLeafTriangles);
+    const auto child = static_cast<std::int32_t>(nodes.size());
+    nodes.emplace_back();
+    nodes.emplace_back();
+    nodes[node].first = child;
+    nodes[node].count = 0;
+    const int left = build(begin, middle, nodes, child, level + 1, scratch, maxLeafTriangles, jobTriangles, jobs);
+    const int right = build(middle, end, nodes, child + 1, level + 1, scratch, maxLeafTriangles, jobTriangles, jobs);
     return 1 + std::max(left, right);
+}
+
+void MeshBvh::layOutDepthFirst(const std::vector<Node> &upper, const std::vector<BuildJob> &jobs,
+                               const std::vector<std::vector<Node>> &subtrees)
+{
+    std::vector<int> jobOf(upper.size(), -1);
+    for (std::size_t j = 0; j < jobs.size(); ++j)
+        jobOf[static_cast<std::size_t>(jobs[j].node)] = static_cast<int>(j);
+    std::size_t total = upper.size() - jobs.size();
+    for (const std::vector<Node> &subtree : subtrees)
+        total += subtree.size();
+    ownNodes_.clear();
+    ownNodes_.reserve(total);
+    ownNodes_.emplace_back();
+    // Node \a index of \a from goes to slot \a at; a split appends its pair of children, then lays
+    // out the first child's subtree, then the second's: build()'s own order.
+    const auto place = [&](const auto &self, const std::vector<Node> *from, std::int32_t index, std::size_t at) -> void
+    {
+        if (from == &upper && jobOf[static_cast<std::size_t>(index)] >= 0)
+        {
+            from = &subtrees[static_cast<std::size_t>(jobOf[static_cast<std::size_t>(index)])];
+            index = 0;
+        }
+        Node node = (*from)[static_cast<std::size_t>(index)];
+        if (node.isLeaf())
+        {
+            ownNodes_[at] = node;
+            return;
+        }
+        const std::int32_t children = node.first;
+        node.first = static_cast<std::int32_t>(ownNodes_.size());
+        ownNodes_[at] = node;
+        ownNodes_.emplace_back();
+        ownNodes_.emplace_back();
+        self(self, from, children, static_cast<std::size_t>(node.first));
+        self(self, from, children + 1, static_cast<std::size_t>(node.first) + 1);
+    };
+    place(place, &upper, 0, 0);
+    // Heights from the leaves up: children come after their parent.
+    std::vector<int> height(ownNodes_.size(), 0);
+    for (std::size_t i = ownNodes_.size(); i-- > 0;)
+        if (!ownNodes_[i].isLeaf())
+            height[i] = 1 + std::max(height[static_cast<std::size_t>(ownNodes_[i].first)],
+                                     height[static_cast<std::size_t>(ownNodes_[i].first) + 1]);
+    depth_ = height[0];
 }
 
 device::ExactScratch ExactWorkspace::lend(std::size_t movingNodes)

@@ -45,6 +45,9 @@ public:
     /** \brief Deepest tree the walk's fixed stack allows (device::walkPairs); a balanced build of
         any mesh that fits in memory stays far below it (the constructor checks). */
     static constexpr int kMaxDepth = device::kMaxTreeDepth;
+    /** \brief Smallest subtree a large mesh's build gives an OpenMP thread of its own: a mesh of more
+        than twice as many triangles is built on every thread (the same tree as on one). */
+    static constexpr std::size_t kMinJobTriangles = 4096;
 
     /** \brief Builds over \a mesh, which must outlive this object and not change. Empty meshes give
         an empty tree. Throws rastercheck::Error if a triangle names a vertex that does not exist.
@@ -130,9 +133,24 @@ private:
         about a few normals, the one whose box has the least surface area. */
     Eigen::Matrix3d fitAxes(std::uint32_t begin, std::uint32_t end, const Eigen::Matrix3d &principal,
                             BuildScratch &scratch) const;
-    /** \brief Builds node \a node over slots begin..end and its subtree; returns its height. */
-    int build(std::uint32_t begin, std::uint32_t end, std::int32_t node, int level, BuildScratch &scratch,
-              unsigned maxLeafTriangles);
+    /** \brief A subtree left to a thread of its own: slots begin..end at depth \a level, its root
+        standing for node \a node of the upper tree. */
+    struct BuildJob
+    {
+        std::uint32_t begin, end;
+        std::int32_t node;
+        int level;
+    };
+    /** \brief Builds node \a node of \a nodes over slots begin..end and its subtree (each split
+        appends the two children to \a nodes), and returns its height; with \a jobs, a node over at
+        most \a jobTriangles triangles is left to a job instead (height 0 here). */
+    int build(std::uint32_t begin, std::uint32_t end, std::vector<Node> &nodes, std::int32_t node, int level,
+              BuildScratch &scratch, unsigned maxLeafTriangles, std::uint32_t jobTriangles = 0,
+              std::vector<BuildJob> *jobs = nullptr);
+    /** \brief ownNodes_ and depth_ from \a upper, whose nodes named by \a jobs stand for the roots
+        of \a subtrees: the nodes in the order one build() alone appends them. */
+    void layOutDepthFirst(const std::vector<Node> &upper, const std::vector<BuildJob> &jobs,
+                          const std::vector<std::vector<Node>> &subtrees);
     /** \brief The surface area heuristic's split of slots begin..end: false when every centroid
         projects alike on every axis of \a axes, else the cut (centroids below \a cut along
         \a direction go left; both sides non-empty). */
