@@ -1117,8 +1117,9 @@ TEST(MeshBvh, ALargeMeshBuiltOnManyThreadsIsTheTreeOneThreadBuilds)
 {
     // Above 2 x kMinJobTriangles triangles the subtrees below the upper levels are built as jobs on
     // OpenMP's threads and laid out again in one build's order: node for node the same tree.
+    // A bumpy grid (19 602 triangles) and a sphere (11 448): 4 threads give each several jobs.
     rc::Mesh bumpy;
-    const int side = 130;  // 2 x 129^2 = 33 282 triangles
+    const int side = 100;
     for (int i = 0; i < side; ++i)
         for (int j = 0; j < side; ++j)
             bumpy.vertices.emplace_back(0.01 * i, 0.01 * j,
@@ -1130,9 +1131,9 @@ TEST(MeshBvh, ALargeMeshBuiltOnManyThreadsIsTheTreeOneThreadBuilds)
             bumpy.triangles.push_back({v, v + side, v + 1});
             bumpy.triangles.push_back({v + 1, v + side, v + side + 1});
         }
-    for (const rc::Mesh &mesh : {bumpy, rc::makeSphere(1.0, 1e-7)})
+    for (const rc::Mesh &mesh : {bumpy, rc::makeSphere(1.0, 1e-3)})
     {
-        ASSERT_GT(mesh.numTriangles(), 4 * rc::MeshBvh::kMinJobTriangles);
+        ASSERT_GT(mesh.numTriangles(), 2 * rc::MeshBvh::kMinJobTriangles);
         const int threads = omp_get_max_threads();
         omp_set_num_threads(1);
         const rc::MeshBvh serial(mesh, 2, false);
