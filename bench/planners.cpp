@@ -192,7 +192,8 @@ int main(int argc, char **argv)
             if (backend == BackendChoice::Cuda || backend == BackendChoice::HostStages)
                 options.checker.minDeviceBatch = deviceBatch;
             og::SimpleSetupPtr ours;
-            setupSeconds.push_back(bench::seconds([&] { ours = rastercheck::ompl::makeSimpleSetup(problem, options); }));
+            setupSeconds.push_back(
+                bench::seconds([&] { ours = rastercheck::ompl::makeSimpleSetup(problem, options); }));
             setStartAndGoal(*ours);
             const rastercheck::ompl::StateValidityCheckerPtr oracle = rastercheck::ompl::getStateValidityChecker(*ours);
             // MotionBenchMaker's problems were made with other collision models: a start or goal
@@ -339,10 +340,11 @@ int main(int argc, char **argv)
         if (!setupSeconds.empty())
         {
             const std::vector<double> later(setupSeconds.begin() + 1, setupSeconds.end());
-            std::printf("Setups built (the checker with them): %zu; the first %.1f ms, the others median %.1f ms, "
-                        "max %.1f ms.\n\n",
-                        setupSeconds.size(), 1e3 * setupSeconds.front(), later.empty() ? 0.0 : 1e3 * quantile(later, 0.5),
-                        later.empty() ? 0.0 : 1e3 * *std::max_element(later.begin(), later.end()));
+            std::printf(
+                "Setups built (the checker with them): %zu; the first %.1f ms, the others median %.1f ms, "
+                "max %.1f ms.\n\n",
+                setupSeconds.size(), 1e3 * setupSeconds.front(), later.empty() ? 0.0 : 1e3 * quantile(later, 0.5),
+                later.empty() ? 0.0 : 1e3 * *std::max_element(later.begin(), later.end()));
         }
     }
     return 0;
