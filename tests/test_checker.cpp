@@ -352,8 +352,10 @@ TEST(RobotParts, EveryFieldOfTheRobotCountsTowardsItsContent)
         {"joint continuity", [](rc::RobotModel &r) { r.joints[0].continuous = !r.joints[0].continuous; }},
         {"mimic", [](rc::RobotModel &r) { r.joints[1].mimicOffset += 1.0; }},
         {"component vertex", [](rc::RobotModel &r) { r.components[1].mesh.vertices[0].y() += 1e-12; }},
-        {"component triangle", [](rc::RobotModel &r) { std::swap(r.components[1].mesh.triangles[0][0], r.components[1].mesh.triangles[0][1]); }},
-        {"component closed", [](rc::RobotModel &r) { r.components[0].topology.closed = !r.components[0].topology.closed; }},
+        {"component triangle", [](rc::RobotModel &r)
+         { std::swap(r.components[1].mesh.triangles[0][0], r.components[1].mesh.triangles[0][1]); }},
+        {"component closed",
+         [](rc::RobotModel &r) { r.components[0].topology.closed = !r.components[0].topology.closed; }},
         {"component box", [](rc::RobotModel &r) { r.components[0].localObb.halfExtents.x() *= 2.0; }},
         {"component bounds", [](rc::RobotModel &r) { r.components[0].localAabb.max.x() += 1.0; }},
         {"component shapes", [](rc::RobotModel &r) { r.components[0].shapes.emplace_back(); }},
@@ -757,8 +759,9 @@ TEST(Checker, HostStagesRunTheDevicePathFromTheirDeviceBatchOn)
 TEST(LongRunning, CheckersBuiltAndDroppedKeepMemoryFlat)
 {
     // A system that rebuilds its checker (a scene update, a reconfigured robot) for hours. One build
-    // for the crane in the plant takes about 0.13 s here (its robot's part shared: much less): ctest builds 30, RASTERCHECK_SOAK_CHECKERS
-    // sets the count (1000 in docs/benchmarks.md), RASTERCHECK_SOAK_SCALE shrinks it (scripts/sanitize.sh).
+    // for the crane in the plant takes about 0.13 s here (its robot's part shared: much less): ctest builds 30,
+    // RASTERCHECK_SOAK_CHECKERS sets the count (1000 in docs/benchmarks.md), RASTERCHECK_SOAK_SCALE shrinks it
+    // (scripts/sanitize.sh).
     const rc::Problem &plant = rc::test::plant();
     const std::vector<double> boomInRack = {0, 0, 0, 1.570796326795, 0.3, 5, 1};
     rc::CheckerOptions options;

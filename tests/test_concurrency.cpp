@@ -465,10 +465,9 @@ TEST(RobotParts, EightThreadsBuildingCheckersOfEqualRobotsShareOnePartAndAgree)
     std::vector<std::thread> threads;
     for (int t = 0; t < kThreads; ++t)
         threads.emplace_back(
-            [&, t]
-            {
-                checkers[t] = std::make_unique<rc::Checker>(std::make_shared<rc::RobotModel>(*plant.robot),
-                                                            plant.scene, options);
+            [&, t] {
+                checkers[t] =
+                    std::make_unique<rc::Checker>(std::make_shared<rc::RobotModel>(*plant.robot), plant.scene, options);
             });
     for (std::thread &thread : threads)
         thread.join();

@@ -676,7 +676,7 @@ std::shared_ptr<const CollisionModel> CollisionModel::sharedRobotPart(const Robo
         std::weak_ptr<const CollisionModel> part;
     };
     static std::mutex mutex;
-    static std::vector<Entry> entries;                             // every part some model may hold
+    static std::vector<Entry> entries;                              // every part some model may hold
     static std::deque<std::shared_ptr<const CollisionModel>> kept;  // the last used, newest first
     std::string content = contentBytes(robot);
     auto find = [&]() -> std::shared_ptr<const CollisionModel>

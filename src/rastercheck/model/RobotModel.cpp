@@ -116,9 +116,9 @@ std::string contentBytes(const RobotModel &robot)
             for (std::uint32_t corner : t)
                 out.value(corner);
         const MeshTopology &topology = component.topology;
-        for (std::size_t count : {topology.boundaryEdges, topology.nonManifoldEdges, topology.misorientedEdges,
-                                  topology.degenerateTriangles, topology.mergedVertices,
-                                  topology.removedDuplicateFaces, topology.shells})
+        for (std::size_t count :
+             {topology.boundaryEdges, topology.nonManifoldEdges, topology.misorientedEdges,
+              topology.degenerateTriangles, topology.mergedVertices, topology.removedDuplicateFaces, topology.shells})
             out.value(count);
         out.value(topology.closed);
         out.matrix(component.localObb.center);
