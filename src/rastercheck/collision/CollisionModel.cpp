@@ -679,6 +679,14 @@ std::shared_ptr<const CollisionModel> CollisionModel::sharedRobotPart(const Robo
     static std::vector<Entry> entries;                              // every part some model may hold
     static std::deque<std::shared_ptr<const CollisionModel>> kept;  // the last used, newest first
     std::string content = contentBytes(robot);
+    // Makes \a part the newest kept; the oldest beyond kKeptRobotParts are let go.
+    auto keep = [&](const std::shared_ptr<const CollisionModel> &part)
+    {
+        kept.erase(std::remove(kept.begin(), kept.end(), part), kept.end());
+        kept.push_front(part);
+        kept.resize(std::min(kept.size(), kKeptRobotParts));
+        return part;
+    };
     auto find = [&]() -> std::shared_ptr<const CollisionModel>
     {
         entries.erase(std::remove_if(entries.begin(), entries.end(), [](const Entry &e) { return e.part.expired(); }),
@@ -686,12 +694,7 @@ std::shared_ptr<const CollisionModel> CollisionModel::sharedRobotPart(const Robo
         for (const Entry &entry : entries)
             if (entry.content == content)
                 if (std::shared_ptr<const CollisionModel> part = entry.part.lock())
-                {
-                    kept.erase(std::remove(kept.begin(), kept.end(), part), kept.end());
-                    kept.push_front(part);
-                    kept.resize(std::min(kept.size(), kKeptRobotParts));
-                    return part;
-                }
+                    return keep(part);
         return nullptr;
     };
     {
@@ -707,9 +710,7 @@ std::shared_ptr<const CollisionModel> CollisionModel::sharedRobotPart(const Robo
     if (std::shared_ptr<const CollisionModel> part = find())
         return part;
     entries.push_back(Entry{std::move(content), built});
-    kept.push_front(built);
-    kept.resize(std::min(kept.size(), kKeptRobotParts));
-    return built;
+    return keep(built);
 }
 
 int CollisionModel::firstInadmissibleCoordinate(const double *q) const

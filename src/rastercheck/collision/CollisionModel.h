@@ -122,7 +122,8 @@ private:
     uploaded unchanged to a GPU), plus the oracle's BVHs. Built once per checker.
 
     What depends on the robot alone (its meshes' trees, hulls and patches, the self pairs and their
-    tables: 95 % of a Panda model's build, about 0.13 s, and 1.3 s for the UR5) is built once per
+    tables: 95 % of a model's build, about 70 ms for the Panda and 1.3 s for the UR5 on one core,
+    docs/benchmarks.md "Building a checker") is built once per
     robot content (contentBytes) and shared: a model of a robot whose content equals an earlier
     one's, loaded once or again, copies those arrays and shares the trees, so a benchmark or a
     viewer that builds a checker per scene builds the robot's part once. The parts of the
