@@ -37,6 +37,7 @@
 #include "rastercheck/ompl/MotionValidator.h"
 #include "rastercheck/ompl/Planners.h"
 #include "rastercheck/ompl/Setup.h"
+#include "rastercheck/core/Paths.h"
 
 namespace py = pybind11;
 namespace rc = rastercheck;
@@ -58,11 +59,6 @@ struct PyProblem
     std::size_t dof() const { return problem.robot->numCoordinates(); }
 };
 using PyProblemPtr = std::shared_ptr<PyProblem>;
-
-std::string stemOf(const std::string &path)
-{
-    return std::filesystem::path(path).stem().string();
-}
 
 py::array_t<double> vectorArray(const std::vector<double> &values)
 {
@@ -147,7 +143,7 @@ PyProblemPtr loadRobotProblem(const std::string &urdf, const std::string &srdf, 
     source.urdfOptions.packagePaths = packagePaths;
     auto loaded = std::make_shared<PyProblem>();
     loaded->problem = rc::loadProblem(source);
-    loaded->name = loaded->problem.robot->name + (scene.empty() ? "" : "_" + stemOf(scene));
+    loaded->name = loaded->problem.robot->name + (scene.empty() ? "" : "_" + rc::stemOf(scene));
     if (!request.empty())
     {
         // The start and goal makeSimpleSetup's mapping gives the request (rastercheck plan --request).
@@ -156,7 +152,7 @@ PyProblemPtr loadRobotProblem(const std::string &urdf, const std::string &srdf, 
         loaded->start =
             rc::ompl::configurationFromJoints(mapping, motion.startJoints, "start", rc::ompl::UnknownJoints::Skip);
         loaded->goal = rc::ompl::configurationFromJoints(mapping, motion.goalJoints, "goal");
-        loaded->name += "_" + stemOf(request);
+        loaded->name += "_" + rc::stemOf(request);
     }
     return loaded;
 }
@@ -168,7 +164,7 @@ PyProblemPtr loadCfgProblem(const std::string &path)
     auto loaded = std::make_shared<PyProblem>();
     loaded->problem = rc::loadProblem(source);
     const rc::OmplAppProblem &app = *loaded->problem.omplApp;
-    loaded->name = app.name.empty() ? stemOf(path) : app.name;
+    loaded->name = app.name.empty() ? rc::stemOf(path) : app.name;
     loaded->start = app.start;
     loaded->goal = app.goal;
     return loaded;

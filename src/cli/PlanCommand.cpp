@@ -24,6 +24,7 @@
 #include "rastercheck/ompl/PathCheck.h"
 #include "rastercheck/ompl/Planners.h"
 #include "rastercheck/ompl/Setup.h"
+#include "rastercheck/core/Paths.h"
 
 namespace ob = ::ompl::base;
 namespace og = ::ompl::geometric;
@@ -115,14 +116,6 @@ bool flag(const ot::Benchmark::RunProperties &run, const std::string &key)
 {
     const auto found = run.find(key);
     return found != run.end() && (found->second == "1" || found->second == "true");
-}
-
-std::string stemOf(const std::string &path)
-{
-    const std::size_t slash = path.find_last_of('/');
-    std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-    const std::size_t dot = name.find_last_of('.');
-    return dot == std::string::npos ? name : name.substr(0, dot);
 }
 
 /** \brief Checks the start and goal once before benchmarking: a planner cannot fix an invalid one. */

@@ -28,6 +28,7 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/ompl/Planners.h"
+#include "rastercheck/core/Paths.h"
 
 extern char **environ;
 
@@ -35,31 +36,6 @@ namespace rastercheck::cli
 {
 namespace
 {
-bool isFile(const std::string &path)
-{
-    struct stat info;
-    return ::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode);
-}
-
-std::string folderOf(const std::string &path)
-{
-    const std::size_t slash = path.find_last_of('/');
-    return slash == std::string::npos ? "." : (slash == 0 ? "/" : path.substr(0, slash));
-}
-
-std::string nameOf(const std::string &path)
-{
-    const std::size_t slash = path.find_last_of('/');
-    return slash == std::string::npos ? path : path.substr(slash + 1);
-}
-
-std::string stemOf(const std::string &path)
-{
-    const std::string name = nameOf(path);
-    const std::size_t dot = name.find_last_of('.');
-    return dot == std::string::npos ? name : name.substr(0, dot);
-}
-
 std::string absolute(const std::string &path, const std::string &base)
 {
     if (!path.empty() && path[0] == '/')

@@ -16,6 +16,9 @@ struct Colour
     double r, g, b;
 };
 
+/** \brief The pictures' text, axes and outlines. */
+inline const Colour kInk{0.15, 0.15, 0.17};
+
 /** \brief An ARGB image surface and its context; owns both. */
 class Canvas
 {

@@ -11,13 +11,13 @@ namespace rastercheck::render
 {
 using detail::Anchor;
 using detail::Colour;
+using detail::kInk;
 
 namespace
 {
-constexpr int kLeftMargin = 80, kRightMargin = 40, kTopMargin = 74, kBottomMargin = 110;
-constexpr int kMinimumWidth = 720;
+constexpr int kRasterLeftMargin = 80, kRasterRightMargin = 40, kRasterTopMargin = 74, kRasterBottomMargin = 110;
+constexpr int kRasterMinimumWidth = 720;
 
-const Colour kInk{0.15, 0.15, 0.17};
 const Colour kEmpty{0.97, 0.97, 0.96};
 const Colour kComponentOnly{0.45, 0.64, 0.87};
 const Colour kObjectOnly{0.82, 0.76, 0.62};
@@ -41,10 +41,11 @@ RasterPictureLayout rasterPictureLayout(const device::RasterGrid &grid, const Ra
     layout.gridWidth = std::max(1, grid.width);
     layout.gridHeight = std::max(1, grid.height);
     layout.cell = std::max(1, options.gridSide / std::max(layout.gridWidth, layout.gridHeight));
-    layout.left = kLeftMargin;
-    layout.top = kTopMargin;
-    layout.width = std::max(kMinimumWidth, kLeftMargin + layout.gridWidth * layout.cell + kRightMargin);
-    layout.height = kTopMargin + layout.gridHeight * layout.cell + kBottomMargin;
+    layout.left = kRasterLeftMargin;
+    layout.top = kRasterTopMargin;
+    layout.width =
+        std::max(kRasterMinimumWidth, kRasterLeftMargin + layout.gridWidth * layout.cell + kRasterRightMargin);
+    layout.height = kRasterTopMargin + layout.gridHeight * layout.cell + kRasterBottomMargin;
     return layout;
 }
 
@@ -140,19 +141,19 @@ void paintRasterPicture(detail::Canvas &canvas, const RasterImage &image, const 
     cairo_restore(cr);
 
     // Title and caption.
-    detail::drawText(cr, options.title.empty() ? "Raster image of the colliding pair" : options.title, kLeftMargin, 28,
-                     18, Anchor::Left, true);
+    detail::drawText(cr, options.title.empty() ? "Raster image of the colliding pair" : options.title,
+                     kRasterLeftMargin, 28, 18, Anchor::Left, true);
     std::ostringstream caption;
     caption.precision(3);
     caption << "seen from +" << axisName(grid.axis) << ", rays along +" << axisName(grid.axis)
             << " (toward the viewer), " << grid.width << " x " << grid.height << " pixels of " << grid.pixel << " m; "
             << hits << " pixel" << (hits == 1 ? "" : "s") << " where Sort_Search_Pair finds the solids overlapping";
-    detail::drawText(cr, options.subtitle.empty() ? caption.str() : options.subtitle, kLeftMargin, 50, 12);
+    detail::drawText(cr, options.subtitle.empty() ? caption.str() : options.subtitle, kRasterLeftMargin, 50, 12);
     if (!options.subtitle.empty())
-        detail::drawText(cr, caption.str(), kLeftMargin, 66, 11);
+        detail::drawText(cr, caption.str(), kRasterLeftMargin, 66, 11);
 
     // Legend.
-    double x = kLeftMargin;
+    double x = kRasterLeftMargin;
     const double y = layout.top + gridH + 70;
     auto swatch = [&](const Colour &colour, const std::string &text)
     {
@@ -172,7 +173,7 @@ void paintRasterPicture(detail::Canvas &canvas, const RasterImage &image, const 
     detail::setColour(cr, kInk);
     detail::drawText(cr,
                      "Coverage of the candidate triangles after culling (Cai et al., Alg. 1); hit pixels as in Fig. 6.",
-                     kLeftMargin, y + 22, 11);
+                     kRasterLeftMargin, y + 22, 11);
 }
 }  // namespace
 

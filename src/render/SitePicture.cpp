@@ -14,6 +14,7 @@ namespace rastercheck::render
 {
 using detail::Anchor;
 using detail::Colour;
+using detail::kInk;
 
 SiteView parseSiteView(const std::string &text)
 {
@@ -31,10 +32,9 @@ Eigen::Vector2d SitePictureInfo::toScreen(const Eigen::Vector3d &p) const
 
 namespace
 {
-constexpr double kLeftMargin = 70, kRightMargin = 30, kTopMargin = 70, kBottomMargin = 120;
-constexpr int kMinimumWidth = 860;
+constexpr double kSiteLeftMargin = 70, kSiteRightMargin = 30, kSiteTopMargin = 70, kSiteBottomMargin = 120;
+constexpr int kSiteMinimumWidth = 860;
 
-const Colour kInk{0.15, 0.15, 0.17};
 const Colour kPlotBackground{0.975, 0.975, 0.965};
 const Colour kGridLine{0.86, 0.86, 0.84};
 const Colour kStartColour{0.18, 0.43, 0.72};
@@ -362,10 +362,11 @@ SitePictureInfo writeSitePicture(const std::string &pngPath, const RobotModel &r
     const double scale = options.plotSide / std::max(1e-9, (hi - lo).maxCoeff());
     const double plotWidth = (hi.x() - lo.x()) * scale, plotHeight = (hi.y() - lo.y()) * scale;
     info.pixelsPerMetre = scale;
-    info.width = std::max(kMinimumWidth, static_cast<int>(std::ceil(kLeftMargin + plotWidth + kRightMargin)));
-    info.height = static_cast<int>(std::ceil(kTopMargin + plotHeight + kBottomMargin));
-    info.origin = Eigen::Vector2d(kLeftMargin - lo.x() * scale, kTopMargin + hi.y() * scale);
-    const Box2 plot{kLeftMargin, kTopMargin, kLeftMargin + plotWidth, kTopMargin + plotHeight};
+    info.width =
+        std::max(kSiteMinimumWidth, static_cast<int>(std::ceil(kSiteLeftMargin + plotWidth + kSiteRightMargin)));
+    info.height = static_cast<int>(std::ceil(kSiteTopMargin + plotHeight + kSiteBottomMargin));
+    info.origin = Eigen::Vector2d(kSiteLeftMargin - lo.x() * scale, kSiteTopMargin + hi.y() * scale);
+    const Box2 plot{kSiteLeftMargin, kSiteTopMargin, kSiteLeftMargin + plotWidth, kSiteTopMargin + plotHeight};
 
     detail::Canvas canvas(info.width, info.height);
     cairo_t *cr = canvas.context();
@@ -507,27 +508,27 @@ SitePictureInfo writeSitePicture(const std::string &pngPath, const RobotModel &r
     // Title.
     const std::string title = options.title.empty() ? (top ? "Top view" : "Side view") : options.title;
     detail::setColour(cr, kInk);
-    detail::drawText(cr, title, kLeftMargin, 28, 18, Anchor::Left, true);
+    detail::drawText(cr, title, kSiteLeftMargin, 28, 18, Anchor::Left, true);
     if (!options.subtitle.empty())
-        detail::drawText(cr, options.subtitle, kLeftMargin, 50, 12, Anchor::Left);
+        detail::drawText(cr, options.subtitle, kSiteLeftMargin, 50, 12, Anchor::Left);
 
     // Scale bar, then the legend, along the bottom.
     const double barMetres = detail::niceStep(hi.x() - lo.x(), 5);
     const double barPixels = barMetres * scale, barY = plot.y1 + 62;
     for (int half = 0; half < 2; ++half)
     {
-        cairo_rectangle(cr, kLeftMargin + half * barPixels / 2, barY, barPixels / 2, 7);
+        cairo_rectangle(cr, kSiteLeftMargin + half * barPixels / 2, barY, barPixels / 2, 7);
         detail::setColour(cr, half == 0 ? kInk : Colour{1, 1, 1});
         cairo_fill_preserve(cr);
         detail::setColour(cr, kInk);
         cairo_set_line_width(cr, 1.0);
         cairo_stroke(cr);
     }
-    detail::drawText(cr, "0", kLeftMargin, barY + 22, 11, Anchor::Centre);
-    detail::drawText(cr, detail::formatTick(barMetres, barMetres) + " m", kLeftMargin + barPixels, barY + 22, 11,
+    detail::drawText(cr, "0", kSiteLeftMargin, barY + 22, 11, Anchor::Centre);
+    detail::drawText(cr, detail::formatTick(barMetres, barMetres) + " m", kSiteLeftMargin + barPixels, barY + 22, 11,
                      Anchor::Centre);
 
-    double x = kLeftMargin + std::max(barPixels, 40.0) + 40;
+    double x = kSiteLeftMargin + std::max(barPixels, 40.0) + 40;
     const double legendY = barY + 8;
     auto swatch = [&](const Colour &colour, double alpha, const std::string &text)
     {

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include <httplib.h>
+#include "rastercheck/core/Text.h"
 
 namespace rastercheck::view
 {
@@ -74,21 +75,6 @@ void sendRefusal(int fd, int status, const char *reason, const std::string &mess
     for (int i = 0; i < 64 && ::recv(fd, chunk, sizeof chunk, MSG_DONTWAIT) > 0; ++i)
     {
     }
-}
-
-std::string lowerCase(std::string text)
-{
-    for (char &c : text)
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return text;
-}
-
-std::string trimmed(const std::string &text)
-{
-    const std::size_t begin = text.find_first_not_of(" \t");
-    if (begin == std::string::npos)
-        return "";
-    return text.substr(begin, text.find_last_not_of(" \t") - begin + 1);
 }
 
 /** \brief The request as httplib reads it: the bytes of one complete request from the loop's
@@ -284,7 +270,7 @@ struct ConnectionLoop::Impl
                 if (colon < lineEnd)
                 {
                     const std::string name = lowerCase(connection.buffer.substr(line, colon - line));
-                    const std::string value = trimmed(connection.buffer.substr(colon + 1, lineEnd - colon - 1));
+                    const std::string value = trim(connection.buffer.substr(colon + 1, lineEnd - colon - 1));
                     if (name == "content-length")
                     {
                         if (value.empty() || value.size() > 18 ||

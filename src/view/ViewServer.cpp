@@ -25,6 +25,7 @@
 #include "rastercheck/ompl/Planners.h"
 #include "rastercheck/ompl/Setup.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
+#include "rastercheck/core/Text.h"
 #include "render/RasterPicture.h"
 // After Eigen: httplib.h brings in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>
@@ -241,13 +242,6 @@ private:
     int running_ = 0;
     int peak_ = 0;
 };
-
-std::string lowerCase(std::string text)
-{
-    std::transform(text.begin(), text.end(), text.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return text;
-}
 
 bool isLoopbackHost(const std::string &host)
 {

@@ -8,6 +8,7 @@
 #include "rastercheck/device/ConvexDistance.h"
 #include "rastercheck/device/Traversal.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {
@@ -63,11 +64,6 @@ double reachOf(const PrimitiveShape &shape)
             return std::hypot(shape.size.x(), 0.5 * shape.size.y());
     }
     return 0.0;
-}
-
-Eigen::Vector3d toEigen(const Vec3<double> &v)
-{
-    return Eigen::Vector3d(v.x, v.y, v.z);
 }
 
 /** \brief The nearest pair of solid \a a's and solid \a b's shapes when nearer than result.distance

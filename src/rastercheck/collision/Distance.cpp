@@ -47,7 +47,7 @@ struct DistanceWorkspace
 namespace
 {
 // As MeshDistance.cpp's slack: the float nodes' rounding, taken off the root bounds.
-constexpr double kNodeRounding = 1e-6;
+using device::kNodeRounding;
 
 /** \brief Lower bound on the distance between the solids of \a a and \a b (their root boxes), less
     the float nodes' rounding; 0 when the boxes may overlap. */

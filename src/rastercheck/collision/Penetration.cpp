@@ -7,6 +7,7 @@
 #include "rastercheck/device/CurvedShapes.h"
 #include "rastercheck/device/Penetration.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {
@@ -133,11 +134,6 @@ device::ConvexPenetration penetrationOf(WithA &&withA, WithB &&withB, double tol
                   { device::convexPenetration(a, b, tolerance, result, marginA, marginB); });
         });
     return result;
-}
-
-Eigen::Vector3d toEigen(const Vec3<double> &v)
-{
-    return Eigen::Vector3d(v.x, v.y, v.z);
 }
 }  // namespace
 

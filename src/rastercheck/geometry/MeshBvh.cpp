@@ -15,6 +15,7 @@
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/geometry/BoxFit.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {
@@ -50,11 +51,6 @@ float roundedUp(double x)
     if (static_cast<double>(f) < x)
         f = std::nextafter(f, std::numeric_limits<float>::infinity());
     return f;
-}
-
-device::Vec3<double> toDevice(const Vec &v)
-{
-    return {v.x(), v.y(), v.z()};
 }
 
 // The caller's workspace for a query of a and b: the tree with fewer nodes is the one moved.

@@ -9,6 +9,7 @@
 #include "rastercheck/device/TriangleTests.h"
 #include "rastercheck/geometry/TriangleTests.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {
@@ -91,7 +92,6 @@ PlanesShow whatPlanesShow(const Vec p[3], const Vec q[3], double reach, double &
     const bool acrossP = overP.gap * overP.gap * overQ.length2 >= overQ.gap * overQ.gap * overP.length2;
     const Vec *face = acrossP ? p : q;
     const Vec &corner = acrossP ? q[overP.nearest] : p[overQ.nearest];
-    const auto toDevice = [](const Vec &v) { return device::Vec3<double>{v.x(), v.y(), v.z()}; };
     device::Vec3<double> foot;
     const double d =
         device::triangles::vertexFace(toDevice(corner), toDevice(face[0]), toDevice(face[1]), toDevice(face[2]), foot);

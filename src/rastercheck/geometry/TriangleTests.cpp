@@ -2,22 +2,13 @@
 
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/TriangleTests.h"
+#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {
 namespace
 {
 using Vec = Eigen::Vector3d;
-
-device::Vec3<double> toDevice(const Vec &v)
-{
-    return {v.x(), v.y(), v.z()};
-}
-
-Vec fromDevice(const device::Vec3<double> &v)
-{
-    return {v.x, v.y, v.z};
-}
 
 }  // namespace
 
@@ -28,7 +19,7 @@ bool trianglesIntersect(const Vec &p0, const Vec &p1, const Vec &p2, const Vec &
     const bool meet = device::trianglesIntersect(toDevice(p0), toDevice(p1), toDevice(p2), toDevice(q0), toDevice(q1),
                                                  toDevice(q2), point ? &at : nullptr);
     if (meet && point)
-        *point = fromDevice(at);
+        *point = toEigen(at);
     return meet;
 }
 
@@ -39,9 +30,9 @@ double triangleDistance(const Vec &p0, const Vec &p1, const Vec &p2, const Vec &
     const double distance = device::triangleDistance(toDevice(p0), toDevice(p1), toDevice(p2), toDevice(q0),
                                                      toDevice(q1), toDevice(q2), &onP, &onQ);
     if (pointOnP)
-        *pointOnP = fromDevice(onP);
+        *pointOnP = toEigen(onP);
     if (pointOnQ)
-        *pointOnQ = fromDevice(onQ);
+        *pointOnQ = toEigen(onQ);
     return distance;
 }
 
@@ -52,7 +43,7 @@ bool trianglesWithin(const Vec &p0, const Vec &p1, const Vec &p2, const Vec &q0,
     const bool within = device::trianglesWithin(toDevice(p0), toDevice(p1), toDevice(p2), toDevice(q0), toDevice(q1),
                                                 toDevice(q2), distance, point ? &at : nullptr);
     if (within && point)
-        *point = fromDevice(at);
+        *point = toEigen(at);
     return within;
 }
 

@@ -11,27 +11,13 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/io/MeshLoader.h"
+#include "rastercheck/core/Paths.h"
+#include "rastercheck/core/Text.h"
 
 namespace rastercheck
 {
 namespace
 {
-std::string trim(const std::string &text)
-{
-    const std::size_t first = text.find_first_not_of(" \t\r\n");
-    if (first == std::string::npos)
-        return "";
-    return text.substr(first, text.find_last_not_of(" \t\r\n") - first + 1);
-}
-
-std::string parentDirectory(const std::string &path)
-{
-    const std::size_t slash = path.find_last_of('/');
-    if (slash == std::string::npos)
-        return ".";
-    return slash == 0 ? "/" : path.substr(0, slash);
-}
-
 // The .cfg as OMPL.app's boost::program_options sees it: "section.key" = value, in file order.
 struct ConfigFile
 {
@@ -160,7 +146,7 @@ OmplAppProblem loadOmplAppProblem(const std::string &cfgPath)
         throw InputError(cfgPath, "", "file not found");
     std::ostringstream text;
     text << in.rdbuf();
-    return loadOmplAppProblemString(text.str(), parentDirectory(cfgPath), cfgPath);
+    return loadOmplAppProblemString(text.str(), folderOf(cfgPath), cfgPath);
 }
 
 OmplAppProblem loadOmplAppProblemString(const std::string &text, const std::string &baseDirectory,

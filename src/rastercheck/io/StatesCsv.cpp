@@ -7,19 +7,12 @@
 #include <sstream>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/core/Text.h"
 
 namespace rastercheck
 {
 namespace
 {
-std::string trim(const std::string &text)
-{
-    const auto first = text.find_first_not_of(" \t\r");
-    if (first == std::string::npos)
-        return "";
-    return text.substr(first, text.find_last_not_of(" \t\r") - first + 1);
-}
-
 std::vector<std::string> splitCells(const std::string &line)
 {
     std::vector<std::string> cells;

@@ -18,26 +18,13 @@
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
 #include "rastercheck/io/MeshLoader.h"
+#include "rastercheck/core/Paths.h"
 
 namespace rastercheck
 {
 namespace
 {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
-bool isFile(const std::string &path)
-{
-    struct stat info;
-    return stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode);
-}
-
-std::string parentDirectory(const std::string &path)
-{
-    const std::size_t slash = path.find_last_of('/');
-    if (slash == std::string::npos)
-        return ".";
-    return slash == 0 ? "/" : path.substr(0, slash);
-}
 
 std::string joinPath(const std::string &folder, const std::string &rest)
 {
@@ -600,7 +587,7 @@ private:
         while (true)
         {
             folders.push_back(folder);
-            const std::string parent = parentDirectory(folder);
+            const std::string parent = folderOf(folder);
             if (parent == folder || folder == "." || folder == "/")
                 break;
             folder = parent;
@@ -664,7 +651,7 @@ RobotModelPtr loadUrdf(const std::string &path, const UrdfOptions &options)
         throw InputError(path, "", "file not found");
     std::ostringstream text;
     text << in.rdbuf();
-    return Builder(path, parentDirectory(path), options).build(text.str());
+    return Builder(path, folderOf(path), options).build(text.str());
 }
 
 RobotModelPtr loadUrdfString(const std::string &xml, const std::string &baseDirectory, const UrdfOptions &options,

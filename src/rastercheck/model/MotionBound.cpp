@@ -270,7 +270,7 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
     for (std::size_t c = 0; c < above_.size(); ++c)
     {
         const std::vector<Carrier> &above = above_[c];
-        Eigen::Vector3d centre = Eigen::Vector3d::Zero(), ends[2];
+        Eigen::Vector3d centre = Eigen::Vector3d::Zero(), ends[2] = {centre, centre};
         if (reference)
         {
             const Eigen::Isometry3d &pose = reference->oMl[static_cast<std::size_t>(componentLink_[c])];

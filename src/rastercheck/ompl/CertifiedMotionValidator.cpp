@@ -86,7 +86,7 @@ struct CertifiedMotionValidator::EdgeSearch
 namespace
 {
 /** \brief Per-thread buffers of checkMotions (a validator is shared by planner threads). */
-struct Scratch
+struct CertifiedScratch
 {
     std::vector<double> qa, qb, qm;
     std::unique_ptr<RobotData> reference;  ///< the links' poses where sweeps are measured
@@ -98,9 +98,9 @@ struct Scratch
     PairPadding sweepPadding;  ///< per midpoint, what each pair can close in over half its interval
 };
 
-Scratch &scratch()
+CertifiedScratch &certifiedScratch()
 {
-    thread_local Scratch buffers;
+    thread_local CertifiedScratch buffers;
     return buffers;
 }
 
@@ -171,7 +171,7 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
         w.finish(false);
         return;
     }
-    Scratch &scratchBuffers = scratch();
+    CertifiedScratch &scratchBuffers = certifiedScratch();
     const std::size_t dof = mapping_->numCoordinates();
     scratchBuffers.qa.resize(dof);
     scratchBuffers.qb.resize(dof);
@@ -228,7 +228,7 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
 void CertifiedMotionValidator::sweepsAbout(const EdgeSearch &w, double fraction, double halfSpan,
                                            double *componentSweeps, double *pairSweeps) const
 {
-    Scratch &buffers = scratch();
+    CertifiedScratch &buffers = certifiedScratch();
     const RobotModel &robot = mapping_->robot();
     space_->interpolate(w.edge.from, w.edge.to, fraction, w.state);
     buffers.qm.resize(mapping_->numCoordinates());
@@ -253,7 +253,7 @@ void CertifiedMotionValidator::intervalSweeps(EdgeSearch &w, std::uint32_t coars
     if (w.spanMeasured[span])
         return;
     w.spanMeasured[span] = 1;
-    Scratch &buffers = scratch();
+    CertifiedScratch &buffers = certifiedScratch();
     mapping_->toConfiguration(w.edge.from, buffers.qa.data());
     mapping_->toConfiguration(w.edge.to, buffers.qb.data());
     const double begin = static_cast<double>(span * w.perSpan) * w.coarseLength;
@@ -340,7 +340,7 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
         start(edges[i], *pool[i]);
     }
 
-    Scratch &w = scratch();
+    CertifiedScratch &w = certifiedScratch();
     const CollisionModel &model = checker_->collisionModel();
     const std::size_t components = model.numComponents();
     const std::size_t selfPairs = model.selfPairs.size();

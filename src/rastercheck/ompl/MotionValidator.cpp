@@ -28,7 +28,7 @@ struct MotionValidator::EdgeScan
 namespace
 {
 /** \brief Per-thread buffers of checkMotions (a validator is shared by planner threads). */
-struct Scratch
+struct BatchScratch
 {
     std::vector<std::pair<unsigned int, unsigned int>> intervals;
     std::vector<std::pair<std::size_t, unsigned int>> inBounds;  ///< (scan, index) of each checked row
@@ -36,9 +36,9 @@ struct Scratch
     std::vector<std::uint8_t> verdicts;
 };
 
-Scratch &scratch()
+BatchScratch &batchScratch()
 {
-    thread_local Scratch buffers;
+    thread_local BatchScratch buffers;
     return buffers;
 }
 }  // namespace
@@ -87,7 +87,7 @@ void MotionValidator::nextBatch(EdgeScan &scan, bool wantFirst) const
 void MotionValidator::checkMotions(const Edge *edges, std::size_t n, std::uint8_t *valid, double *lastValid) const
 {
     const bool wantFirst = lastValid != nullptr;
-    Scratch &w = scratch();
+    BatchScratch &w = batchScratch();
     // Scans are reused per thread: their vectors keep their capacity between calls.
     thread_local std::vector<std::unique_ptr<EdgeScan>> pool;
     while (pool.size() < n)
