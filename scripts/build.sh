@@ -3,5 +3,5 @@
 # configure step, e.g. scripts/build.sh -DRASTERCHECK_WITH_CUDA=OFF.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DRASTERCHECK_UNITY_BUILD=ON "$@" >/dev/null
 cmake --build build

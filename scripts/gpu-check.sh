@@ -27,7 +27,7 @@ cd "$(dirname "$0")/.."
 bundle() {
     set -e
     command -v cpio >/dev/null || { echo "gpu-check: gpu-bundle needs cpio (apt-get install cpio)" >&2; exit 1; }
-    cmake -S . -B build-gpu -G Ninja -DCMAKE_BUILD_TYPE=Release -DRASTERCHECK_WITH_CUDA=ON \
+    cmake -S . -B build-gpu -G Ninja -DCMAKE_BUILD_TYPE=Release -DRASTERCHECK_WITH_CUDA=ON -DRASTERCHECK_UNITY_BUILD=ON \
         -DCMAKE_CUDA_ARCHITECTURES=90
     cmake --build build-gpu --target test_gpu_backend test_staged_pipeline rastercheck_bench_backends \
         rastercheck_bench_planners

@@ -13,8 +13,10 @@
 # its size (RASTERCHECK_CONCURRENCY_STATES), and asan tests/test_nonconvex.cpp at a quarter
 # (RASTERCHECK_NONCONVEX_SCALE), the viewer's load tests at a twentieth (RASTERCHECK_VIEW_LOAD_SCALE)
 # and the long-running tests at a fiftieth (RASTERCHECK_SOAK_SCALE): the sanitizers slow the
-# checker 10 to 50 times. asan leaves out the test labelled slurm (a real Slurm's daemons; the
-# sweep's code itself is in test_sweep).
+# checker 10 to 50 times. asan leaves out the tests labelled slurm (a real Slurm's daemons; the
+# sweep's code itself is in test_sweep), install (the installed package's layout and a consumer
+# project's build: the Release run checks them) and browser (the viewer's page in Chromium; the
+# server's code under it is in test_view, with its load tests).
 # Usage: scripts/sanitize.sh [asan] [tsan]   (default: both). Needs scripts/install-deps.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,7 +29,8 @@ configure() {  # build directory, then extra CMake arguments
     shift
     cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
         -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -D_GLIBCXX_ASSERTIONS" \
-        -DRASTERCHECK_BUILD_BENCH=OFF -DRASTERCHECK_BUILD_EXAMPLES=OFF -DRASTERCHECK_WITH_CUDA=OFF "$@" >/dev/null
+        -DRASTERCHECK_BUILD_BENCH=OFF -DRASTERCHECK_BUILD_EXAMPLES=OFF -DRASTERCHECK_WITH_CUDA=OFF \
+        -DRASTERCHECK_UNITY_BUILD=ON "$@" >/dev/null
 }
 
 elapsed() { echo "sanitize: $1 took $((SECONDS - $2)) s"; }
@@ -44,9 +47,8 @@ asan() {
     export RASTERCHECK_SOAK_SCALE=${RASTERCHECK_SOAK_SCALE:-0.02}
     configure build-asan -DCMAKE_CXX_COMPILER=g++ -DRASTERCHECK_SANITIZE=ON
     cmake --build build-asan -j2
-    # Not the test labelled slurm (test_sweep_slurm): it starts Slurm's daemons and drives the
-    # command line through them; the sweep's own code is checked by test_sweep here.
-    ctest --test-dir build-asan --output-on-failure -j2 --no-tests=error -LE slurm
+    # Not the tests labelled slurm, install or browser (see the top of this file).
+    ctest --test-dir build-asan --output-on-failure -j2 --no-tests=error -LE '^(slurm|install|browser)$'
     elapsed "AddressSanitizer + UndefinedBehaviorSanitizer (all tests)" "$start"
 }
 
