@@ -30,6 +30,7 @@
 
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/core/Error.h"
+#include "rastercheck/core/Paths.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/ompl/BatchMotionValidator.h"
@@ -37,7 +38,6 @@
 #include "rastercheck/ompl/MotionValidator.h"
 #include "rastercheck/ompl/Planners.h"
 #include "rastercheck/ompl/Setup.h"
-#include "rastercheck/core/Paths.h"
 
 namespace py = pybind11;
 namespace rc = rastercheck;

@@ -18,13 +18,13 @@
 
 #include "Commands.h"
 #include "PlannedPaths.h"
-#include "rastercheck/core/Statistics.h"
 #include "rastercheck/core/Error.h"
+#include "rastercheck/core/Paths.h"
+#include "rastercheck/core/Statistics.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/ompl/PathCheck.h"
 #include "rastercheck/ompl/Planners.h"
 #include "rastercheck/ompl/Setup.h"
-#include "rastercheck/core/Paths.h"
 
 namespace ob = ::ompl::base;
 namespace og = ::ompl::geometric;

@@ -27,8 +27,8 @@
 #include <ompl/util/Console.h>
 
 #include "rastercheck/core/Error.h"
-#include "rastercheck/ompl/Planners.h"
 #include "rastercheck/core/Paths.h"
+#include "rastercheck/ompl/Planners.h"
 
 extern char **environ;
 

@@ -21,11 +21,11 @@
 
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/core/Error.h"
+#include "rastercheck/core/Text.h"
 #include "rastercheck/model/Kinematics.h"
 #include "rastercheck/ompl/Planners.h"
 #include "rastercheck/ompl/Setup.h"
 #include "rastercheck/ompl/StateValidityChecker.h"
-#include "rastercheck/core/Text.h"
 #include "render/RasterPicture.h"
 // After Eigen: httplib.h brings in <resolv.h>, whose `_res` macro breaks Eigen's headers.
 #include <httplib.h>

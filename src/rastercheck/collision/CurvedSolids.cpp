@@ -7,8 +7,8 @@
 #include "rastercheck/device/ConvexClosest.h"
 #include "rastercheck/device/ConvexDistance.h"
 #include "rastercheck/device/Traversal.h"
-#include "rastercheck/model/Kinematics.h"
 #include "rastercheck/geometry/EigenDevice.h"
+#include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
 {

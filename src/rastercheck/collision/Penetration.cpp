@@ -6,8 +6,8 @@
 #include "rastercheck/collision/CollisionModel.h"
 #include "rastercheck/device/CurvedShapes.h"
 #include "rastercheck/device/Penetration.h"
-#include "rastercheck/model/Kinematics.h"
 #include "rastercheck/geometry/EigenDevice.h"
+#include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
 {

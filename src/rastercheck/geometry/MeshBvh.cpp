@@ -14,8 +14,8 @@
 #include "rastercheck/core/Parallel.h"
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/geometry/BoxFit.h"
-#include "rastercheck/model/Kinematics.h"
 #include "rastercheck/geometry/EigenDevice.h"
+#include "rastercheck/model/Kinematics.h"
 
 namespace rastercheck
 {

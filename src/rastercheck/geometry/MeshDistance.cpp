@@ -7,9 +7,9 @@
 
 #include "rastercheck/device/Traversal.h"
 #include "rastercheck/device/TriangleTests.h"
+#include "rastercheck/geometry/EigenDevice.h"
 #include "rastercheck/geometry/TriangleTests.h"
 #include "rastercheck/model/Kinematics.h"
-#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {

@@ -10,9 +10,9 @@
 #include <sstream>
 
 #include "rastercheck/core/Error.h"
-#include "rastercheck/io/MeshLoader.h"
 #include "rastercheck/core/Paths.h"
 #include "rastercheck/core/Text.h"
+#include "rastercheck/io/MeshLoader.h"
 
 namespace rastercheck
 {

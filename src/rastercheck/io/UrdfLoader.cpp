@@ -17,8 +17,8 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
-#include "rastercheck/io/MeshLoader.h"
 #include "rastercheck/core/Paths.h"
+#include "rastercheck/io/MeshLoader.h"
 
 namespace rastercheck
 {
