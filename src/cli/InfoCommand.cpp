@@ -11,8 +11,10 @@
 #include <vector>
 
 #include "Commands.h"
-#include "rastercheck/core/Error.h"
 #include "rastercheck/collision/CollisionModel.h"
+#include "rastercheck/core/Error.h"
+#include "rastercheck/core/Paths.h"
+#include "rastercheck/core/Text.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/OmplAppProblem.h"
 #include "rastercheck/io/SrdfLoader.h"
@@ -29,18 +31,6 @@ struct InfoOptions
     std::vector<std::string> packagePaths;
     bool visualFallback = false;
 };
-
-std::string extensionOf(const std::string &path)
-{
-    const std::size_t dot = path.find_last_of('.');
-    const std::size_t slash = path.find_last_of('/');
-    if (dot == std::string::npos || (slash != std::string::npos && dot < slash))
-        return "";
-    std::string extension = path.substr(dot + 1);
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    return extension;
-}
 
 std::string formatVector(const Eigen::Vector3d &v)
 {
@@ -186,7 +176,7 @@ void printProofArrays(const CollisionModel &model, std::ostream &out)
 
 void runInfo(const InfoOptions &options)
 {
-    const std::string extension = extensionOf(options.path);
+    const std::string extension = lowerCase(extensionOf(options.path));
     std::ostream &out = std::cout;
     if (extension == "urdf" || extension == "xml")
     {

@@ -39,6 +39,7 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/planners/BatchRRTConnect.h"
+#include "rastercheck/core/Text.h"
 
 namespace og = ::ompl::geometric;
 namespace ob = ::ompl::base;
@@ -107,9 +108,7 @@ const std::vector<std::string> &knownPlannerNames()
 
 ob::PlannerPtr allocatePlanner(const std::string &name, const ob::SpaceInformationPtr &si)
 {
-    std::string key = name;
-    std::transform(key.begin(), key.end(), key.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const std::string key = lowerCase(name);
     const auto found = registry().find(key);
     if (found == registry().end())
     {

@@ -12,6 +12,7 @@
 #include "rastercheck/core/Parallel.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/model/Kinematics.h"
+#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {
@@ -410,7 +411,7 @@ device::ConvexPiece ConvexSolids::makePiece(const Mesh &mesh, bool closedShell)
             {
                 const Eigen::Vector3d &v = mesh.vertices[i];
                 piece.hullSlack =
-                    std::max(piece.hullSlack, device::hullDistanceBound({v.x(), v.y(), v.z()}, hull, piece.hullSlack));
+                    std::max(piece.hullSlack, device::hullDistanceBound(toDevice(v), hull, piece.hullSlack));
             }
         piece.hullSlack += 1e-6 * piece.radius;
     }

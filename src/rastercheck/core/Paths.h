@@ -4,7 +4,7 @@
 #include <sys/stat.h>
 
 /** \file
-    Path helpers the loaders and the command line share (POSIX paths). */
+    Path helpers the loaders, the command line and the Python module share (POSIX paths). */
 
 namespace rastercheck
 {
@@ -37,4 +37,11 @@ inline std::string stemOf(const std::string &path)
     return dot == std::string::npos ? name : name.substr(0, dot);
 }
 
+/** \brief The last extension of \a path's last component, without the dot, as written ("" when
+    it has none). */
+inline std::string extensionOf(const std::string &path)
+{
+    const std::size_t dot = path.find_last_of('.'), slash = path.find_last_of('/');
+    return dot == std::string::npos || (slash != std::string::npos && dot < slash) ? "" : path.substr(dot + 1);
+}
 }  // namespace rastercheck

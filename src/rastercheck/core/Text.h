@@ -3,7 +3,7 @@
 #include <string>
 
 /** \file
-    Text helpers the loaders and the viewer share. */
+    Text helpers the loaders, the planners' registry, the command line and the viewer share. */
 
 namespace rastercheck
 {
@@ -16,7 +16,8 @@ inline std::string trim(const std::string &text)
     return text.substr(first, text.find_last_not_of(" \t\r\n") - first + 1);
 }
 
-/** \brief \a text with ASCII letters in lower case (HTTP header names and values). */
+/** \brief \a text with ASCII letters in lower case (as std::tolower in the C locale): file
+    extensions, names matched without case, HTTP header names and values. */
 inline std::string lowerCase(std::string text)
 {
     for (char &c : text)

@@ -214,7 +214,7 @@ struct DistanceQuery
         double alongWitness = 0.0;
         if (hasWitness)
         {
-            const device::Vec3<double> u{witness.x(), witness.y(), witness.z()};
+            const device::Vec3<double> u = toDevice(witness);
             const float *f = nf.axes;           // row-major: the fixed box's axis i is (f[i], f[3 + i], f[6 + i])
             double reachF = 0.0, reachM = 0.0;  // each box's half extent along the axis
             for (int i = 0; i < 3; ++i)
@@ -415,7 +415,7 @@ double nodeDistanceLowerBound(const MeshBvh::Node &nf, const Eigen::Matrix3d &ax
     device::Vec3<double> axes[3];
     for (int j = 0; j < 3; ++j)
         axes[j] = {axesM(0, j), axesM(1, j), axesM(2, j)};
-    return boxesLowerBound(nf, axes, nm, device::Vec3<double>{between.x(), between.y(), between.z()}, reach);
+    return boxesLowerBound(nf, axes, nm, toDevice(between), reach);
 }
 
 namespace

@@ -18,6 +18,8 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/io/PlyCheck.h"
+#include "rastercheck/core/Paths.h"
+#include "rastercheck/core/Text.h"
 
 namespace rastercheck
 {
@@ -54,10 +56,7 @@ bool isMaterialLibrary(const char *file)
     const std::string name(file ? file : "");
     if (name.size() < 4)
         return false;
-    std::string extension = name.substr(name.size() - 4);
-    for (char &c : extension)
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return extension == ".mtl";
+    return lowerCase(name.substr(name.size() - 4)) == ".mtl";
 }
 
 // Mesh files: the file system, without material libraries.
@@ -96,17 +95,10 @@ private:
 
 // The PLY importer is assimp's choice when the extension (or memory hint) says ply, or when no
 // importer claims the extension and assimp goes by content.
-bool plyImporterMayRun(const Assimp::Importer &importer, std::string extension)
+bool plyImporterMayRun(const Assimp::Importer &importer, const std::string &written)
 {
-    for (char &c : extension)
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const std::string extension = lowerCase(written);
     return extension == "ply" || !importer.IsExtensionSupported("." + extension);
-}
-
-std::string extensionOf(const std::string &path)
-{
-    const std::size_t dot = path.find_last_of('.'), slash = path.find_last_of('/');
-    return dot == std::string::npos || (slash != std::string::npos && dot < slash) ? "" : path.substr(dot + 1);
 }
 
 Eigen::Matrix4d toEigen(const aiMatrix4x4 &m)
@@ -225,8 +217,7 @@ void collectOmplApp(const aiScene *scene, const aiNode *node, aiMatrix4x4 transf
 const aiScene *readFile(Assimp::Importer &importer, const std::string &path, ColladaUpAxis upAxis,
                         unsigned int postProcessFlags)
 {
-    struct stat info;
-    if (stat(path.c_str(), &info) != 0 || !S_ISREG(info.st_mode))
+    if (!isFile(path))
         throw InputError(path, "", "file not found");
     configure(importer, upAxis);
     importer.SetIOHandler(new GeometryFiles);  // the importer owns it

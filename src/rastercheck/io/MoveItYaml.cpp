@@ -9,6 +9,7 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Log.h"
+#include "rastercheck/core/Text.h"
 
 namespace rastercheck
 {
@@ -159,9 +160,7 @@ Mesh primitiveMesh(const Reader &reader, const YAML::Node &node, const std::stri
 {
     if (!node || !node.IsMap())
         throw InputError(reader.file(), where, "expected a primitive with type and dimensions");
-    std::string type = reader.text(node["type"], where + ".type");
-    for (char &c : type)
-        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    std::string type = lowerCase(reader.text(node["type"], where + ".type"));
     static const std::map<std::string, std::string> byNumber{
         {"1", "box"}, {"2", "sphere"}, {"3", "cylinder"}, {"4", "cone"}};
     if (byNumber.count(type))

@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "rastercheck/core/Error.h"
+#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {
@@ -368,7 +369,7 @@ void RobotModel::finalize()
     for (const Joint &joint : joints)
         kinematicJoints.push_back(device::KinematicJoint{
             joint.kind, joint.parentLink, joint.childLink, joint.firstCoordinate, joint.mimicOf, joint.mimicMultiplier,
-            joint.mimicOffset, toDevicePose(joint.origin), device::Vec3<double>{joint.axis.x(), joint.axis.y(), joint.axis.z()}});
+            joint.mimicOffset, toDevicePose(joint.origin), toDevice(joint.axis)});
 }
 
 std::vector<double> RobotModel::neutralConfiguration() const
