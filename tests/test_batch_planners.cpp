@@ -496,6 +496,56 @@ TEST(BatchRRTConnect, WorksWithAForeignValidityChecker)
         EXPECT_TRUE(outsideDisc(state));
 }
 
+TEST(BatchRRTConnect, LazyModeChecksNoStateTwice)
+{
+    // An empty unit square, start and goal 0.9 apart, range 0.25: the first candidate is the line
+    // from start to goal in four steps, and it is accepted. The validity checker (a foreign one)
+    // records every state it is asked about; edges go to a motion validator that accepts them
+    // without asking it. A lazy step checks its midpoint and its end; the candidate's rake must
+    // then skip its first level (those midpoints), and the step that reaches the goal must not
+    // check the goal again (a tree state, checked when it was added).
+    auto space = std::make_shared<ob::RealVectorStateSpace>(2);
+    space->setBounds(0.0, 1.0);
+    og::SimpleSetup setup(space);
+    std::vector<std::pair<double, double>> checked;
+    setup.setStateValidityChecker(
+        [&checked](const ob::State *state)
+        {
+            const double *x = state->as<ob::RealVectorStateSpace::StateType>()->values;
+            checked.emplace_back(x[0], x[1]);
+            return true;
+        });
+    struct AcceptEveryEdge : ob::MotionValidator
+    {
+        using ob::MotionValidator::MotionValidator;
+        bool checkMotion(const ob::State *, const ob::State *) const override { return true; }
+        bool checkMotion(const ob::State *, const ob::State *, std::pair<ob::State *, double> &) const override
+        {
+            return true;
+        }
+    };
+    setup.getSpaceInformation()->setMotionValidator(std::make_shared<AcceptEveryEdge>(setup.getSpaceInformation()));
+    ob::ScopedState<> start(space), goal(space);
+    start[0] = 0.05;
+    start[1] = 0.5;
+    goal[0] = 0.95;
+    goal[1] = 0.5;
+    setup.setStartAndGoalStates(start, goal);
+    auto planner = std::make_shared<rcp::BatchRRTConnect>(setup.getSpaceInformation());
+    planner->setRange(0.25);
+    setup.setPlanner(planner);
+    rc::test::seedOmpl(1);
+    ASSERT_EQ(setup.solve(10.0), ob::PlannerStatus::EXACT_SOLUTION);
+    EXPECT_EQ(planner->getCandidateCount(), 1u);
+    EXPECT_EQ(setup.getSolutionPath().getStateCount(), 5u);  // start, three step ends, goal
+    // Start and goal, the four midpoints and three ends, and the rake's finer levels.
+    EXPECT_GT(checked.size(), 9u);
+    std::vector<std::pair<double, double>> sorted = checked;
+    std::sort(sorted.begin(), sorted.end());
+    const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+    EXPECT_EQ(twice, sorted.end()) << "checked twice: (" << twice->first << ", " << twice->second << ")";
+}
+
 TEST(BatchShortcutter, ShortensAPathAndKeepsItCollisionFree)
 {
     // A zigzag through the gap: shortcuts straighten it, the ones through the wall are refused.

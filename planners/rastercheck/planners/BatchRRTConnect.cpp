@@ -107,6 +107,7 @@ BatchRRTConnect::Motion *BatchRRTConnect::addMotion(const Tree &tree, const ob::
     motion->parent = parent;
     motion->tree = &tree;
     motion->edgeDecided = edgeDecided;
+    motion->rakedLevels = edgeDecided ? 0 : lazyRakedLevels();
     if (parent)
         parent->children.push_back(motion);
     motions_.push_back(motion);
@@ -114,22 +115,35 @@ BatchRRTConnect::Motion *BatchRRTConnect::addMotion(const Tree &tree, const ob::
     return motion;
 }
 
-void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid)
+void BatchRRTConnect::checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid,
+                                    const std::vector<std::uint8_t> *endInTree)
 {
     if (!lazyNow_)
     {
         edges_->check(edges, valid);
         return;
     }
-    // States at fractions 1/k, 2/k, ..., 1 of every edge (the start is a tree's state already).
+    // States at fractions 1/k, 2/k, ..., 1 of every edge (the start is a tree's state already, and
+    // so is the end of a step that joins the trees).
     const unsigned int k = lazySamples_;
     std::vector<std::pair<std::size_t, double>> points;
     points.reserve(edges.size() * k);
     for (std::size_t e = 0; e < edges.size(); ++e)
         for (unsigned int j = 1; j <= k; ++j)
-            points.emplace_back(e, j == k ? 1.0 : static_cast<double>(j) / k);
+            if (j < k || !endInTree || !(*endInTree)[e])
+                points.emplace_back(e, j == k ? 1.0 : static_cast<double>(j) / k);
     valid.assign(edges.size(), 1);
     lazyStates_ += edges_->checkAlong(edges, points, valid);
+}
+
+unsigned int BatchRRTConnect::lazyRakedLevels() const
+{
+    // A lazy edge's states at j / k include the rake's level L (the odd multiples of 2^-L) wherever
+    // 2^L divides k: with the default k = 2 the rake's first level, the midpoint, is checked.
+    unsigned int levels = 0;
+    for (unsigned int k = lazySamples_; k % 2 == 0; k /= 2)
+        ++levels;
+    return levels;
 }
 
 void BatchRRTConnect::cutSubtree(Motion *motion)
@@ -242,7 +256,7 @@ bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const o
     std::vector<std::uint8_t> valid;
     std::vector<unsigned int> levels;
     for (const Motion *m : below)
-        levels.push_back(m ? m->rakedLevels : 0u);
+        levels.push_back(m ? m->rakedLevels : lazyRakedLevels());  // the bridge was a lazy step
     rakedStates_ += edges_->rake(edges, levels, valid, true);
     const bool certify = std::all_of(valid.begin(), valid.end(), [](std::uint8_t v) { return v != 0; });
     for (std::size_t e = 0; e < edges.size(); ++e)
@@ -310,13 +324,15 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
     // checks).
     std::vector<ompl::Edge> edges;
     std::vector<std::size_t> owner;
-    std::vector<ob::State *> points;  ///< ends of the steps of this round (not the targets)
+    std::vector<ob::State *> points;        ///< ends of the steps of this round (not the targets)
+    std::vector<std::uint8_t> endIsTarget;  ///< the step ends at its line's target, a tree state
     std::vector<std::uint8_t> valid;
     bool joined = false;
     for (bool live = !lines.empty(); live && !ptc && !joined;)
     {
         edges.clear();
         owner.clear();
+        endIsTarget.clear();
         for (std::size_t l = 0; l < lines.size(); ++l)
         {
             Line &line = lines[l];
@@ -333,9 +349,10 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             }
             edges.push_back({line.last->state, to});
             owner.push_back(l);
+            endIsTarget.push_back(to == line.target->state ? 1 : 0);
         }
         const bool lazyRound = lazyNow_;  // a rejected candidate below may end laziness mid-round
-        checkNewEdges(edges, valid);
+        checkNewEdges(edges, valid, &endIsTarget);
         live = false;
         for (std::size_t e = 0; e < edges.size(); ++e)
         {

@@ -127,13 +127,18 @@ private:
         true, with the solution path added, when a line joins the trees. */
     bool connect(const std::vector<std::pair<Motion *, const Tree *>> &fresh,
                  const ::ompl::base::PlannerTerminationCondition &ptc);
-    /** \brief Decides the new \a edges: by the EdgeChecker, or in lazy mode at lazy_samples states each. */
-    void checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid);
+    /** \brief Decides the new \a edges: by the EdgeChecker, or in lazy mode at lazy_samples states each
+        (the end left out where \a endInTree says it is a tree's state, checked when it was added). */
+    void checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid,
+                       const std::vector<std::uint8_t> *endInTree = nullptr);
     /** \brief Decides the edges from both trees' roots to \a startEnd and \a goalEnd that are not
         decided yet, and the \a bridge between them unless \a bridgeDecided, in one batch (after a
         rake that rejects most failing candidates for less); cuts the subtree below each rejected
         tree edge. True when every edge is accepted (at once when none needed deciding). */
     bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided);
+    /** \brief The levels of EdgeChecker::rake that a lazy edge's own states (checkNewEdges) have
+        checked already: as many as 2 divides lazy_samples. */
+    unsigned int lazyRakedLevels() const;
     /** \brief Removes \a motion and every motion below it from their tree. */
     void cutSubtree(Motion *motion);
     /** \brief Cuts every edge not yet decided; the rest of the solve is eager. */
