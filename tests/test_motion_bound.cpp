@@ -203,14 +203,18 @@ void measureSpanSweeps(const rc::RobotModelConstPtr &robot, int edges, int steps
 
 TEST(MotionBound, SweepsAboutAReferenceHoldOverTheirSpanAndAreTighter)
 {
-    // A span of a Panda or crane edge, its sweeps measured about the link poses at its middle:
+    // A span of a Panda, crane or UR5 edge, its sweeps measured about the link poses at its middle:
     // every vertex and vertex pair within them, and on average tighter than the chain's bound
     // (which sweeps() about the middle never exceeds).
     RASTERCHECK_REQUIRE_DATA(root);
     double panda = 1.0, crane = 1.0;
     measureSpanSweeps(rc::test::pandaProblem(root, "table_pick").robot, 40, 24, panda);
     measureSpanSweeps(rc::test::plant().robot, 40, 24, crane);
-    std::cout << "span sweep / chain sweep, mean over components: Panda " << panda << ", crane " << crane << "\n";
+    // The UR5's base and upper arm: a pair whose first joint counts from the base's side.
+    double ur5 = 1.0;
+    measureSpanSweeps(rc::loadUrdf(root + "/mbm/ur5/ur5.urdf"), 20, 24, ur5);
+    std::cout << "span sweep / chain sweep, mean over components: Panda " << panda << ", crane " << crane << ", UR5 "
+              << ur5 << "\n";
     EXPECT_LT(panda, 0.95);
     EXPECT_LT(crane, 0.8);
 }
@@ -260,6 +264,101 @@ TEST(MotionBound, KnownAnswersOnOneLink)
                                  rc::test::urdfJoint("j", "continuous", "base", "arm", "<axis xyz=\"0 0 1\"/>"));
     const double from[] = {3.0}, to[] = {-3.0};
     EXPECT_NEAR(rc::MotionBound(*wheel).sweep(from, to), (2 * M_PI - 6.0) * reach, 1e-12);
+}
+
+TEST(MotionBound, APairsJointCountsFromTheNearerSide)
+{
+    // A 0.2 m cube on the base around the joint's centre and the 1 m cube 2 m out on the arm: the
+    // joint turns the arm at up to sqrt(6.75) m, but it changes a base point's distance to an arm
+    // point no faster than the base point's distance from the joint, at most sqrt(0.03) m.
+    const auto robot = robotFrom(
+        rc::test::urdfLink("base", "<collision><geometry><box size=\"0.2 0.2 0.2\"/></geometry></collision>") +
+        rc::test::urdfLink("arm", kBox) +
+        rc::test::urdfJoint("j", "revolute", "base", "arm",
+                            "<axis xyz=\"0 0 1\"/><limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/>"));
+    ASSERT_EQ(robot->numComponents(), 2u);
+    const rc::MotionBound bound(*robot);
+    const double qa[] = {0.25}, qb[] = {0.35};
+    double components[2], pair = 0.0;
+    bound.sweeps(qa, qb, {{0, 1}}, components, &pair);
+    EXPECT_EQ(components[0], 0.0);
+    EXPECT_NEAR(components[1], 0.1 * std::sqrt(6.75), 1e-12);
+    EXPECT_NEAR(pair, 0.1 * std::sqrt(0.03), 1e-12);
+    // About a reference: the base's sphere (about its centre, on the axis) holds it within
+    // sqrt(0.03) m of the axis too.
+    rc::RobotData reference(*robot);
+    rc::forwardKinematics(*robot, reference, std::vector<double>{0.3});
+    bound.sweeps(qa, qb, reference, 0.5, {{0, 1}}, components, &pair);
+    EXPECT_NEAR(pair, 0.1 * std::sqrt(0.03), 1e-12);
+    // Every base vertex against every arm vertex, in steps of the edge.
+    rc::RobotData x(*robot), y(*robot);
+    for (int k = 0; k < 10; ++k)
+    {
+        rc::forwardKinematics(*robot, x, std::vector<double>{0.25 + 0.01 * k});
+        rc::forwardKinematics(*robot, y, std::vector<double>{0.25 + 0.01 * (k + 1)});
+        for (const Eigen::Vector3d &va : robot->components[0].mesh.vertices)
+            for (const Eigen::Vector3d &vb : robot->components[1].mesh.vertices)
+            {
+                const double then =
+                    (x.oMl[robot->components[0].link] * va - x.oMl[robot->components[1].link] * vb).norm();
+                const double now =
+                    (y.oMl[robot->components[0].link] * va - y.oMl[robot->components[1].link] * vb).norm();
+                EXPECT_LE(std::abs(now - then), 0.1 * pair + 1e-12);
+            }
+    }
+}
+
+TEST(MotionBound, AboutAReferenceTheNearerSideCountsWhatTurnsItWithinTheSpan)
+{
+    // j1 turns about z, j2 about j1's x axis and carries a 1 m cube 2 m up. The base's small cube
+    // sits 0.5 m out on x: on j2's axis halfway along the edge (j1 = 0), 0.35 m from it at the ends
+    // (j1 = +-pi/4). So j2 counts from the base's side at its distance from the axis there plus
+    // what j1 moves the base about that axis within the span; without the latter, the distances
+    // between the two cubes' vertices change faster than the pair sweep allows.
+    const std::string limit = "<limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/>";
+    const auto robot = robotFrom(
+        rc::test::urdfLink("base",
+                           "<collision><origin xyz=\"0.5 0 0\"/><geometry><box size=\"0.02 0.02 0.02\"/></geometry>"
+                           "</collision>") +
+        rc::test::urdfLink("middle") +
+        rc::test::urdfLink("arm",
+                           "<collision><origin xyz=\"0 0 2\"/><geometry><box size=\"1 1 1\"/></geometry>"
+                           "</collision>") +
+        rc::test::urdfJoint("j1", "revolute", "base", "middle", "<axis xyz=\"0 0 1\"/>" + limit) +
+        rc::test::urdfJoint("j2", "revolute", "middle", "arm", "<axis xyz=\"1 0 0\"/>" + limit));
+    ASSERT_EQ(robot->numComponents(), 2u);
+    const rc::MotionBound bound(*robot);
+    const double quarter = 0.25 * M_PI;
+    const std::vector<double> qa{-quarter, -0.5}, qb{quarter, 0.5};
+    rc::RobotData reference(*robot);
+    rc::forwardKinematics(*robot, reference, std::vector<double>{0.0, 0.0});
+    double components[2], chainPair = 0.0, pair = 0.0;
+    bound.sweeps(qa.data(), qb.data(), {{0, 1}}, components, &chainPair);
+    bound.sweeps(qa.data(), qb.data(), reference, 0.5, {{0, 1}}, components, &pair);
+    EXPECT_LE(pair, chainPair);
+    const int steps = 200;
+    rc::RobotData x(*robot), y(*robot);
+    double fastest = 0.0;  // the largest change of a vertex pair's distance per unit of the edge
+    for (int k = 0; k < steps; ++k)
+    {
+        auto at = [&](int i)
+        {
+            const double t = static_cast<double>(i) / steps;
+            return std::vector<double>{qa[0] + t * (qb[0] - qa[0]), qa[1] + t * (qb[1] - qa[1])};
+        };
+        rc::forwardKinematics(*robot, x, at(k));
+        rc::forwardKinematics(*robot, y, at(k + 1));
+        for (const Eigen::Vector3d &va : robot->components[0].mesh.vertices)
+            for (const Eigen::Vector3d &vb : robot->components[1].mesh.vertices)
+            {
+                const auto la = static_cast<std::size_t>(robot->components[0].link);
+                const auto lb = static_cast<std::size_t>(robot->components[1].link);
+                const double then = (x.oMl[la] * va - x.oMl[lb] * vb).norm();
+                const double now = (y.oMl[la] * va - y.oMl[lb] * vb).norm();
+                fastest = std::max(fastest, std::abs(now - then) * steps);
+            }
+    }
+    EXPECT_LE(fastest, pair * (1 + 1e-9));
 }
 
 TEST(MotionBound, ReachAddsTheOffsetsAndSlidesBelowAJoint)

@@ -104,6 +104,41 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         if (std::isfinite(r))
             size_ = std::max(size_, r);
 
+    // Between any two links' frames, the tree path's offsets and shifts bound their origins'
+    // distance in every configuration: from each moving joint's centre (its child frame's origin)
+    // to every component's points (centreDistance_, filled below once moving_ is known).
+    auto pathLengthsFrom = [&](int startLink)
+    {
+        std::vector<double> lengths(robot.links.size(), std::numeric_limits<double>::infinity());
+        std::vector<bool> reached(robot.links.size(), false);
+        lengths[static_cast<std::size_t>(startLink)] = 0.0;
+        reached[static_cast<std::size_t>(startLink)] = true;
+        std::vector<int> stack{startLink};
+        while (!stack.empty())
+        {
+            const int link = stack.back();
+            stack.pop_back();
+            auto visit = [&](int next, const Joint &joint)
+            {
+                if (reached[static_cast<std::size_t>(next)])
+                    return;
+                reached[static_cast<std::size_t>(next)] = true;
+                // Infinite past an unbounded shift (a free-floating base): that side is never the nearer.
+                lengths[static_cast<std::size_t>(next)] = lengths[static_cast<std::size_t>(link)] +
+                                                          joint.origin.translation().norm() + frameShift(robot, joint);
+                stack.push_back(next);
+            };
+            for (const Joint &joint : robot.joints)
+            {
+                if (joint.parentLink == link)
+                    visit(joint.childLink, joint);
+                else if (joint.childLink == link)
+                    visit(joint.parentLink, joint);
+            }
+        }
+        return lengths;
+    };
+
     std::vector<int> movingIndex(robot.joints.size(), -1);
     for (std::size_t j = 0; j < robot.joints.size(); ++j)
     {
@@ -116,6 +151,12 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         movingIndex[j] = static_cast<int>(moving_.size());
         moving_.push_back({joint.kind, joint.childLink, joint.axis.normalized(), driver.firstCoordinate,
                            driver.continuous, joint.mimicOf >= 0, joint.mimicOf >= 0 ? joint.mimicMultiplier : 1.0});
+    }
+    for (const MovingJoint &joint : moving_)
+    {
+        const std::vector<double> lengths = pathLengthsFrom(joint.childLink);
+        for (std::size_t c = 0; c < robot.components.size(); ++c)
+            centreDistance_.push_back(lengths[static_cast<std::size_t>(robot.components[c].link)] + radius[c]);
     }
     // Per component, up its chain: how far its points can lie from each joint's centre (its own
     // radius, then each joint's offset and shift on the way up). A joint near the base turns a
@@ -256,13 +297,38 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
     thread_local std::vector<Travel> travel;
     thread_local std::vector<double> moved;
     thread_local std::vector<Eigen::Vector3d> axes;  // each turning joint's axis at the reference
+    thread_local std::vector<Eigen::Vector3d> holders;  // per component at the reference: sphere centre, capsule ends
     travels(qa, qb, travel);
     if (reference)
     {
         axes.resize(moving_.size());
         for (std::size_t k = 0; k < moving_.size(); ++k)
             axes[k] = reference->oMl[static_cast<std::size_t>(moving_[k].childLink)].linear() * moving_[k].axis;
+        holders.resize(3 * above_.size());
+        for (std::size_t c = 0; c < above_.size(); ++c)
+        {
+            const Eigen::Isometry3d &pose = reference->oMl[static_cast<std::size_t>(componentLink_[c])];
+            holders[3 * c] = pose * sphereCentre_[c];
+            holders[3 * c + 1] = pose * capsuleEnds_[c].first;
+            holders[3 * c + 2] = pose * capsuleEnds_[c].second;
+        }
     }
+    // At the reference, the farthest point of component c's sphere or capsule (whose ends are its
+    // farthest from a line or a point) from the line joint k turns about (a planar or floating
+    // joint: its centre), the nearer of the two bounds.
+    auto distanceAtReference = [&](std::size_t k, std::size_t c)
+    {
+        const MovingJoint &joint = moving_[k];
+        const Eigen::Vector3d &pivot = reference->oMl[static_cast<std::size_t>(joint.childLink)].translation();
+        const bool aboutAxis = joint.kind == JointKind::Revolute;
+        auto distance = [&](const Eigen::Vector3d &point)
+        {
+            const Eigen::Vector3d offset = point - pivot;
+            return aboutAxis ? (offset - offset.dot(axes[k]) * axes[k]).norm() : offset.norm();
+        };
+        return std::min(distance(holders[3 * c]) + sphereRadius_[c],
+                        std::max(distance(holders[3 * c + 1]), distance(holders[3 * c + 2])) + capsuleRadius_[c]);
+    };
     // How far each carrier's joint moves its component's points, per component from the joint
     // nearest to it up to the base: a joint that does not turn adds only its slide, even at an
     // infinite distance (a held floating base).
@@ -270,14 +336,6 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
     for (std::size_t c = 0; c < above_.size(); ++c)
     {
         const std::vector<Carrier> &above = above_[c];
-        Eigen::Vector3d centre = Eigen::Vector3d::Zero(), ends[2] = {centre, centre};
-        if (reference)
-        {
-            const Eigen::Isometry3d &pose = reference->oMl[static_cast<std::size_t>(componentLink_[c])];
-            centre = pose * sphereCentre_[c];
-            ends[0] = pose * capsuleEnds_[c].first;
-            ends[1] = pose * capsuleEnds_[c].second;
-        }
         double inner = 0.0;  // what the joints between the carrier and the component move its points
         for (std::size_t i = above.size(); i-- > 0;)
         {
@@ -288,19 +346,7 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
             {
                 // Turning about its axis keeps a point's distance from it; only the joints between
                 // them change it, by at most their travel over the half span on either side.
-                // The farthest point of the sphere or of the capsule (whose ends are its farthest
-                // from a line or a point), the nearer bound.
-                const MovingJoint &joint = moving_[k];
-                const Eigen::Vector3d &pivot = reference->oMl[static_cast<std::size_t>(joint.childLink)].translation();
-                const bool aboutAxis = joint.kind == JointKind::Revolute;  // planar, floating: about the centre
-                auto distance = [&](const Eigen::Vector3d &point)
-                {
-                    const Eigen::Vector3d offset = point - pivot;
-                    return aboutAxis ? (offset - offset.dot(axes[k]) * axes[k]).norm() : offset.norm();
-                };
-                const double measured = std::min(distance(centre) + sphereRadius_[c],
-                                                 std::max(distance(ends[0]), distance(ends[1])) + capsuleRadius_[c]);
-                const double tightened = measured + halfSpan * inner;
+                const double tightened = distanceAtReference(k, c) + halfSpan * inner;
                 if (tightened < reach)  // false for NaN: the chain's bound stands
                     reach = tightened;
             }
@@ -310,11 +356,52 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
         }
         componentSweeps[c] = inner;
     }
+    // A pair's joints, each counted from the nearer side (see sweeps()): the carried component's
+    // reach, as above, or the other component's distance from the joint's centre in any
+    // configuration, or at the reference its distance from the joint's axis plus what the pair's
+    // joints between them (the other's own, and the carried side's above this one) move it
+    // within the span.
+    thread_local std::vector<std::pair<int, std::size_t>> chain;  // (component, carrier), ascending joints
+    const std::size_t components = above_.size();
     for (std::size_t i = 0; i < pairs.size(); ++i)
     {
+        chain.clear();
+        forEachPairCarrier(pairs[i].first, pairs[i].second, [&](int c, std::size_t k) { chain.emplace_back(c, k); });
         double sum = 0.0;
-        forEachPairCarrier(pairs[i].first, pairs[i].second,
-                           [&](int c, std::size_t k) { sum += moved[firstCarrier_[static_cast<std::size_t>(c)] + k]; });
+        for (const auto &[c, carrier] : chain)
+        {
+            const auto carried = static_cast<std::size_t>(c);
+            double m = moved[firstCarrier_[carried] + carrier];
+            const auto k = static_cast<std::size_t>(above_[carried][carrier].joint);
+            const Travel &t = travel[k];
+            if (t.turn != 0.0)
+            {
+                const auto other = static_cast<std::size_t>(c == pairs[i].first ? pairs[i].second : pairs[i].first);
+                double reach = centreDistance_[k * components + other];
+                if (reference)
+                {
+                    double between = 0.0;
+                    for (const auto &[c2, carrier2] : chain)
+                    {
+                        const auto j = static_cast<std::size_t>(above_[static_cast<std::size_t>(c2)][carrier2].joint);
+                        if (static_cast<std::size_t>(c2) == other)
+                            between += moved[firstCarrier_[other] + carrier2];
+                        else if (j < k)  // the carried side's joints above this one (topological order)
+                            between +=
+                                travel[j].slide + (travel[j].turn == 0.0
+                                                       ? 0.0
+                                                       : travel[j].turn * centreDistance_[j * components + other]);
+                    }
+                    const double tightened = distanceAtReference(k, other) + halfSpan * between;
+                    if (tightened < reach)  // false for NaN
+                        reach = tightened;
+                }
+                const double fromOther = t.slide + t.turn * reach;
+                if (fromOther < m)  // false for NaN
+                    m = fromOther;
+            }
+            sum += m;
+        }
         pairSweeps[i] = sum;
     }
 }

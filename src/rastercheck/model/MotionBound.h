@@ -55,7 +55,13 @@ public:
         \a pairSweeps (one per entry of \a pairs, component indices): how much the distance between
         a point of the first component and a point of the second can change, which only the joints
         between them in the tree can do (the joints above both move them rigidly together: the
-        distance is the same in their common ancestor's frame). Infinite where sweep() would be. */
+        distance is the same in their common ancestor's frame). Infinite where sweep() would be.
+        Each such joint counts from either side, the nearer: a turn w about a centre c changes the
+        distance between points a and b at the rate (b - a) / |b - a| . (w x (b - c)), which is
+        also (b - a) / |b - a| . (w x (a - c)) since w x (b - a) is normal to b - a; so the turn
+        counts at the smaller of the carried component's reach and the other component's distance
+        from the joint (a UR5's base lies within 0.1 m of its shoulder-pan axis, which turns the
+        upper arm at up to half a metre). */
     void sweeps(const double *qa, const double *qb, const std::vector<std::pair<int, int>> &pairs,
                 double *componentSweeps, double *pairSweeps) const;
 
@@ -138,6 +144,10 @@ private:
     std::vector<std::vector<Carrier>> above_;  ///< per component, by ascending joint
     std::vector<std::size_t> firstCarrier_;    ///< per component: where its carriers start in a flat array
     std::vector<int> componentLink_;
+    /** \brief Per moving joint, per component (row-major, numComponents() per joint): the farthest
+        the component's points can lie from the joint's centre in any configuration (its radius
+        plus the joints' offsets and shifts along the tree path between them). */
+    std::vector<double> centreDistance_;
     /** \brief Per component (link frame), a sphere and a capsule (a segment along its box's longest
         axis, widened by the other two half extents) that hold its vertices: what sweeps() about a
         reference measures, the nearer of the two. */
