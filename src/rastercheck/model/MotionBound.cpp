@@ -298,6 +298,7 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
     thread_local std::vector<double> moved;
     thread_local std::vector<Eigen::Vector3d> axes;  // each turning joint's axis at the reference
     thread_local std::vector<Eigen::Vector3d> holders;  // per component at the reference: sphere centre, capsule ends
+    thread_local std::vector<double> fromAxis;          // distanceAtReference per (joint, component), once each
     travels(qa, qb, travel);
     if (reference)
     {
@@ -312,12 +313,16 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
             holders[3 * c + 1] = pose * capsuleEnds_[c].first;
             holders[3 * c + 2] = pose * capsuleEnds_[c].second;
         }
+        fromAxis.assign(moving_.size() * above_.size(), -1.0);
     }
     // At the reference, the farthest point of component c's sphere or capsule (whose ends are its
     // farthest from a line or a point) from the line joint k turns about (a planar or floating
     // joint: its centre), the nearer of the two bounds.
     auto distanceAtReference = [&](std::size_t k, std::size_t c)
     {
+        double &known = fromAxis[k * above_.size() + c];
+        if (known >= 0.0)
+            return known;
         const MovingJoint &joint = moving_[k];
         const Eigen::Vector3d &pivot = reference->oMl[static_cast<std::size_t>(joint.childLink)].translation();
         const bool aboutAxis = joint.kind == JointKind::Revolute;
@@ -326,8 +331,9 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
             const Eigen::Vector3d offset = point - pivot;
             return aboutAxis ? (offset - offset.dot(axes[k]) * axes[k]).norm() : offset.norm();
         };
-        return std::min(distance(holders[3 * c]) + sphereRadius_[c],
-                        std::max(distance(holders[3 * c + 1]), distance(holders[3 * c + 2])) + capsuleRadius_[c]);
+        known = std::min(distance(holders[3 * c]) + sphereRadius_[c],
+                         std::max(distance(holders[3 * c + 1]), distance(holders[3 * c + 2])) + capsuleRadius_[c]);
+        return known;
     };
     // How far each carrier's joint moves its component's points, per component from the joint
     // nearest to it up to the base: a joint that does not turn adds only its slide, even at an
@@ -359,49 +365,55 @@ void MotionBound::sweepsAlong(const double *qa, const double *qb, const RobotDat
     // A pair's joints, each counted from the nearer side (see sweeps()): the carried component's
     // reach, as above, or the other component's distance from the joint's centre in any
     // configuration, or at the reference its distance from the joint's axis plus what the pair's
-    // joints between them (the other's own, and the carried side's above this one) move it
-    // within the span.
-    thread_local std::vector<std::pair<int, std::size_t>> chain;  // (component, carrier), ascending joints
+    // joints between them (all of the other's own, and the carried side's above this one) move it
+    // within the span. In ascending (topological) order each side's joints above the current one
+    // are a running sum.
     const std::size_t components = above_.size();
     for (std::size_t i = 0; i < pairs.size(); ++i)
     {
-        chain.clear();
-        forEachPairCarrier(pairs[i].first, pairs[i].second, [&](int c, std::size_t k) { chain.emplace_back(c, k); });
-        double sum = 0.0;
-        for (const auto &[c, carrier] : chain)
+        const int first = pairs[i].first, second = pairs[i].second;
+        // Each side's own joints, what they move it: all of its carriers' moves but those of the
+        // joints above both (the common ancestors, first in both ascending lists).
+        double own[2] = {componentSweeps[first], componentSweeps[second]};
+        const std::vector<Carrier> &a = above_[static_cast<std::size_t>(first)];
+        const std::vector<Carrier> &b = above_[static_cast<std::size_t>(second)];
+        for (std::size_t x = 0; x < a.size() && x < b.size() && a[x].joint == b[x].joint; ++x)
         {
-            const auto carried = static_cast<std::size_t>(c);
-            double m = moved[firstCarrier_[carried] + carrier];
-            const auto k = static_cast<std::size_t>(above_[carried][carrier].joint);
-            const Travel &t = travel[k];
-            if (t.turn != 0.0)
-            {
-                const auto other = static_cast<std::size_t>(c == pairs[i].first ? pairs[i].second : pairs[i].first);
-                double reach = centreDistance_[k * components + other];
-                if (reference)
-                {
-                    double between = 0.0;
-                    for (const auto &[c2, carrier2] : chain)
-                    {
-                        const auto j = static_cast<std::size_t>(above_[static_cast<std::size_t>(c2)][carrier2].joint);
-                        if (static_cast<std::size_t>(c2) == other)
-                            between += moved[firstCarrier_[other] + carrier2];
-                        else if (j < k)  // the carried side's joints above this one (topological order)
-                            between +=
-                                travel[j].slide + (travel[j].turn == 0.0
-                                                       ? 0.0
-                                                       : travel[j].turn * centreDistance_[j * components + other]);
-                    }
-                    const double tightened = distanceAtReference(k, other) + halfSpan * between;
-                    if (tightened < reach)  // false for NaN
-                        reach = tightened;
-                }
-                const double fromOther = t.slide + t.turn * reach;
-                if (fromOther < m)  // false for NaN
-                    m = fromOther;
-            }
-            sum += m;
+            own[0] -= moved[firstCarrier_[static_cast<std::size_t>(first)] + x];
+            own[1] -= moved[firstCarrier_[static_cast<std::size_t>(second)] + x];
         }
+        double above[2] = {0.0, 0.0};  // each side's joints so far: what they move the other side
+        double sum = 0.0;
+        forEachPairCarrier(first, second,
+                           [&](int c, std::size_t carrier)
+                           {
+                               const int side = c == first ? 0 : 1;
+                               const auto other = static_cast<std::size_t>(side == 0 ? second : first);
+                               const auto k =
+                                   static_cast<std::size_t>(above_[static_cast<std::size_t>(c)][carrier].joint);
+                               const Travel &t = travel[k];
+                               double m = moved[firstCarrier_[static_cast<std::size_t>(c)] + carrier];
+                               const double fromCentre = centreDistance_[k * components + other];
+                               // Only where the other side is the nearer by the chain's bounds (the UR5's base
+                               // about its shoulder joints): elsewhere measuring it costs more than it saves.
+                               if (t.turn != 0.0 && fromCentre < above_[static_cast<std::size_t>(c)][carrier].distance)
+                               {
+                                   double reach = fromCentre;
+                                   const double moves = halfSpan * (own[1 - side] + above[side]);
+                                   // Measured only where it can beat the carried side (it is at least the moves).
+                                   if (reference && t.slide + t.turn * moves < m)
+                                   {
+                                       const double tightened = distanceAtReference(k, other) + moves;
+                                       if (tightened < reach)  // false for NaN
+                                           reach = tightened;
+                                   }
+                                   const double fromOther = t.slide + t.turn * reach;
+                                   if (fromOther < m)  // false for NaN
+                                       m = fromOther;
+                               }
+                               above[side] += t.slide + (t.turn == 0.0 ? 0.0 : t.turn * fromCentre);
+                               sum += m;
+                           });
         pairSweeps[i] = sum;
     }
 }
