@@ -96,6 +96,17 @@ void setAcrossTheWall(og::SimpleSetup &setup)
     rco::setStartAndGoal(setup, start, goal);
 }
 
+/** \brief A planar unit square's start (0.05, 0.5) and goal (0.95, 0.5). */
+void setAcrossTheUnitSquare(og::SimpleSetup &setup)
+{
+    ob::ScopedState<> start(setup.getStateSpace()), goal(setup.getStateSpace());
+    start[0] = 0.05;
+    start[1] = 0.5;
+    goal[0] = 0.95;
+    goal[1] = 0.5;
+    setup.setStartAndGoalStates(start, goal);
+}
+
 og::SimpleSetupPtr pandaSetup(const std::string &root, const std::string &scenario)
 {
     rco::SetupOptions options;
@@ -479,12 +490,7 @@ TEST(BatchRRTConnect, WorksWithAForeignValidityChecker)
         return std::hypot(x[0] - 0.5, x[1] - 0.5) > 0.3;
     };
     setup.setStateValidityChecker(outsideDisc);
-    ob::ScopedState<> start(space), goal(space);
-    start[0] = 0.05;
-    start[1] = 0.5;
-    goal[0] = 0.95;
-    goal[1] = 0.5;
-    setup.setStartAndGoalStates(start, goal);
+    setAcrossTheUnitSquare(setup);
     auto planner = std::make_shared<rcp::BatchRRTConnect>(setup.getSpaceInformation());
     planner->setShortcut(true);
     setup.setPlanner(planner);
@@ -525,12 +531,7 @@ TEST(BatchRRTConnect, LazyModeChecksNoStateTwice)
         }
     };
     setup.getSpaceInformation()->setMotionValidator(std::make_shared<AcceptEveryEdge>(setup.getSpaceInformation()));
-    ob::ScopedState<> start(space), goal(space);
-    start[0] = 0.05;
-    start[1] = 0.5;
-    goal[0] = 0.95;
-    goal[1] = 0.5;
-    setup.setStartAndGoalStates(start, goal);
+    setAcrossTheUnitSquare(setup);
     auto planner = std::make_shared<rcp::BatchRRTConnect>(setup.getSpaceInformation());
     planner->setRange(0.25);
     setup.setPlanner(planner);
