@@ -58,10 +58,11 @@ public:
         distance is the same in their common ancestor's frame). Infinite where sweep() would be.
         Each such joint counts from either side, the nearer: a turn w about a centre c changes the
         distance between points a and b at the rate (b - a) / |b - a| . (w x (b - c)), which is
-        also (b - a) / |b - a| . (w x (a - c)) since w x (b - a) is normal to b - a; so the turn
-        counts at the smaller of the carried component's reach and the other component's distance
-        from the joint (a UR5's base lies within 0.1 m of its shoulder-pan axis, which turns the
-        upper arm at up to half a metre). */
+        also (b - a) / |b - a| . (w x (a - c)) since w x (b - a) is normal to b - a; so where the
+        chain's bounds make the other component the nearer to the joint, the turn counts at the
+        smaller of the carried component's reach and the other's distance from the joint (a UR5's
+        base lies within 0.1 m of its shoulder-pan axis, which turns the upper arm at up to half a
+        metre). */
     void sweeps(const double *qa, const double *qb, const std::vector<std::pair<int, int>> &pairs,
                 double *componentSweeps, double *pairSweeps) const;
 
@@ -144,7 +145,7 @@ private:
     std::vector<std::vector<Carrier>> above_;  ///< per component, by ascending joint
     std::vector<std::size_t> firstCarrier_;    ///< per component: where its carriers start in a flat array
     std::vector<int> componentLink_;
-    /** \brief Per moving joint, per component (row-major, numComponents() per joint): the farthest
+    /** \brief Per moving joint, then per component (row-major): the farthest
         the component's points can lie from the joint's centre in any configuration (its radius
         plus the joints' offsets and shifts along the tree path between them). */
     std::vector<double> centreDistance_;
