@@ -289,6 +289,26 @@ TEST(CertifiedMotion, EveryAcceptedPandaEdgeIsCollisionFreeAtEveryPoint)
     }
 }
 
+TEST(CertifiedMotion, EveryAcceptedUr5EdgeIsCollisionFreeAtEveryPoint)
+{
+    // The UR5 among a bookshelf's shelves: its base and upper arm, centimetres apart at the
+    // shoulder, are held to the shoulder joints' turns at the base's own distance from their axes
+    // (MotionBound's pair sweeps from the nearer side).
+    RASTERCHECK_REQUIRE_DATA(root);
+    rc::ProblemSource source;
+    source.urdfPath = root + "/mbm/ur5/ur5.urdf";
+    source.srdfPath = root + "/mbm/ur5/ur5.srdf";
+    source.scenePath = root + "/mbm/ur5/problems/bookshelf_small_ur5/scene0001.yaml";
+    const Context context = makeContext(rc::loadProblem(source));
+    const std::array<int, 3> counts = checkRandomEdges(context, 12, 0.2 * context.si->getMaximumExtent(), 7);
+    EXPECT_GT(counts[0], 2);
+    EXPECT_GT(counts[1], 2);
+    std::printf(
+        "UR5 bookshelf_small, bisection: %d edges certified, %d not (%d of them accepted by the discrete "
+        "validator)\n",
+        counts[0], counts[1], counts[2]);
+}
+
 TEST(CertifiedMotion, EveryAcceptedCraneEdgeIsCollisionFreeAtEveryPoint)
 {
     const rc::Problem &plant = rc::test::plant();
