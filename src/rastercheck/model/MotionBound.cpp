@@ -106,7 +106,8 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
 
     // Between any two links' frames, the tree path's offsets and shifts bound their origins'
     // distance in every configuration: from each moving joint's centre (its child frame's origin)
-    // to every component's points (centreDistance_, filled below once moving_ is known).
+    // to every component's points (centreDistance_, filled below once moving_ is known), whether
+    // the joint carries the component or not.
     auto pathLengthsFrom = [&](int startLink)
     {
         std::vector<double> lengths(robot.links.size(), std::numeric_limits<double>::infinity());
@@ -158,24 +159,22 @@ MotionBound::MotionBound(const RobotModel &robot) : reach_(robot.joints.size(), 
         for (std::size_t c = 0; c < robot.components.size(); ++c)
             centreDistance_.push_back(lengths[static_cast<std::size_t>(robot.components[c].link)] + radius[c]);
     }
-    // Per component, up its chain: how far its points can lie from each joint's centre (its own
-    // radius, then each joint's offset and shift on the way up). A joint near the base turns a
-    // link near the base through a small radius, whatever the hand below does.
+    // Per component, up its chain: the moving joints that carry it, each with how far its points
+    // can lie from the joint's centre (centreDistance_). A joint near the base turns a link near
+    // the base through a small radius, whatever the hand below does.
     for (std::size_t c = 0; c < robot.components.size(); ++c)
     {
         const Component &component = robot.components[c];
-        double distance = radius[c];
         std::vector<Carrier> above;
         for (int link = component.link; link >= 0;)
         {
             const int j = robot.links[static_cast<std::size_t>(link)].parentJoint;
             if (j < 0)
                 break;
-            const Joint &joint = robot.joints[static_cast<std::size_t>(j)];
-            if (movingIndex[static_cast<std::size_t>(j)] >= 0)
-                above.push_back({movingIndex[static_cast<std::size_t>(j)], distance});
-            distance += joint.origin.translation().norm() + frameShift(robot, joint);
-            link = joint.parentLink;
+            const int k = movingIndex[static_cast<std::size_t>(j)];
+            if (k >= 0)
+                above.push_back({k, centreDistance_[static_cast<std::size_t>(k) * robot.components.size() + c]});
+            link = robot.joints[static_cast<std::size_t>(j)].parentLink;
         }
         std::sort(above.begin(), above.end(), [](const Carrier &a, const Carrier &b) { return a.joint < b.joint; });
         firstCarrier_.push_back(c == 0 ? 0 : firstCarrier_.back() + above_.back().size());
