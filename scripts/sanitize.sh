@@ -6,7 +6,8 @@
 #         with ThreadSanitizer. Clang, because LLVM's OpenMP runtime with its Archer tool tells TSan
 #         about OpenMP's barriers and locks, so the OpenMP batch path runs as it ships; GCC's
 #         libgomp is not instrumented and TSan would report races in every parallel region.
-# Both: unity builds (RASTERCHECK_UNITY_BUILD: the libraries' sources in batches), -O1 -g1 (the test programs and the command line -O0: tests/CMakeLists.txt's
+# Both: unity builds (RASTERCHECK_UNITY_BUILD: the libraries' sources in batches),
+# -O1 -g1 (the test programs and the command line -O0: tests/CMakeLists.txt's
 # RASTERCHECK_TEST_OPTIMIZATION, CMakeLists.txt's RASTERCHECK_CLI_OPTIMIZATION), assertions on (ours, Eigen's, and libstdc++'s bounds checks), no benchmarks,
 # examples or CUDA (sanitizers check host code). -g1 (line tables, no variables) gives the reports'
 # stack traces the same functions, files, lines and inlined frames as -g, in less compile time. Both run tests/test_concurrency.cpp at a tenth of

@@ -1,7 +1,5 @@
 // `rastercheck info`: prints what the loaders make of a robot, a problem or a scene, so a user can
 // see the coordinate layout, the collision components and their topology before planning.
-#include <algorithm>
-#include <cctype>
 #include <fstream>
 #include <iostream>
 #include <memory>

@@ -1,7 +1,5 @@
 #include "rastercheck/ompl/Planners.h"
 
-#include <algorithm>
-#include <cctype>
 #include <exception>
 #include <functional>
 #include <map>
@@ -38,8 +36,8 @@
 #include <ompl/geometric/planners/stride/STRIDE.h>
 
 #include "rastercheck/core/Error.h"
-#include "rastercheck/planners/BatchRRTConnect.h"
 #include "rastercheck/core/Text.h"
+#include "rastercheck/planners/BatchRRTConnect.h"
 
 namespace og = ::ompl::geometric;
 namespace ob = ::ompl::base;

@@ -10,9 +10,9 @@
 
 #include "rastercheck/core/Error.h"
 #include "rastercheck/core/Parallel.h"
+#include "rastercheck/geometry/EigenDevice.h"
 #include "rastercheck/geometry/MeshTopology.h"
 #include "rastercheck/model/Kinematics.h"
-#include "rastercheck/geometry/EigenDevice.h"
 
 namespace rastercheck
 {

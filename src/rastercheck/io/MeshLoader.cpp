@@ -1,12 +1,10 @@
 #include "rastercheck/io/MeshLoader.h"
 
-#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
-#include <sys/stat.h>
 #include <utility>
 
 #include <assimp/DefaultIOSystem.h>
@@ -17,9 +15,9 @@
 #include <assimp/scene.h>
 
 #include "rastercheck/core/Error.h"
-#include "rastercheck/io/PlyCheck.h"
 #include "rastercheck/core/Paths.h"
 #include "rastercheck/core/Text.h"
+#include "rastercheck/io/PlyCheck.h"
 
 namespace rastercheck
 {
