@@ -184,9 +184,11 @@ int main(int argc, char **argv)
                 staged ? staged->executorCounts().since(before) : device::ExecutorCounts{};
             const double passShare = used.seconds / std::max(1e-12, gpuSeconds);
             const double perCall = 1.0 / std::max<unsigned long long>(1, used.calls);
-            char costs[96];
-            std::snprintf(costs, sizeof costs, ", %.2f waits, %.1f launches, %.2f allocations per call",
-                          used.synchronizations * perCall, used.launches * perCall, used.allocations * perCall);
+            char costs[128];
+            std::snprintf(costs, sizeof costs,
+                          ", %.2f waits, %.1f launches, %.2f allocations, %.2f graph replays per call",
+                          used.synchronizations * perCall, used.launches * perCall, used.allocations * perCall,
+                          used.replayedPasses * perCall);
             std::printf("| %s | %zu / %zu | %zu | %s | %s | %s | %s | %s | %s |\n", c.name.c_str(),
                         c.robot->numTriangles(), sceneTriangles, batch, rate(fclRate).c_str(),
                         cpuRate > 0 ? rate(cpuRate).c_str() : "-", haveGpu ? rate(gpuRate).c_str() : "no device",

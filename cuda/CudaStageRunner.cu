@@ -1,6 +1,6 @@
 // The CUDA executor of the batched pipeline: each stage of device/BatchPipeline.h runs as one
 // kernel (forEachKernel instantiated with that stage's per-element function), compaction, scans
-// and the segmented sort are CUB calls, all on the executor's stream. Device buffers and the
+// and the fragments' sort are CUB calls, all on the executor's stream. Device buffers and the
 // page-locked host mirrors that copies go through live as long as the executor and only grow, so
 // a steady stream of batches does not allocate; copies run asynchronously on the stream, and the
 // host waits only where the driver asks (a small chunk: once); the model is uploaded once.
@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -17,11 +18,11 @@
 
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
-#include <cub/device/device_segmented_sort.cuh>
 #include <cub/device/device_select.cuh>
 #include <cuda_runtime.h>
 #include <thrust/iterator/counting_iterator.h>
 
+#include "rastercheck/collision/PassRecorder.h"
 #include "rastercheck/collision/StageChunks.h"
 
 namespace rastercheck::cuda
@@ -142,10 +143,43 @@ private:
 using DeviceAllocation = Allocation<false>;
 using PinnedAllocation = Allocation<true>;
 
+/** \brief A pass compiled by PassRecorder: the CUDA graph captured from its operations, or none
+    where capturing failed (its operations are then issued one by one, as before). */
+class GraphExec
+{
+public:
+    explicit GraphExec(cudaGraphExec_t exec = nullptr) : exec_(exec) {}
+    GraphExec(GraphExec &&other) noexcept : exec_(other.exec_) { other.exec_ = nullptr; }
+    GraphExec &operator=(GraphExec &&) = delete;
+    GraphExec(const GraphExec &) = delete;
+    GraphExec &operator=(const GraphExec &) = delete;
+    ~GraphExec()
+    {
+        if (exec_)
+            cudaGraphExecDestroy(exec_);  // one still running is freed when it ends
+    }
+
+    cudaGraphExec_t get() const { return exec_; }
+
+private:
+    cudaGraphExec_t exec_;
+};
+
+/** \brief Whether small passes may be replayed as CUDA graphs: yes unless RASTERCHECK_CUDA_GRAPHS=0
+    (to measure one against the other in the same run, scripts/gpu-check.sh). */
+bool graphsAllowed()
+{
+    const char *setting = std::getenv("RASTERCHECK_CUDA_GRAPHS");
+    return !(setting && std::strcmp(setting, "0") == 0);
+}
+
 class CudaExecutor
 {
 public:
-    CudaExecutor() { check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate"); }
+    CudaExecutor() : graphs_(graphsAllowed())
+    {
+        check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
+    }
     ~CudaExecutor()
     {
         cudaStreamSynchronize(stream_);  // no copy may still use a mirror
@@ -174,9 +208,14 @@ public:
         if (count == 0)
             return destination;
         T *staged = static_cast<T *>(mirror(slot, count * sizeof(T), true));
-        std::memcpy(staged, source, count * sizeof(T));
-        check(cudaMemcpyAsync(destination, staged, count * sizeof(T), cudaMemcpyHostToDevice, stream_),
-              "cudaMemcpyAsync (upload)");
+        const std::size_t bytes = count * sizeof(T);
+        std::memcpy(staged, source, bytes);  // now: the copy to the device may run later
+        recorder_.issue(
+            [this, destination, staged, bytes] {
+                check(cudaMemcpyAsync(destination, staged, bytes, cudaMemcpyHostToDevice, stream_),
+                      "cudaMemcpyAsync (upload)");
+            },
+            kUpload, destination, staged, bytes);
         return destination;
     }
 
@@ -188,14 +227,38 @@ public:
         if (count == 0)
             return static_cast<const T *>(mirrors_[static_cast<std::size_t>(slot)].pointer());
         T *host = static_cast<T *>(mirror(slot, count * sizeof(T), false));
-        check(cudaMemcpyAsync(host, source, count * sizeof(T), cudaMemcpyDeviceToHost, stream_),
-              "cudaMemcpyAsync (download)");
+        const std::size_t bytes = count * sizeof(T);
+        recorder_.issue(
+            [this, host, source, bytes] {
+                check(cudaMemcpyAsync(host, source, bytes, cudaMemcpyDeviceToHost, stream_),
+                      "cudaMemcpyAsync (download)");
+            },
+            kDownload, host, source, bytes);
         return host;
     }
 
-    /** \brief The host waits for everything queued on the stream. */
+    /** \brief What is issued until the next wait() may be recorded (PassRecorder): a pass seen
+        twice before runs as one CUDA graph. */
+    void beginReplayable()
+    {
+        if (graphs_)
+            recorder_.begin();
+    }
+
+    /** \brief The host waits for everything queued on the stream (a recorded pass issued first). */
     void wait()
     {
+        bool replayed = false;  // as a graph (a pass whose capture failed is issued one by one)
+        const auto issued = recorder_.finish([this](std::vector<Operation> &operations) { return compile(operations); },
+                                             [&](GraphExec &graph, std::vector<Operation> &operations)
+                                             {
+                                                 if (!graph.get())
+                                                     return Recorder::issueAll(operations);
+                                                 check(cudaGraphLaunch(graph.get(), stream_), "cudaGraphLaunch");
+                                                 replayed = true;
+                                             });
+        counts_.compiledPasses += issued == Recorder::Issued::CompiledNow ? 1 : 0;
+        counts_.replayedPasses += replayed ? 1 : 0;
         check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
         ++counts_.synchronizations;
         mirrorInUse_.fill(false);
@@ -209,9 +272,14 @@ public:
     {
         if (n == 0)
             return;
-        forEachKernel<<<blocksFor(n), kThreads, 0, stream_>>>(n, f);
-        check(cudaGetLastError(), "kernel launch");
         ++counts_.launches;
+        recorder_.issue(
+            [this, n, f]
+            {
+                forEachKernel<<<blocksFor(n), kThreads, 0, stream_>>>(n, f);
+                check(cudaGetLastError(), "kernel launch");
+            },
+            reinterpret_cast<const void *>(&forEachKernel<F>), n, f);
     }
 
     /** \brief forEach for a stage whose per-element code is register-heavy (forEachHeavyKernel). */
@@ -220,9 +288,14 @@ public:
     {
         if (n == 0)
             return;
-        forEachHeavyKernel<<<blocksFor(n), kThreads, 0, stream_>>>(n, f);
-        check(cudaGetLastError(), "kernel launch");
         ++counts_.launches;
+        recorder_.issue(
+            [this, n, f]
+            {
+                forEachHeavyKernel<<<blocksFor(n), kThreads, 0, stream_>>>(n, f);
+                check(cudaGetLastError(), "kernel launch");
+            },
+            reinterpret_cast<const void *>(&forEachHeavyKernel<F>), n, f);
     }
 
     /** \brief f(i) for i below the extent's count, read on the device: a thread per element of its
@@ -232,9 +305,14 @@ public:
     {
         if (extent.bound == 0)
             return;
-        forEachCountedKernel<<<blocksFor(extent.bound), kThreads, 0, stream_>>>(extent, f);
-        check(cudaGetLastError(), "kernel launch");
         ++counts_.launches;
+        recorder_.issue(
+            [this, extent, f]
+            {
+                forEachCountedKernel<<<blocksFor(extent.bound), kThreads, 0, stream_>>>(extent, f);
+                check(cudaGetLastError(), "kernel launch");
+            },
+            reinterpret_cast<const void *>(&forEachCountedKernel<F>), extent, f);
     }
 
     /** \brief The indices i < n with flags[i] set into \a selected, their number into *count
@@ -243,17 +321,26 @@ public:
     {
         if (n == 0)
         {
-            check(cudaMemsetAsync(count, 0, sizeof(*count), stream_), "cudaMemsetAsync (count)");
+            recorder_.issue([this, count]
+                            { check(cudaMemsetAsync(count, 0, sizeof(*count), stream_), "cudaMemsetAsync (count)"); },
+                            kZeroCount, count);
             return;
         }
         const thrust::counting_iterator<std::uint32_t> indices(0);
+        const auto items = static_cast<std::int64_t>(n);
         std::size_t bytes = 0;
-        check(cub::DeviceSelect::Flagged(nullptr, bytes, indices, flags, selected, count, static_cast<std::int64_t>(n), stream_),
+        check(cub::DeviceSelect::Flagged(nullptr, bytes, indices, flags, selected, count, items, stream_),
               "cub::DeviceSelect::Flagged (size)");
-        check(cub::DeviceSelect::Flagged(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, indices, flags, selected,
-                                         count, static_cast<std::int64_t>(n), stream_),
-              "cub::DeviceSelect::Flagged");
+        void *temp = reserve(temp_, bytes, "cudaMalloc (CUB scratch)");
         ++counts_.launches;
+        recorder_.issue(
+            [=]
+            {
+                std::size_t size = bytes;  // CUB takes it by reference
+                check(cub::DeviceSelect::Flagged(temp, size, indices, flags, selected, count, items, stream_),
+                      "cub::DeviceSelect::Flagged");
+            },
+            kSelect, temp, bytes, flags, selected, count, items);
     }
 
     /** \brief order = 0..n-1 stably sorted by keys[i] (each below numKeys): CUB's radix sort (LSD,
@@ -271,18 +358,25 @@ public:
             static_cast<std::uint32_t *>(reserve(keysAlt_, n * sizeof(std::uint32_t), "cudaMalloc (sort keys)"));
         auto *indices =
             static_cast<std::uint32_t *>(reserve(valuesAlt_, n * sizeof(std::uint32_t), "cudaMalloc (sort values)"));
-        constexpr unsigned threads = 256;
-        iotaKernel<<<static_cast<unsigned>((n + threads - 1) / threads), threads, 0, stream_>>>(indices, n);
-        check(cudaGetLastError(), "kernel launch (iota)");
         const auto items = static_cast<std::int64_t>(n);
         std::size_t bytes = 0;
         check(
             cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys, sortedKeys, indices, order, items, 0, bits, stream_),
             "cub::DeviceRadixSort::SortPairs (size)");
-        check(cub::DeviceRadixSort::SortPairs(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, keys,
-                                              sortedKeys, indices, order, items, 0, bits, stream_),
-              "cub::DeviceRadixSort::SortPairs");
+        void *temp = reserve(temp_, bytes, "cudaMalloc (CUB scratch)");
         counts_.launches += 2;  // with the iota
+        recorder_.issue(
+            [=]
+            {
+                constexpr unsigned threads = 256;
+                iotaKernel<<<static_cast<unsigned>((n + threads - 1) / threads), threads, 0, stream_>>>(indices, n);
+                check(cudaGetLastError(), "kernel launch (iota)");
+                std::size_t size = bytes;
+                check(cub::DeviceRadixSort::SortPairs(temp, size, keys, sortedKeys, indices, order, items, 0, bits,
+                                                      stream_),
+                      "cub::DeviceRadixSort::SortPairs");
+            },
+            kOrder, temp, bytes, keys, sortedKeys, indices, order, items, bits);
     }
 
     /** \brief out[i] = sum of in[0..i); the inputs end with a zero, so the last output is the
@@ -291,47 +385,103 @@ public:
     {
         std::size_t bytes = 0;
         check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, n, stream_), "cub::DeviceScan::ExclusiveSum (size)");
-        check(cub::DeviceScan::ExclusiveSum(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes, in, out, n, stream_),
-              "cub::DeviceScan::ExclusiveSum");
+        void *temp = reserve(temp_, bytes, "cudaMalloc (CUB scratch)");
         ++counts_.launches;
-        check(cudaMemcpyAsync(total, out + (n - 1), sizeof(*total), cudaMemcpyDeviceToDevice, stream_),
-              "cudaMemcpyAsync (scan total)");
+        recorder_.issue(
+            [=]
+            {
+                std::size_t size = bytes;
+                check(cub::DeviceScan::ExclusiveSum(temp, size, in, out, n, stream_), "cub::DeviceScan::ExclusiveSum");
+                check(cudaMemcpyAsync(total, out + (n - 1), sizeof(*total), cudaMemcpyDeviceToDevice, stream_),
+                      "cudaMemcpyAsync (scan total)");
+            },
+            kScan, temp, bytes, in, out, n, total);
     }
 
-    /** \brief Stable sort of each segment by key. The sorted pairs may end in the other buffers of
-        CUB's double buffers (no copy back): \a keys and \a values then point there. Elements
-        outside the segments (past the fragments' count) are not read. */
-    void sortSegments(unsigned long long *&keys, std::uint32_t *&values, std::size_t n, const std::uint32_t *starts,
-                      std::uint32_t numSegments)
+    /** \brief Stable sort of the \a n (key, value) pairs by key (every key below 2^\a keyBits):
+        CUB's radix sort, which does not make the host wait, into the executor's other key and
+        value buffers, where \a keys and \a values then point (known when the sort is issued, so
+        that a recorded pass needs nothing from it). */
+    void sortByKey(unsigned long long *&keys, std::uint32_t *&values, std::size_t n, int keyBits)
     {
-        if (n == 0 || numSegments == 0)
+        if (n == 0)
             return;
-        auto *keysAlternate =
-            static_cast<unsigned long long *>(reserve(keysAlt_, n * sizeof(unsigned long long), "cudaMalloc (sort keys)"));
-        auto *valuesAlternate =
+        auto *sortedKeys = static_cast<unsigned long long *>(
+            reserve(keysAlt_, n * sizeof(unsigned long long), "cudaMalloc (sort keys)"));
+        auto *sortedValues =
             static_cast<std::uint32_t *>(reserve(valuesAlt_, n * sizeof(std::uint32_t), "cudaMalloc (sort values)"));
+        const unsigned long long *inKeys = keys;
+        const std::uint32_t *inValues = values;
         const auto items = static_cast<std::int64_t>(n);
         std::size_t bytes = 0;
-        {
-            cub::DoubleBuffer<unsigned long long> keyBuffers(keys, keysAlternate);
-            cub::DoubleBuffer<std::uint32_t> valueBuffers(values, valuesAlternate);
-            check(cub::DeviceSegmentedSort::StableSortPairs(nullptr, bytes, keyBuffers, valueBuffers, items, numSegments,
-                                                            starts, starts + 1, stream_),
-                  "cub::DeviceSegmentedSort::StableSortPairs (size)");
-        }
-        cub::DoubleBuffer<unsigned long long> keyBuffers(keys, keysAlternate);
-        cub::DoubleBuffer<std::uint32_t> valueBuffers(values, valuesAlternate);
-        check(cub::DeviceSegmentedSort::StableSortPairs(reserve(temp_, bytes, "cudaMalloc (CUB scratch)"), bytes,
-                                                        keyBuffers, valueBuffers, items, numSegments, starts,
-                                                        starts + 1, stream_),
-              "cub::DeviceSegmentedSort::StableSortPairs");
+        check(cub::DeviceRadixSort::SortPairs(nullptr, bytes, inKeys, sortedKeys, inValues, sortedValues, items, 0,
+                                              keyBits, stream_),
+              "cub::DeviceRadixSort::SortPairs (size)");
+        void *temp = reserve(temp_, bytes, "cudaMalloc (CUB scratch)");
         ++counts_.launches;
-        keys = keyBuffers.Current();
-        values = valueBuffers.Current();
+        recorder_.issue(
+            [=]
+            {
+                std::size_t size = bytes;
+                check(cub::DeviceRadixSort::SortPairs(temp, size, inKeys, sortedKeys, inValues, sortedValues, items, 0,
+                                                      keyBits, stream_),
+                      "cub::DeviceRadixSort::SortPairs");
+            },
+            kSort, temp, bytes, inKeys, sortedKeys, inValues, sortedValues, items, keyBits);
+        keys = sortedKeys;
+        values = sortedValues;
     }
 
 private:
     static constexpr unsigned kThreads = kBlockThreads;
+    using Recorder = PassRecorder<GraphExec>;
+    using Operation = Recorder::Operation;
+    /** \brief Tags of the operations that are not kernels of the driver's, in signatures. */
+    enum OperationTag : int
+    {
+        kUpload,
+        kDownload,
+        kZeroCount,
+        kSelect,
+        kOrder,
+        kScan,
+        kSort
+    };
+
+    /** \brief A pass's operations captured as a CUDA graph, which is launched. Where capturing
+        fails, nothing has run: the operations are issued one by one, now and at each replay. */
+    GraphExec compile(std::vector<Operation> &operations)
+    {
+        cudaGraph_t graph = nullptr;
+        cudaGraphExec_t exec = nullptr;
+        bool captured = cudaStreamBeginCapture(stream_, cudaStreamCaptureModeRelaxed) == cudaSuccess;
+        if (captured)
+        {
+            try
+            {
+                Recorder::issueAll(operations);
+            }
+            catch (const std::exception &)
+            {
+                captured = false;
+            }
+            captured = cudaStreamEndCapture(stream_, &graph) == cudaSuccess && captured && graph;
+            captured = captured && cudaGraphInstantiate(&exec, graph, 0) == cudaSuccess;
+            if (graph)
+                cudaGraphDestroy(graph);
+        }
+        if (!captured)
+        {
+            cudaGetLastError();  // a failed capture must not resurface at the next launch check
+            if (exec)
+                cudaGraphExecDestroy(exec);
+            Recorder::issueAll(operations);
+            return GraphExec();
+        }
+        GraphExec compiled(exec);
+        check(cudaGraphLaunch(compiled.get(), stream_), "cudaGraphLaunch");
+        return compiled;
+    }
 
     static unsigned blocksFor(std::size_t n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
 
@@ -348,6 +498,7 @@ private:
             wait();
         if (grows)
         {
+            recorder_.interrupt();  // what it recorded may copy through this mirror
             if (!m.grow(bytes, SIZE_MAX, "cudaMallocHost (host mirror)"))
                 throw std::runtime_error("CUDA: no page-locked host memory for a host mirror of " +
                                          std::to_string(bytes) + " bytes");
@@ -365,6 +516,7 @@ private:
         if (need <= a.bytes())
             return a.pointer();
         const std::size_t room = scratchRoom(maxScratchBytes_, heldBytes() - a.bytes());
+        recorder_.interrupt();  // what it recorded may use this allocation
         if (need > room || !a.grow(need, room, what))
         {
             releaseScratch();
@@ -384,6 +536,8 @@ private:
 
     void releaseScratch()
     {
+        recorder_.discard();
+        recorder_.forget();  // their graphs use this memory
         for (DeviceAllocation &a : buffers_)
             a.release();
         temp_.release();
@@ -399,6 +553,8 @@ private:
     DeviceAllocation temp_, keysAlt_, valuesAlt_;
     std::array<PinnedAllocation, device::kNumStageBuffers> mirrors_;
     std::array<bool, device::kNumStageBuffers> mirrorInUse_{};  // a queued copy reads or writes it
+    bool graphs_;
+    Recorder recorder_;
 };
 
 /** \brief A host array copied to the device once. */
@@ -488,11 +644,10 @@ public:
 
         // Budgets: the caller's limit, else half the free memory (the rest is left to others),
         // split between the stages' buffers by bytes per element: fragments 56 (key, value, their
-        // sorted copies, the walk's fragment, CUB's own sort buffers), (pair, triangle) items 20,
-        // (state, pair) elements 8, states perState; what is left covers the surviving pairs'
-        // buffers (in a chunk below StageBudget::waitForCountsFrom sized by its (state, pair)
-        // elements, a few hundred bytes each) and CUB's scratch. The scratch limit enforces the sum
-        // (StageMemoryExhausted).
+        // sorted copies, the rasterized and the walk's fragment: 40; CUB's own sort scratch), (pair, triangle) items
+        // 20, (state, pair) elements 8, states perState; what is left covers the surviving pairs' buffers (in a chunk
+        // below StageBudget::waitForCountsFrom sized by its (state, pair) elements, a few hundred bytes each) and CUB's
+        // scratch. The scratch limit enforces the sum (StageMemoryExhausted).
         std::size_t freeBytes = 0, totalBytes = 0;
         check(cudaMemGetInfo(&freeBytes, &totalBytes), "cudaMemGetInfo");
         const std::size_t usable = memoryLimit > 0 ? std::min(memoryLimit, freeBytes) : freeBytes / 2;

@@ -226,14 +226,24 @@ TEST_F(PandaOnTheGpu, ABatchOf32StatesWaitsOnceAndAllocatesNothingAfterTheFirst)
             EXPECT_EQ(counts.synchronizations, 1u) << n << " states, call " << call;
             EXPECT_EQ(counts.allocations, 0u) << n << " states, call " << call;
             EXPECT_EQ(counts.reruns, 0u) << n << " states, call " << call;
+            // Recorded, then compiled (captured as a CUDA graph), then replayed (PassRecorder).
+            EXPECT_EQ(counts.replayedPasses, call >= 2 ? 1u : 0u) << n << " states, call " << call;
             EXPECT_EQ(valid, expected) << n << " states, call " << call;
-            if (call == 0)
-                std::printf("%zu states: %llu launches, %llu wait, %llu allocations per call\n", n, counts.launches,
-                            counts.synchronizations, counts.allocations);
+            if (call == 0 || call == 2)
+                std::printf("%zu states: %llu launches, %llu wait, %llu allocations, %llu graph replays per call\n", n,
+                            counts.launches, counts.synchronizations, counts.allocations, counts.replayedPasses);
         }
         std::sort(microseconds.begin(), microseconds.end());
         std::printf("%zu states: %.0f us per call (median of 20, host clock), fastest %.0f us\n", n,
                     microseconds[microseconds.size() / 2], microseconds.front());
+
+        // Other states, as many: the same graph, their own verdicts.
+        const std::vector<double> others = rc::test::randomStates(*panda_->robot, n, 22);
+        cpu_->check(others.data(), n, expected.data(), nullptr, {}, 0);
+        const rc::device::ExecutorCounts before = staged->executorCounts();
+        gpu_->check(others.data(), n, valid.data());
+        EXPECT_EQ(staged->executorCounts().since(before).replayedPasses, 1u) << n << " states";
+        EXPECT_EQ(valid, expected) << n << " other states";
     }
 }
 

@@ -481,6 +481,65 @@ TEST(StagedPipeline, ASmallBatchWaitsOnceAndAllocatesNothingAfterTheFirst)
     EXPECT_GT(stages.fragments, 0u);
 }
 
+TEST(StagedPipeline, ABatchSeenTwiceIsReplayedFromItsThirdCallWithTheNewStatesVerdicts)
+{
+    // A small chunk with its counts guessed issues everything before its one wait without reading
+    // anything back, so the executor records it (PassRecorder): a pass that issues exactly what an
+    // earlier one did is compiled the second time (on a GPU captured as a CUDA graph) and replayed
+    // from the third on (one graph launch). The states and paddings are data the pass uploads, not
+    // what it issues: new states of the same count replay, with their own verdicts.
+    const rc::test::StateSuite suite = suiteNamed("thin plate at 1e6 m", 32);  // rasterizes in safe mode
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    const rc::StagedBackend staged(model, poisonedStages(model));
+    std::vector<std::uint8_t> valid;
+    const rc::CollisionRequest safe;
+
+    const rc::device::ExecutorCounts first = oneCall(staged, suite, safe, valid);
+    EXPECT_EQ(first.compiledPasses + first.replayedPasses, 0u) << "the first call measures its counts";
+    const rc::device::ExecutorCounts second = oneCall(staged, suite, safe, valid);
+    EXPECT_EQ(second.compiledPasses + second.replayedPasses, 0u) << "seen for the first time";
+    const rc::device::ExecutorCounts third = oneCall(staged, suite, safe, valid);
+    EXPECT_EQ(third.compiledPasses, 1u);
+    EXPECT_EQ(third.replayedPasses, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
+
+    // The same count of other states: the suite's rows reversed.
+    rc::test::StateSuite reversed = suite;
+    const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
+    for (std::size_t i = 0; i < n; ++i)
+        std::copy_n(suite.states.begin() + static_cast<std::ptrdiff_t>((n - 1 - i) * dof), dof,
+                    reversed.states.begin() + static_cast<std::ptrdiff_t>(i * dof));
+    const std::vector<std::uint8_t> expected = cpuVerdicts(model, reversed, safe);
+    ASSERT_NE(expected, cpuVerdicts(model, suite, safe)) << "the reversed states must have other verdicts";
+    for (int call = 0; call < 2; ++call)
+    {
+        const rc::device::ExecutorCounts again = oneCall(staged, call == 0 ? reversed : suite, safe, valid);
+        EXPECT_EQ(again.replayedPasses, 1u) << "call " << call;
+        EXPECT_EQ(again.compiledPasses, 0u);
+        EXPECT_EQ(again.synchronizations, 1u);
+        EXPECT_EQ(again.launches, third.launches) << "a replay issues what the pass issued";
+        EXPECT_EQ(valid, call == 0 ? expected : cpuVerdicts(model, suite, safe)) << "call " << call;
+    }
+
+    // Another count is another pass: recorded, not replayed; the first one's is kept.
+    const rc::test::StateSuite fewer = suiteNamed("thin plate at 1e6 m", 31);
+    const rc::device::ExecutorCounts other = oneCall(staged, fewer, safe, valid);
+    EXPECT_EQ(other.compiledPasses + other.replayedPasses, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, fewer, safe));
+    EXPECT_EQ(oneCall(staged, suite, safe, valid).replayedPasses, 1u);
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
+
+    // Another request (a padding) issues other kernel arguments: a pass of its own.
+    rc::CollisionRequest padded;
+    padded.padding = 0.01;
+    for (int call = 0; call < 3; ++call)
+    {
+        const rc::device::ExecutorCounts counts = oneCall(staged, suite, padded, valid);
+        EXPECT_EQ(counts.replayedPasses, call == 2 ? 1u : 0u) << "call " << call;
+        EXPECT_EQ(valid, cpuVerdicts(model, suite, padded)) << "call " << call;
+    }
+}
+
 TEST(StagedPipeline, ALargerBatchRunsAgainAtMostOnceThenWaitsOnce)
 {
     // A batch that needs more candidate triangles or fragments than the executor's earlier ones

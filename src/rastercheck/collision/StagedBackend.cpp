@@ -7,6 +7,7 @@
 #include <string>
 
 #include "rastercheck/collision/ModeRules.h"
+#include "rastercheck/collision/PassRecorder.h"
 #include "rastercheck/collision/StageChunks.h"
 
 namespace rastercheck
@@ -93,6 +94,11 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
 
 namespace
 {
+/** \brief What the host executor compiles of a pass: nothing (its operations run again). */
+struct NoGraph
+{
+};
+
 /** \brief The stages' primitives as host loops (OpenMP), for running the GPU's driver on the CPU.
     Its memory is the host's, so copies need no mirrors and waits wait for nothing, but it counts
     launches and waits where the CUDA executor makes them. */
@@ -114,10 +120,12 @@ public:
             const std::size_t room = scratchRoom(maxScratchBytes_, heldBytes() - storage.size());
             if (need > room)
             {
+                recorder_.discard();  // the chunk is abandoned
                 for (std::vector<unsigned char> &b : buffers_)
                     std::vector<unsigned char>().swap(b);
                 throw scratchExhausted("stage buffer " + std::to_string(slot), need, room, maxScratchBytes_);
             }
+            recorder_.interrupt();  // what it recorded may use this buffer's storage
             storage.resize(need);
             ++counts_.allocations;
         }
@@ -143,7 +151,24 @@ public:
         return source;
     }
 
-    void wait() { ++counts_.synchronizations; }
+    /** \brief The launches until the next wait() may be recorded and issued there (PassRecorder):
+        on the GPU, as one CUDA graph from a pass's third time on; here, the same recording and
+        signatures, each pass's operations run at its wait, and counts of what a GPU would replay. */
+    void beginReplayable() { recorder_.begin(); }
+
+    void wait()
+    {
+        const auto issued = recorder_.finish(
+            [](std::vector<Operation> &operations)
+            {
+                Recorder::issueAll(operations);
+                return NoGraph{};
+            },
+            [](NoGraph &, std::vector<Operation> &operations) { Recorder::issueAll(operations); });
+        counts_.compiledPasses += issued == Recorder::Issued::CompiledNow ? 1 : 0;
+        counts_.replayedPasses += issued == Recorder::Issued::Replayed ? 1 : 0;
+        ++counts_.synchronizations;
+    }
 
     device::ExecutorCounts &counts() { return counts_; }
     device::CountGuesses &guesses() { return guesses_; }
@@ -154,9 +179,7 @@ public:
         if (n == 0)
             return;
         ++counts_.launches;
-#pragma omp parallel for schedule(static)
-        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
-            f(static_cast<std::size_t>(i));
+        recorder_.issue([n, f] { loop(n, f); }, kernelId<F>(), n, f);
     }
 
     /** \brief The GPU holds these kernels to fewer registers; here the same loop. */
@@ -173,21 +196,22 @@ public:
         if (extent.bound == 0)
             return;
         ++counts_.launches;
-        const std::size_t n = extent.size();
-#pragma omp parallel for schedule(static)
-        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
-            f(static_cast<std::size_t>(i));
+        recorder_.issue([extent, f] { loop(extent.size(), f); }, kernelId<F>(), extent, f);  // the count as it is then
     }
 
     void selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected, unsigned long long *count)
     {
-        *count = 0;
-        if (n == 0)
-            return;
-        ++counts_.launches;
-        for (std::size_t i = 0; i < n; ++i)
-            if (flags[i])
-                selected[(*count)++] = static_cast<std::uint32_t>(i);
+        if (n > 0)
+            ++counts_.launches;
+        recorder_.issue(
+            [=]
+            {
+                *count = 0;
+                for (std::size_t i = 0; i < n; ++i)
+                    if (flags[i])
+                        selected[(*count)++] = static_cast<std::uint32_t>(i);
+            },
+            flags, n, selected, count);
     }
 
     /** \brief order = 0..n-1 stably sorted by keys[i] (each below numKeys): a counting sort. */
@@ -196,13 +220,18 @@ public:
         if (n == 0)
             return;
         counts_.launches += 2;  // the GPU's iota and radix sort
-        std::vector<std::size_t> next(static_cast<std::size_t>(numKeys) + 1, 0);
-        for (std::size_t i = 0; i < n; ++i)
-            ++next[keys[i] + 1];
-        for (std::uint32_t k = 0; k < numKeys; ++k)
-            next[k + 1] += next[k];
-        for (std::size_t i = 0; i < n; ++i)
-            order[next[keys[i]]++] = static_cast<std::uint32_t>(i);
+        recorder_.issue(
+            [=]
+            {
+                std::vector<std::size_t> next(static_cast<std::size_t>(numKeys) + 1, 0);
+                for (std::size_t i = 0; i < n; ++i)
+                    ++next[keys[i] + 1];
+                for (std::uint32_t k = 0; k < numKeys; ++k)
+                    next[k + 1] += next[k];
+                for (std::size_t i = 0; i < n; ++i)
+                    order[next[keys[i]]++] = static_cast<std::uint32_t>(i);
+            },
+            keys, n, numKeys, order);
     }
 
     /** \brief out[i] = sum of in[0..i) (in and out may alias); the inputs end with a zero, so the
@@ -210,48 +239,87 @@ public:
     void exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n, unsigned long long *total)
     {
         ++counts_.launches;
-        unsigned long long sum = 0;
-        for (std::size_t i = 0; i < n; ++i)
-        {
-            const unsigned long long value = in[i];
-            out[i] = sum;
-            sum += value;
-        }
-        *total = n > 0 ? out[n - 1] : 0;
+        recorder_.issue(
+            [=]
+            {
+                unsigned long long sum = 0;
+                for (std::size_t i = 0; i < n; ++i)
+                {
+                    const unsigned long long value = in[i];
+                    out[i] = sum;
+                    sum += value;
+                }
+                *total = n > 0 ? out[n - 1] : 0;
+            },
+            in, out, n, total);
     }
 
-    /** \brief Stable sort of each segment [starts[s], starts[s + 1]) by key, in place (the GPU's
-        may leave the result in other buffers, and moves \a keys and \a values there). */
-    void sortSegments(unsigned long long *&keys, std::uint32_t *&values, std::size_t n, const std::uint32_t *starts,
-                      std::uint32_t numSegments)
+    /** \brief Stable sort of the \a n (key, value) pairs by key (every key below 2^\a keyBits), in
+        place (the GPU's may leave the result in other buffers, and moves \a keys and \a values
+        there): an LSD radix sort, as the GPU's. */
+    void sortByKey(unsigned long long *&keys, std::uint32_t *&values, std::size_t n, int keyBits)
     {
-        if (n == 0 || numSegments == 0)
+        if (n == 0)
             return;
         ++counts_.launches;
-        unsigned long long *const k = keys;
-        std::uint32_t *const v = values;
-#pragma omp parallel
-        {
-            std::vector<std::pair<unsigned long long, std::uint32_t>> scratch;
-#pragma omp for schedule(dynamic, 64)
-            for (std::ptrdiff_t s = 0; s < static_cast<std::ptrdiff_t>(numSegments); ++s)
-            {
-                const std::uint32_t begin = starts[s], end = starts[s + 1];
-                scratch.clear();
-                for (std::uint32_t i = begin; i < end; ++i)
-                    scratch.emplace_back(k[i], v[i]);
-                std::stable_sort(scratch.begin(), scratch.end(),
-                                 [](const auto &a, const auto &b) { return a.first < b.first; });
-                for (std::uint32_t i = begin; i < end; ++i)
-                {
-                    k[i] = scratch[i - begin].first;
-                    v[i] = scratch[i - begin].second;
-                }
-            }
-        }
+        recorder_.issue([this, keys, values, n, keyBits] { radixSort(keys, values, n, keyBits); }, keys, values, n,
+                        keyBits);
     }
 
 private:
+    using Recorder = PassRecorder<NoGraph>;
+    using Operation = Recorder::Operation;
+
+    void radixSort(unsigned long long *keys, std::uint32_t *values, std::size_t n, int keyBits)
+    {
+        constexpr int kDigitBits = 8;
+        constexpr std::size_t kDigits = std::size_t{1} << kDigitBits;
+        if (sortKeys_.size() < n)
+        {
+            sortKeys_.resize(n);
+            sortValues_.resize(n);
+        }
+        unsigned long long *fromKeys = keys, *toKeys = sortKeys_.data();
+        std::uint32_t *fromValues = values, *toValues = sortValues_.data();
+        for (int shift = 0; shift < keyBits; shift += kDigitBits)
+        {
+            std::array<std::size_t, kDigits + 1> next{};
+            for (std::size_t i = 0; i < n; ++i)
+                ++next[((fromKeys[i] >> shift) & (kDigits - 1)) + 1];
+            for (std::size_t d = 0; d < kDigits; ++d)
+                next[d + 1] += next[d];
+            for (std::size_t i = 0; i < n; ++i)
+            {
+                const std::size_t slot = next[(fromKeys[i] >> shift) & (kDigits - 1)]++;
+                toKeys[slot] = fromKeys[i];
+                toValues[slot] = fromValues[i];
+            }
+            std::swap(fromKeys, toKeys);
+            std::swap(fromValues, toValues);
+        }
+        if (fromKeys != keys)
+        {
+            std::copy(fromKeys, fromKeys + n, keys);
+            std::copy(fromValues, fromValues + n, values);
+        }
+    }
+
+    template <class F>
+    static void loop(std::size_t n, const F &f)
+    {
+#pragma omp parallel for schedule(static)
+        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
+            f(static_cast<std::size_t>(i));
+    }
+
+    /** \brief One value per per-element function type, as a kernel's address on the GPU. */
+    template <class F>
+    static const void *kernelId()
+    {
+        static const char id = 0;
+        return &id;
+    }
+
     std::size_t heldBytes() const
     {
         std::size_t total = 0;
@@ -265,6 +333,9 @@ private:
     device::ExecutorCounts counts_;
     device::CountGuesses guesses_;
     std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
+    std::vector<unsigned long long> sortKeys_;  // sortByKey's other buffers
+    std::vector<std::uint32_t> sortValues_;
+    Recorder recorder_;
 };
 
 class HostStageRunner : public PooledStageRunner<HostExecutor>

@@ -2,7 +2,7 @@
 
 // The batched pipeline: many states decided in one pass, stage by stage, each stage one data-
 // parallel loop over its elements (a kernel on the GPU). The driver is a template over an
-// executor that provides the loops, scans, compaction, ordering by a small key and segmented
+// executor that provides the loops, scans, compaction, ordering by a small key and a stable
 // sort: the CUDA executor runs them as kernels and CUB calls (cuda/), the host executor as plain
 // loops (collision/HostStageRunner), so the CPU test suite runs exactly the code the GPU runs,
 // apart from those primitives.
@@ -16,8 +16,9 @@
 //      separation proof, the grid, and the candidate triangles (both meshes' trees walked with the
 //      node culls, counted, scanned, written); per (pair, candidate triangle): the per-triangle
 //      cull and the pre-rasterization fragment count; scan;
-//   4. rasterization into the counted slots; segmented sort by (pixel, depth) per pair;
-//   5. Sort_Search_Pair per pixel run; per pair the first hit pixel (atomic minimum); outcomes;
+//   4. rasterization into the counted slots; one stable sort by (pair, pixel);
+//   5. each pixel run sorted by depth, Sort_Search_Pair on it; per pair the first hit pixel
+//      (atomic minimum); outcomes;
 //   6. the exact phase (device/ExactPhase.h) on every pair still open, with its first contact;
 //      the per-state reduction's compaction: only the outcomes that decide a state come back.
 // The host finishes the reduction (the first colliding pair in pair order), confirms curved
@@ -41,8 +42,11 @@
 #include "rastercheck/device/SolidRelation.h"
 #include "rastercheck/device/Stages.h"
 
+// A stage's per-element function. Under nvcc a device lambda: the CUDA executor only launches it,
+// and its closure is a plain struct of the captured values, which a pass's signature compares
+// (PassRecorder); nvcc wraps a __host__ __device__ one in a type with its own copy constructor.
 #if defined(__CUDACC__)
-#define RC_LAMBDA __host__ __device__
+#define RC_LAMBDA __device__
 #else
 #define RC_LAMBDA
 #endif
@@ -299,6 +303,10 @@ struct ExecutorCounts
     unsigned long long launches = 0;          ///< kernels and CUB calls
     unsigned long long synchronizations = 0;  ///< waits of the host for the executor
     unsigned long long allocations = 0;       ///< scratch buffers (and on the GPU host mirrors) grown
+    /** Passes recorded after beginReplayable() whose signature was seen once before: compiled
+        (on the GPU captured as a CUDA graph), and seen compiled: replayed (one graph launch). */
+    unsigned long long compiledPasses = 0;
+    unsigned long long replayedPasses = 0;
     double seconds = 0;                       ///< host clock inside the passes (kernels, copies, waits)
 
     ExecutorCounts &operator+=(const ExecutorCounts &other)
@@ -309,6 +317,8 @@ struct ExecutorCounts
         launches += other.launches;
         synchronizations += other.synchronizations;
         allocations += other.allocations;
+        compiledPasses += other.compiledPasses;
+        replayedPasses += other.replayedPasses;
         seconds += other.seconds;
         return *this;
     }
@@ -321,6 +331,8 @@ struct ExecutorCounts
                               launches - earlier.launches,
                               synchronizations - earlier.synchronizations,
                               allocations - earlier.allocations,
+                              compiledPasses - earlier.compiledPasses,
+                              replayedPasses - earlier.replayedPasses,
                               seconds - earlier.seconds};
     }
 };
@@ -399,7 +411,7 @@ enum StageBuffer : int
     BufferKeys,
     BufferValues,
     BufferFragments,
-    BufferSegmentStart,
+    BufferRasterFragments,
     BufferHit,
     BufferOutcomes,
     BufferExactFlags,
@@ -865,6 +877,11 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     // large one for each count.
     CountGuesses &guesses = ex.guesses();
     const bool small = pairElements < budget.waitForCountsFrom && !guesses.outOfMemory;
+    // A small chunk whose counts are all guessed issues everything before its one wait without
+    // reading anything back: the executor may record it, and replay a pass it has seen before as
+    // one graph (PassRecorder).
+    if (small && (!settings.rasterize || guesses.measured))
+        ex.beginReplayable();
 
     const unsigned long long zeros[kNumTallies] = {};
     unsigned long long *tallies = ex.upload(BufferTallies, zeros, kNumTallies);
@@ -1081,9 +1098,17 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
         return ChunkPass::OverBudget;
     const Extent fragmentExtent{fragmentBound, tallies + TallyFragments};
 
-    // 4. Rasterization into the counted slots, keyed by (pixel, depth); sort within each pair.
+    // 4. Rasterization into the counted slots, each fragment keyed by (pair, pixel); one stable sort
+    // of the chunk's fragments by key puts each pair's pixel runs in order. The depth order within a
+    // run is step 5's (sortFragments, by depth and then code: the CPU's order). A sort within each
+    // pair's segment, keyed by (pixel, depth), has CUB copy its segment groups' sizes to the host
+    // and wait (past 500 segments, DeviceSegmentedSort), a second wait in every small chunk.
+    const int pixelBits = imagePixelBits(st.maxImageSide);
+    unsigned long long *hit = ex.template buffer<unsigned long long>(BufferHit, survivorBound + 1);
+    const int keyBits = bitsToNumber(numSegments) + pixelBits;  // pairs 0..numSegments, see below
     unsigned long long *keys = ex.template buffer<unsigned long long>(BufferKeys, fragmentBound + 1);
     std::uint32_t *values = ex.template buffer<std::uint32_t>(BufferValues, fragmentBound + 1);
+    Fragment *rasterFragments = ex.template buffer<Fragment>(BufferRasterFragments, fragmentBound + 1);
     ex.forEach(items, [=] RC_LAMBDA(std::size_t i) {
         if (!fragmentExtent.fits())
             return;
@@ -1093,47 +1118,57 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
         pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
         std::size_t slot = fragmentStart[i];
         rasterizePairTriangle(a, b, itemTriangles[i], grids[c], margins[c],
-                              [&](int pixel, float depth, std::uint32_t code) {
-                                  keys[slot] = (static_cast<unsigned long long>(pixel) << 32) | depthKey(depth);
-                                  values[slot] = code;
+                              [&](int pixel, float depth, std::uint32_t code)
+                              {
+                                  keys[slot] = fragmentKey(c, pixel, pixelBits);
+                                  values[slot] = static_cast<std::uint32_t>(slot);
+                                  rasterFragments[slot] = Fragment{depth, code};
                                   ++slot;
                               });
     });
-    // Pair c's fragments; past the survivors (or when a count outgrew its bound) empty segments.
-    // Each pair's first hit pixel (step 5) starts at none, in the same pass.
-    std::uint32_t *segmentStart = ex.template buffer<std::uint32_t>(BufferSegmentStart, survivorBound + 1);
-    unsigned long long *hit = ex.template buffer<unsigned long long>(BufferHit, survivorBound + 1);
-    ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t c) {
-        segmentStart[c] =
-            items.fits() && fragmentExtent.fits() ? static_cast<std::uint32_t>(fragmentStart[itemStart[c]]) : 0u;
-        hit[c] = ~0ull;
-    });
-    ex.sortSegments(keys, values, fragmentBound, segmentStart, numSegments);  // may move them to other buffers
+    // The slots past the fragments' count (a small chunk sorts its whole bound; all of them when a
+    // count outgrew its bound) keyed past every pair's, so that they sort last, and written whole,
+    // as the sort reads them; each pair's first hit pixel (step 5) starts at none, in the same pass.
+    const unsigned long long pastEveryPair = fragmentKey(numSegments, 0, pixelBits);
+    const std::size_t resetElements = fragmentBound > survivorBound + 1 ? fragmentBound : survivorBound + 1;
+    ex.forEach(resetElements,
+               [=] RC_LAMBDA(std::size_t k)
+               {
+                   if (k < fragmentBound && k >= fragmentExtent.size())
+                   {
+                       keys[k] = pastEveryPair;
+                       values[k] = static_cast<std::uint32_t>(k);
+                   }
+                   if (k <= survivorBound)
+                       hit[k] = ~0ull;
+               });
+    ex.sortByKey(keys, values, fragmentBound, keyBits);  // may move them to other buffers
 
     // 5. Sort_Search_Pair on each pixel's run; the first hit pixel of each pair.
     Fragment *fragments = ex.template buffer<Fragment>(BufferFragments, fragmentBound + 1);
-    ex.forEach(fragmentExtent, [=] RC_LAMBDA(std::size_t f) {
-        fragments[f] = Fragment{depthFromKey(static_cast<std::uint32_t>(keys[f])), values[f]};
-    });
-    ex.forEach(fragmentExtent, [=] RC_LAMBDA(std::size_t f) {
-        const std::uint32_t c = findSegment(segmentStart, numSegments, static_cast<std::uint32_t>(f));
-        const unsigned long long pixel = keys[f] >> 32;
-        if (f > segmentStart[c] && (keys[f - 1] >> 32) == pixel)
-            return;  // not the first fragment of its pixel's run
-        std::uint32_t end = static_cast<std::uint32_t>(f) + 1;
-        while (end < segmentStart[c + 1] && (keys[end] >> 32) == pixel)
-            ++end;
-        const int count = static_cast<int>(end - f);
-        if (count < 2)
-            return;
-        // The radix sort ordered by depth; ties take the CPU's order (by code) here.
-        sortFragments(fragments + f, count);
-        const std::size_t s = candidates[c] / pairs;
-        StageSolid a, b;
-        pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
-        if (sortSearchPair(fragments + f, count, a.slice.closed, b.slice.closed) >= 0)
-            atomicMinimum(&hit[c], (pixel << 32) | static_cast<unsigned long long>(f));
-    });
+    ex.forEach(fragmentExtent, [=] RC_LAMBDA(std::size_t f) { fragments[f] = rasterFragments[values[f]]; });
+    ex.forEach(fragmentExtent,
+               [=] RC_LAMBDA(std::size_t f)
+               {
+                   const unsigned long long key = keys[f];
+                   if (f > 0 && keys[f - 1] == key)
+                       return;  // not the first fragment of its pixel's run
+                   const std::size_t total = fragmentExtent.size();
+                   std::size_t end = f + 1;
+                   while (end < total && keys[end] == key)
+                       ++end;
+                   const int count = static_cast<int>(end - f);
+                   if (count < 2)
+                       return;
+                   sortFragments(fragments + f, count);
+                   const std::uint32_t c = pairOfKey(key, pixelBits);
+                   const std::size_t s = candidates[c] / pairs;
+                   StageSolid a, b;
+                   pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
+                   if (sortSearchPair(fragments + f, count, a.slice.closed, b.slice.closed) >= 0)
+                       atomicMinimum(&hit[c], (static_cast<unsigned long long>(pixelOfKey(key, pixelBits)) << 32) |
+                                                  static_cast<unsigned long long>(f));
+               });
 
     // Outcomes, in (state, pair) order.
     ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) {
@@ -1144,9 +1179,10 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             if (hit[c] != ~0ull)
             {
                 const int pixel = static_cast<int>(hit[c] >> 32);
-                const std::uint32_t run = static_cast<std::uint32_t>(hit[c] & 0xffffffffull);
-                std::uint32_t end = run + 1;
-                while (end < segmentStart[c + 1] && (keys[end] >> 32) == (hit[c] >> 32))
+                const std::size_t run = static_cast<std::size_t>(hit[c] & 0xffffffffull);
+                const std::size_t total = fragmentExtent.size();
+                std::size_t end = run + 1;
+                while (end < total && keys[end] == keys[run])
                     ++end;
                 const std::size_t s = out.state;
                 StageSolid a, b;
@@ -1177,10 +1213,11 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     The executor provides (the host's in collision/StagedBackend.cpp, the GPU's in cuda/):
     buffer(slot, n) (scratch in its memory, kept and grown), upload(slot, host, n) and
     download(slot, its, n) (copies through host mirrors; downloaded data is read after wait()),
-    wait() (the host waits for it: counted), forEach(n or Extent, f) (a kernel), forEachHeavy(n, f)
+    wait() (the host waits for it: counted), beginReplayable() (what is issued until the next wait
+    may be recorded and issued there, PassRecorder), forEach(n or Extent, f) (a kernel), forEachHeavy(n, f)
     (a kernel whose per-element code is register-heavy: the GPU holds it to fewer registers),
     selectFlagged, exclusiveSum (their counts and totals written to its memory, not waited for),
-    orderByKey, sortSegments, counts() (ExecutorCounts) and guesses() (CountGuesses). */
+    orderByKey, sortByKey, counts() (ExecutorCounts) and guesses() (CountGuesses). */
 template <class Exec>
 bool runStageChunk(Exec &ex, const ModelArrays &model, const StageSettings &settings, const StageBudget &budget,
                    const double *hostStates, const std::uint8_t *hostAdmissible, std::uint32_t numStates,

@@ -190,7 +190,7 @@ RC_HD int rasterizeTriangle(const RasterGrid &grid, const Vec3<float> &p0, const
 }
 
 /** \brief Sorts one pixel's fragments by depth (insertion sort: a pixel holds few fragments; the
-    GPU backend uses a segmented radix sort with the same order). */
+    batched stages group each pair's pixel runs by a radix sort and then sort each run here too). */
 RC_HD void sortFragments(Fragment *fragments, int count)
 {
     for (int i = 1; i < count; ++i)

@@ -2,7 +2,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 
 #include "rastercheck/device/Boxes.h"
 #include "rastercheck/device/HostDevice.h"
@@ -202,21 +201,39 @@ RC_HD std::uint32_t findSegment(const Offset *starts, std::uint32_t n, Offset i)
     return lo;
 }
 
-/** \brief Depth as an unsigned key whose order is the float order (-0 and +0 map together, as the
-    CPU's comparisons treat them), for radix sorting fragments. */
-RC_HD std::uint32_t depthKey(float depth)
+/** \brief Bits that number \a n + 1 values (0 to \a n). */
+RC_HD int bitsToNumber(unsigned long long n)
 {
-    const float normalized = depth + 0.0f;  // -0 -> +0
-    std::uint32_t bits;
-    memcpy(&bits, &normalized, sizeof bits);
-    return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+    int bits = 1;
+    while (bits < 64 && (n >> bits) != 0)
+        ++bits;
+    return bits;
 }
 
-RC_HD float depthFromKey(std::uint32_t key)
+/** \brief Bits that number the pixels of an image whose sides makeGrid holds to \a maxImageSide
+    (one more each, for its rounding). */
+RC_HD int imagePixelBits(int maxImageSide)
 {
-    const std::uint32_t bits = (key & 0x80000000u) ? (key & 0x7fffffffu) : ~key;
-    float depth;
-    memcpy(&depth, &bits, sizeof depth);
-    return depth;
+    const unsigned long long side = static_cast<unsigned long long>(maxImageSide) + 1;
+    return bitsToNumber(side * side - 1);
+}
+
+/** \brief A fragment's sort key in the stages: its pair's number in the chunk above the pixel's,
+    so that one stable sort of a chunk's fragments groups each pair's, and in it each pixel's, in
+    order (the depth order within a pixel is sortFragments'). A pair number of \a numPairs (one
+    past the chunk's) keys the slots past the fragments' count, after every real fragment. */
+RC_HD unsigned long long fragmentKey(std::size_t pair, int pixel, int pixelBits)
+{
+    return (static_cast<unsigned long long>(pair) << pixelBits) | static_cast<unsigned long long>(pixel);
+}
+
+RC_HD std::uint32_t pairOfKey(unsigned long long key, int pixelBits)
+{
+    return static_cast<std::uint32_t>(key >> pixelBits);
+}
+
+RC_HD int pixelOfKey(unsigned long long key, int pixelBits)
+{
+    return static_cast<int>(key & ((1ull << pixelBits) - 1));
 }
 }  // namespace rastercheck::device
