@@ -16,6 +16,7 @@
 #include "BackendSuites.h"
 #include "BlindSpots.h"
 #include "TestSupport.h"
+#include "rastercheck/collision/PassRecorder.h"
 #include "rastercheck/collision/StageChunks.h"
 #include "rastercheck/collision/StagedBackend.h"
 
@@ -479,6 +480,92 @@ TEST(StagedPipeline, ASmallBatchWaitsOnceAndAllocatesNothingAfterTheFirst)
     EXPECT_EQ(stages.states, 64u);
     EXPECT_GT(stages.candidateTriangles, 0u) << "the batch must rasterize for this test to measure the raster's counts";
     EXPECT_GT(stages.fragments, 0u);
+}
+
+TEST(PassRecorder, IssuesInOrderRemembersSixteenPassesAndComparesValuesNotPadding)
+{
+    struct Compiled
+    {
+        int pass;
+    };
+    using Recorder = rc::PassRecorder<Compiled>;
+    using Issued = Recorder::Issued;
+    Recorder recorder;
+    std::vector<int> ran;
+    const auto pass = [&](int tag)
+    {
+        recorder.begin();
+        const std::size_t before = ran.size();
+        for (int k = 0; k < 3; ++k)
+            recorder.issue([&ran, tag, k] { ran.push_back(10 * tag + k); }, tag, k);
+        EXPECT_EQ(ran.size(), before) << "recorded operations wait for finish()";
+        return recorder.finish(
+            [&](std::vector<Recorder::Operation> &operations)
+            {
+                Recorder::issueAll(operations);
+                return Compiled{tag};
+            },
+            [&](Compiled &compiled, std::vector<Recorder::Operation> &) { ran.push_back(-compiled.pass); });
+    };
+    EXPECT_EQ(pass(1), Issued::AsRecorded);
+    EXPECT_EQ(ran, (std::vector<int>{10, 11, 12}));
+    ran.clear();
+    EXPECT_EQ(pass(1), Issued::CompiledNow);
+    EXPECT_EQ(ran, (std::vector<int>{10, 11, 12}));
+    ran.clear();
+    EXPECT_EQ(pass(1), Issued::Replayed);
+    EXPECT_EQ(ran, (std::vector<int>{-1})) << "a replay issues the compiled pass, not the operations";
+    ran.clear();
+
+    // Sixteen others push the least recently used one out.
+    for (int tag = 2; tag <= 17; ++tag)
+        EXPECT_EQ(pass(tag), Issued::AsRecorded);
+    ran.clear();
+    EXPECT_EQ(pass(1), Issued::AsRecorded) << "forgotten";
+    EXPECT_EQ(pass(17), Issued::CompiledNow) << "kept";
+
+    // An interrupted recording issues what it holds, in order, and then everything at once.
+    ran.clear();
+    recorder.begin();
+    recorder.issue([&ran] { ran.push_back(1); }, 1);
+    recorder.issue([&ran] { ran.push_back(2); }, 2);
+    recorder.interrupt();
+    EXPECT_EQ(ran, (std::vector<int>{1, 2}));
+    recorder.issue([&ran] { ran.push_back(3); }, 3);
+    EXPECT_EQ(ran, (std::vector<int>{1, 2, 3}));
+    EXPECT_FALSE(recorder.recording());
+    // A discarded one issues nothing.
+    recorder.begin();
+    recorder.issue([&ran] { ran.push_back(4); }, 4);
+    recorder.discard();
+    EXPECT_EQ(ran.size(), 3u);
+
+#if defined(__has_builtin)
+#if __has_builtin(__builtin_clear_padding)
+    // Values that differ only in their padding have one signature.
+    struct Padded
+    {
+        char c;
+        double d;
+    };
+    Padded a, b;
+    std::memset(static_cast<void *>(&a), 0x11, sizeof a);
+    std::memset(static_cast<void *>(&b), 0x22, sizeof b);
+    a.c = b.c = 'x';
+    a.d = b.d = 2.5;
+    const auto padded = [&](const Padded &value)
+    {
+        recorder.begin();
+        recorder.issue([] {}, value);
+        return recorder.finish([](std::vector<Recorder::Operation> &) { return Compiled{0}; },
+                               [](Compiled &, std::vector<Recorder::Operation> &) {});
+    };
+    EXPECT_EQ(padded(a), Issued::AsRecorded);
+    EXPECT_EQ(padded(b), Issued::CompiledNow);
+    b.d = 3.5;
+    EXPECT_EQ(padded(b), Issued::AsRecorded) << "a value that differs is another pass";
+#endif
+#endif
 }
 
 TEST(StagedPipeline, ABatchSeenTwiceIsReplayedFromItsThirdCallWithTheNewStatesVerdicts)
