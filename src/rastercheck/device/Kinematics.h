@@ -20,29 +20,51 @@ struct KinematicJoint
     Vec3<double> axis;
 };
 
+/** \brief The value of joint \a j in configuration \a q: its coordinate (0 for a fixed joint), or
+    for a mimic joint its source's times the multiplier plus the offset (a source is never a mimic
+    itself). */
+RC_HD double jointValue(const KinematicJoint *joints, int j, const double *q)
+{
+    const KinematicJoint &joint = joints[j];
+    if (joint.mimicOf < 0)
+        return joint.firstCoordinate >= 0 ? q[joint.firstCoordinate] : 0.0;
+    const KinematicJoint &source = joints[joint.mimicOf];
+    const double sourceValue = source.firstCoordinate >= 0 ? q[source.firstCoordinate] : 0.0;
+    return joint.mimicMultiplier * sourceValue + joint.mimicOffset;
+}
+
+/** \brief The pose of \a joint's child link in its parent link's frame: \a value (jointValue) for a
+    joint of one coordinate or a mimic joint, else its coordinates in \a q. */
+RC_HD Pose<double> jointLocalPose(const KinematicJoint &joint, const double *q, const double &value)
+{
+    const double *values = joint.mimicOf >= 0 || coordinateCount(joint.kind) == 1
+                               ? &value
+                               : (joint.firstCoordinate >= 0 ? q + joint.firstCoordinate : nullptr);
+    return jointPose(joint.kind, joint.origin, joint.axis, values);
+}
+
+/** \brief The links' world poses from the joints' local ones (\a local[j], jointLocalPose): link 0
+    (the root) at the origin, each joint's child placed from its parent, in the joints' topological
+    order. */
+RC_HD void placeLinks(const KinematicJoint *joints, int numJoints, const Pose<double> *local, Pose<double> *links)
+{
+    links[0] = Pose<double>::identity();
+    for (int j = 0; j < numJoints; ++j)
+        links[joints[j].childLink] = compose(links[joints[j].parentLink], local[j]);
+}
+
 /** \brief Forward kinematics of a whole tree: \a links[l] = pose of link l in the world frame for
-    configuration \a q; link 0 (the root) sits at the origin. \a jointValues: scratch of one value
-    per joint. One implementation for the CPU backend and the GPU's FK kernel (one thread a state). */
+    configuration \a q; link 0 (the root) sits at the origin; \a jointValues[j] = jointValue(j).
+    The CPU backend's; the stages compute the same local poses a thread per (state, joint) and then
+    placeLinks a thread per state, so the chain's serial part is its products alone. */
 RC_HD void linkPoses(const KinematicJoint *joints, int numJoints, const double *q, double *jointValues,
                      Pose<double> *links)
 {
-    // Values first: a mimic joint may come before its source in the depth-first order (the
-    // Panda's second finger mimics the first, in a sibling branch).
     for (int j = 0; j < numJoints; ++j)
-        jointValues[j] = joints[j].firstCoordinate >= 0 ? q[joints[j].firstCoordinate] : 0.0;
-    for (int j = 0; j < numJoints; ++j)
-        if (joints[j].mimicOf >= 0)
-            jointValues[j] = joints[j].mimicMultiplier * jointValues[joints[j].mimicOf] + joints[j].mimicOffset;
+        jointValues[j] = jointValue(joints, j, q);
     links[0] = Pose<double>::identity();
     for (int j = 0; j < numJoints; ++j)
-    {
-        const KinematicJoint &joint = joints[j];
-        const double *values = joint.mimicOf >= 0 || coordinateCount(joint.kind) == 1
-                                   ? &jointValues[j]
-                                   : (joint.firstCoordinate >= 0 ? q + joint.firstCoordinate : nullptr);
-        links[joint.childLink] =
-            compose(links[joint.parentLink], jointPose(joint.kind, joint.origin, joint.axis, values));
-    }
+        links[joints[j].childLink] = compose(links[joints[j].parentLink], jointLocalPose(joints[j], q, jointValues[j]));
 }
 
 /** \brief The float pose the pipeline stages use: the double FK result with its translation taken
