@@ -124,8 +124,9 @@ run() {
                 step profile 200 ncu --clock-control none --section SpeedOfLight --section LaunchStats --section Occupancy --launch-count 120 \
                     .gpu/bin/test_gpu_backend --gtest_filter='*To1000States*' ;;
             latency)
-                # Two calls of 32 Panda states past the first ones (about 23 launches a call): which
-                # kernels a small call's latency is made of.
+                # Two calls of 32 Panda states past the first ones (22 kernels a call, from the third
+                # call on in one CUDA graph; ncu profiles a graph's kernels one by one): which kernels
+                # a small call's latency is made of.
                 step profile-32 120 ncu --clock-control none --section SpeedOfLight --section LaunchStats --section Occupancy \
                     --launch-skip 230 --launch-count 46 .gpu/bin/test_gpu_backend --gtest_filter='*ABatchOf32States*' ;;
             throughput)
