@@ -255,8 +255,8 @@ public:
     }
 
     /** \brief Stable sort of the \a n (key, value) pairs by key (every key below 2^\a keyBits), in
-        place (the GPU's may leave the result in other buffers, and moves \a keys and \a values
-        there): an LSD radix sort, as the GPU's. */
+        place (the GPU's sorts into other buffers and moves \a keys and \a values there): an LSD
+        radix sort, as the GPU's. */
     void sortByKey(unsigned long long *&keys, std::uint32_t *&values, std::size_t n, int keyBits)
     {
         if (n == 0)
