@@ -47,14 +47,6 @@ public:
         signature_.clear();
     }
 
-    /** \brief Records \a operation, with the bytes of each of \a parts in the signature. */
-    template <class... Parts>
-    void record(Operation operation, const Parts &...parts)
-    {
-        (appendValue(parts), ...);
-        operations_.push_back(std::move(operation));
-    }
-
     /** \brief Records \a operation (its signature: \a parts) while recording, else issues it. */
     template <class... Parts>
     void issue(Operation operation, const Parts &...parts)
@@ -143,6 +135,14 @@ public:
     void forget() { passes_.clear(); }
 
 private:
+    /** \brief Records \a operation, with the bytes of each of \a parts in the signature. */
+    template <class... Parts>
+    void record(Operation operation, const Parts &...parts)
+    {
+        (appendValue(parts), ...);
+        operations_.push_back(std::move(operation));
+    }
+
     struct Pass
     {
         std::uint64_t hash = 0;

@@ -60,11 +60,12 @@ RC_HD void placeLinks(const KinematicJoint *joints, int numJoints, const Pose<do
 RC_HD void linkPoses(const KinematicJoint *joints, int numJoints, const double *q, double *jointValues,
                      Pose<double> *links)
 {
-    for (int j = 0; j < numJoints; ++j)
-        jointValues[j] = jointValue(joints, j, q);
     links[0] = Pose<double>::identity();
     for (int j = 0; j < numJoints; ++j)
+    {
+        jointValues[j] = jointValue(joints, j, q);  // a mimic's reads its source's coordinate, not this array
         links[joints[j].childLink] = compose(links[joints[j].parentLink], jointLocalPose(joints[j], q, jointValues[j]));
+    }
 }
 
 /** \brief The float pose the pipeline stages use: the double FK result with its translation taken
