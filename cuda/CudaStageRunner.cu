@@ -47,15 +47,35 @@ __global__ void forEachKernel(std::size_t n, F f)
         f(i);
 }
 
-/** \brief Threads per block of every stage kernel. */
-constexpr unsigned kBlockThreads = 256;
+/** \brief Threads per block of the register-heavy stage kernels (forEachHeavyKernel). */
+constexpr unsigned kHeavyBlockThreads = 256;
+
+/** \brief Threads per block of the other stage kernels, unless RASTERCHECK_CUDA_BLOCK_THREADS says
+    otherwise (a multiple of 32 up to 1024: to measure one size against another in the same run,
+    scripts/gpu-check.sh). An SM holds whole blocks only, so small blocks leave fewer registers
+    unusable: at 64 threads the light proof (200 registers a thread, sm_90) keeps 10 warps an SM
+    resident instead of 8, the per-triangle cull (166) 12 instead of 8, and no stage kernel fewer
+    than at 256 (32 blocks of 2 warps fill an SM's 64). */
+unsigned blockThreads()
+{
+    constexpr unsigned kDefault = 64;
+    const char *setting = std::getenv("RASTERCHECK_CUDA_BLOCK_THREADS");
+    if (!setting || !*setting)
+        return kDefault;
+    char *end = nullptr;
+    const unsigned long threads = std::strtoul(setting, &end, 10);
+    if (*end != '\0' || threads == 0 || threads > 1024 || threads % 32 != 0)
+        throw std::invalid_argument(std::string("RASTERCHECK_CUDA_BLOCK_THREADS=") + setting +
+                                    ": expected a multiple of 32 from 32 to 1024 (threads per block)");
+    return static_cast<unsigned>(threads);
+}
 
 /** \brief forEachKernel for the stages whose per-element code would take every register it can (the
     full proof, the exact phase: 255 and 246 registers per thread unbounded, 8 warps an SM): held to
     two blocks an SM, so 128 registers, twice the warps. ptxas spills 4 and 92 bytes a thread there
     (`scripts/gpu-check.sh registers`, sm_90, 2026-11-26). */
 template <class F>
-__global__ void __launch_bounds__(kBlockThreads, 2) forEachHeavyKernel(std::size_t n, F f)
+__global__ void __launch_bounds__(kHeavyBlockThreads, 2) forEachHeavyKernel(std::size_t n, F f)
 {
     const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i < n)
@@ -176,7 +196,7 @@ bool graphsAllowed()
 class CudaExecutor
 {
 public:
-    CudaExecutor() : graphs_(graphsAllowed())
+    explicit CudaExecutor(unsigned blockThreads) : graphs_(graphsAllowed()), threads_(blockThreads)
     {
         check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
     }
@@ -276,7 +296,7 @@ public:
         recorder_.issue(
             [this, n, f]
             {
-                forEachKernel<<<blocksFor(n), kThreads, 0, stream_>>>(n, f);
+                forEachKernel<<<blocksFor(n, threads_), threads_, 0, stream_>>>(n, f);
                 check(cudaGetLastError(), "kernel launch");
             },
             reinterpret_cast<const void *>(&forEachKernel<F>), n, f);
@@ -292,7 +312,7 @@ public:
         recorder_.issue(
             [this, n, f]
             {
-                forEachHeavyKernel<<<blocksFor(n), kThreads, 0, stream_>>>(n, f);
+                forEachHeavyKernel<<<blocksFor(n, kHeavyBlockThreads), kHeavyBlockThreads, 0, stream_>>>(n, f);
                 check(cudaGetLastError(), "kernel launch");
             },
             reinterpret_cast<const void *>(&forEachHeavyKernel<F>), n, f);
@@ -309,7 +329,7 @@ public:
         recorder_.issue(
             [this, extent, f]
             {
-                forEachCountedKernel<<<blocksFor(extent.bound), kThreads, 0, stream_>>>(extent, f);
+                forEachCountedKernel<<<blocksFor(extent.bound, threads_), threads_, 0, stream_>>>(extent, f);
                 check(cudaGetLastError(), "kernel launch");
             },
             reinterpret_cast<const void *>(&forEachCountedKernel<F>), extent, f);
@@ -433,7 +453,6 @@ public:
     }
 
 private:
-    static constexpr unsigned kThreads = kBlockThreads;
     using Recorder = PassRecorder<GraphExec>;
     using Operation = Recorder::Operation;
     /** \brief Tags of the operations that are not kernels of the driver's, in signatures. */
@@ -483,7 +502,10 @@ private:
         return compiled;
     }
 
-    static unsigned blocksFor(std::size_t n) { return static_cast<unsigned>((n + kThreads - 1) / kThreads); }
+    static unsigned blocksFor(std::size_t n, unsigned threads)
+    {
+        return static_cast<unsigned>((n + threads - 1) / threads);
+    }
 
     /** \brief The host mirror of \a slot, at least \a bytes, for a copy that the host fills first
         (\a hostWrites) or that the stream fills. The host writes or frees a mirror only when no
@@ -554,6 +576,7 @@ private:
     std::array<PinnedAllocation, device::kNumStageBuffers> mirrors_;
     std::array<bool, device::kNumStageBuffers> mirrorInUse_{};  // a queued copy reads or writes it
     bool graphs_;
+    unsigned threads_;  ///< per block, forEach and forEachCounted (blockThreads())
     Recorder recorder_;
 };
 
@@ -578,12 +601,15 @@ class CudaStageRunner : public PooledStageRunner<CudaExecutor>
 {
 public:
     CudaStageRunner(const device::ModelArrays &host, std::string deviceName, std::size_t memoryLimit)
-      : PooledStageRunner([this] {
-            auto ex = std::make_unique<CudaExecutor>();
-            ex->limitScratch(budget_.maxScratchBytes);
-            return ex;
-        }),
-        deviceName_(std::move(deviceName))
+        : PooledStageRunner(
+              [this]
+              {
+                  auto ex = std::make_unique<CudaExecutor>(blockThreads_);
+                  ex->limitScratch(budget_.maxScratchBytes);
+                  return ex;
+              }),
+          deviceName_(std::move(deviceName)),
+          blockThreads_(blockThreads())
     {
         const std::size_t m = static_cast<std::size_t>(host.numComponents);
         const std::size_t o = static_cast<std::size_t>(host.numObjects);
@@ -668,6 +694,7 @@ public:
 
 private:
     std::string deviceName_;
+    unsigned blockThreads_;  ///< threads per block of the executors' light kernels (blockThreads())
     std::vector<DeviceAllocation> model_memory_;  // what arrays_ point into
 };
 }  // namespace

@@ -10,7 +10,7 @@
 #       builds the benchmark at git revision REV (a temporary worktree, build-gpu-base) into
 #       .gpu/baseline/, so that the step "baseline" measures old and new code on the same device.
 #   On the GPU machine (device `run` with carry [".gpu"]), from the repository root:
-#       scripts/gpu-check.sh run tests bench sanitize [plan] [profile] [latency] [throughput] [baseline]
+#       scripts/gpu-check.sh run tests bench sanitize [plan] [profile] [latency] [throughput] [blocks] [baseline]
 #   (all three took 86 s on an H200 on 2026-11-26, each step well inside its limit below; a step
 #   may also run alone)
 #   On the build machine, no GPU needed:  scripts/gpu-check.sh registers
@@ -134,11 +134,16 @@ run() {
                 # batch's device time goes (the 10x-the-CPU target is at 10^5 states and more).
                 step profile-large 240 ncu --clock-control none --section SpeedOfLight --section LaunchStats --section Occupancy \
                     --launch-count 60 .gpu/bin/test_gpu_backend --gtest_filter='*AMillionRandomStates*' ;;
+            blocks)
+                # The light kernels at 256 threads a block, as before 64 was the default: the same
+                # benchmark, so the block size is measured on its own (the baseline step changes more).
+                step bench-safe-blocks256 200 env RASTERCHECK_CUDA_BLOCK_THREADS=256 \
+                    .gpu/bin/rastercheck_bench_backends 100000 safe ;;
             baseline)
                 # The same benchmark at an earlier revision (scripts/gpu-check.sh baseline REV), same device.
                 step "baseline-$(cat .gpu/baseline/revision)" 280 env LD_LIBRARY_PATH=$PWD/.gpu/baseline/lib:$LD_LIBRARY_PATH \
                     .gpu/baseline/rastercheck_bench_backends "$bench_states" safe ;;
-            *) echo "gpu-check: unknown step $s (tests, sanitize, bench, plan, profile, latency, throughput, baseline)" >&2; return 2 ;;
+            *) echo "gpu-check: unknown step $s (tests, sanitize, bench, plan, profile, latency, throughput, blocks, baseline)" >&2; return 2 ;;
         esac
     done
     printf '%s\n' "${summary[@]}" >"$out/summary.txt"

@@ -155,7 +155,7 @@ struct HullSupport
 {
     const ConvexProxy *piece;
     const Pose<double> *pose;
-    RC_HD Vec3<double> operator()(const Vec3<double> &d) const { return detail::worldSupport(*piece, *pose, d); }
+    RC_HD Vec3<double> operator()(const Vec3<double> &d) const { return detail::placedSupport(*piece, *pose, d); }
 };
 
 /** \brief How close to the hulls' distance hullDistanceLowerBound() takes its bound by default: a

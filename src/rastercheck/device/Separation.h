@@ -249,18 +249,16 @@ RC_HD Vec3<double> translationOf(const Pose<double> &pose)
     return {pose.m[3], pose.m[7], pose.m[11]};
 }
 
-/** \brief The gap between A and B along world direction \a v (pointing from B towards A), over
-    every vertex: min over A's vertices of v . x minus max over B's, which is |v| times the distance
-    the plane normal to v leaves between them. A gap above the padding (plus rounding slack) is the
-    proof: each solid lies in the convex hull of its vertices. */
-RC_HD double gapAlong(const Vec3<double> &v, const ConvexProxy &a, const Pose<double> &poseA, const ConvexProxy &b,
-                      const Pose<double> &poseB)
+/** \brief The gap between A and B along direction \a v of A's frame (pointing from B towards A),
+    over every vertex, with B placed in A's frame by \a bInA: min over A's vertices of v . x minus
+    max over B's, which is |v| times the distance the plane normal to v leaves between them. A gap
+    above the padding (plus rounding slack) is the proof: each solid lies in the convex hull of its
+    vertices. */
+RC_HD double gapAlong(const Vec3<double> &v, const ConvexProxy &a, const ConvexProxy &b, const Pose<double> &bInA)
 {
-    const Vec3<double> va = inverseRotate(poseA, v);
-    const double lowestA =
-        -supportValue(a.vertices, a.numVertices, Vec3<double>{-va.x, -va.y, -va.z}) + dot(v, translationOf(poseA));
+    const double lowestA = -supportValue(a.vertices, a.numVertices, Vec3<double>{-v.x, -v.y, -v.z});
     const double highestB =
-        supportValue(b.vertices, b.numVertices, inverseRotate(poseB, v)) + dot(v, translationOf(poseB));
+        supportValue(b.vertices, b.numVertices, inverseRotate(bInA, v)) + dot(v, translationOf(bInA));
     return lowestA - highestB;
 }
 
@@ -455,7 +453,9 @@ RC_HD std::uint32_t hullSupportIndex(const ConvexProxy &solid, const Vec3<double
     return index;
 }
 
-RC_HD Vec3<double> worldSupport(const ConvexProxy &solid, const Pose<double> &pose, const Vec3<double> &d)
+/** \brief The hull point of \a solid extreme along \a d, placed by \a pose (\a d in the frame the pose
+    places the solid in: the world's, or another solid's). */
+RC_HD Vec3<double> placedSupport(const ConvexProxy &solid, const Pose<double> &pose, const Vec3<double> &d)
 {
     const double *p = solid.hullPoints + 3 * hullSupportIndex(solid, inverseRotate(pose, d));
     return transformPoint(pose, Vec3<double>{p[0], p[1], p[2]});
@@ -540,6 +540,42 @@ RC_HD bool surfaceEdgeInside(const ConvexProxy &p, const Pose<double> &poseP, co
     }
     return false;
 }
+
+/** \brief relateHulls' overlap proofs, once the origin lies on or in its simplex (\a count points of
+    A - B, A's frame, with A's point of each in \a onA and the origin's weights). The same weights
+    on A's points give a point of both hulls; it or a point halfway to either piece's centre,
+    behind every face of both, proves it. So does a vertex of one (a point of its surface: an open
+    mesh too) behind every face of the other: that surface reaches inside the other solid. With
+    \a scanSurfaces, then every vertex and edge of each. A call of its own on a GPU: the GJK loop's
+    registers are not held through it. */
+RC_HD_CALL bool overlapProvenInA(const ConvexProxy &a, const Pose<double> &poseA, const ConvexProxy &b,
+                                 const Pose<double> &poseB, const Pose<double> &bInA, const Vec3<double> *onA,
+                                 const Vec3<double> *simplex, const double *weights, int count, double planeMargin,
+                                 bool scanSurfaces)
+{
+    if (a.numPlanes > 0 && b.numPlanes > 0)
+    {
+        Vec3<double> shared = weights[0] * onA[0];
+        for (int i = 1; i < count; ++i)
+            shared = shared + weights[i] * onA[i];
+        const Vec3<double> candidates[3] = {shared, 0.5 * (shared + a.centre),
+                                            0.5 * (shared + transformPoint(bInA, b.centre))};
+        for (const Vec3<double> &x : candidates)
+            if (behindAllPlanesLocal(a, x, planeMargin) && behindAllPlanes(b, bInA, x, planeMargin))
+                return true;
+    }
+    for (int i = 0; i < count; ++i)
+    {
+        if (a.surfaceVertices && behindAllPlanes(b, bInA, onA[i], planeMargin))
+            return true;
+        if (b.surfaceVertices && behindAllPlanesLocal(a, onA[i] - simplex[i], planeMargin))
+            return true;
+    }
+    return scanSurfaces &&
+           (surfaceVertexInside(a, poseA, b, poseB, planeMargin) ||
+            surfaceVertexInside(b, poseB, a, poseA, planeMargin) ||
+            surfaceEdgeInside(a, poseA, b, poseB, planeMargin) || surfaceEdgeInside(b, poseB, a, poseA, planeMargin));
+}
 }  // namespace detail
 
 /** \brief An upper bound on the distance from \a x to the convex hull of \a piece's hull points
@@ -617,19 +653,29 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         return HullRelation::Unknown;
     constexpr int kMaxIterations = 32;
     const Vec3<double> ta = translationOf(poseA), tb = translationOf(poseB);
-    // What the gap must clear: the padding and the rounding of coordinates this large.
+    // What the gap must clear: the padding and the rounding of coordinates this large (the world
+    // poses' translations: B's pose in A's frame rounds at their scale too).
     const double rounding = kSeparationSlack * (a.radius + b.radius + std::sqrt(dot(ta, ta)) + std::sqrt(dot(tb, tb)));
     const double margin = padding + rounding;
+    // Everything below runs in A's frame: A's points as stored, B's placed by one pose. Half the
+    // rotations of placing both in the world, and one pose held instead of two (a GPU thread's
+    // registers). Directions come in and go out in the world frame.
+    const Pose<double> bInA = relativePose(poseA, poseB);
+    const auto supportOfA = [&](const Vec3<double> &d)
+    {
+        const double *p = a.hullPoints + 3 * detail::hullSupportIndex(a, d);
+        return Vec3<double>{p[0], p[1], p[2]};
+    };
     // v: the closest point to the origin of the simplex's hull, a part of the Minkowski difference
     // A - B. The simplex starts as one point of A - B, so every step's v is no farther than the last.
-    Vec3<double> v = ta - tb, onA[4];  // onA: A's point of each simplex point
+    Vec3<double> v = Vec3<double>{0.0, 0.0, 0.0} - translationOf(bInA), onA[4];  // onA: A's point of each simplex point
     if (direction && dot(*direction, *direction) > 0.0)
     {
         // The direction that proved this pair apart at a nearby state (the caller's last call):
         // its gap settles most pairs at once; else its support points start GJK.
-        const Vec3<double> d = *direction;
-        onA[0] = detail::worldSupport(a, poseA, Vec3<double>{-d.x, -d.y, -d.z});
-        v = onA[0] - detail::worldSupport(b, poseB, d);
+        const Vec3<double> d = inverseRotate(poseA, *direction);
+        onA[0] = supportOfA(Vec3<double>{-d.x, -d.y, -d.z});
+        v = onA[0] - detail::placedSupport(b, bInA, d);
         if (dot(d, v) > (margin + a.hullSlack + b.hullSlack) * std::sqrt(dot(d, d)))
             return HullRelation::Apart;
     }
@@ -637,44 +683,16 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
     {
         if (!(dot(v, v) > 0.0))
             v = {1.0, 0.0, 0.0};
-        onA[0] = detail::worldSupport(a, poseA, v);
-        v = onA[0] - detail::worldSupport(b, poseB, Vec3<double>{-v.x, -v.y, -v.z});
+        onA[0] = supportOfA(v);
+        v = onA[0] - detail::placedSupport(b, bInA, Vec3<double>{-v.x, -v.y, -v.z});
     }
     Vec3<double> simplex[4] = {v};
     double weights[4] = {1.0, 0.0, 0.0, 0.0};  // v = sum of weights[i] * simplex[i]
     int count = 1;
-    // With the origin in the simplex's hull, the same weights on A's points give a point of both
-    // hulls; it or a point halfway to either piece's centre, behind every face of both, proves it.
-    // So does a vertex of one (a point of its surface: an open mesh too) behind every face of the
-    // other: that surface reaches inside the other solid.
     const auto overlapProven = [&]()
     {
-        if (!proveOverlap)
-            return false;
-        const double planeMargin = rounding + kPlaneSlack * (a.radius + b.radius);
-        if (a.numPlanes > 0 && b.numPlanes > 0)
-        {
-            Vec3<double> shared = weights[0] * onA[0];
-            for (int i = 1; i < count; ++i)
-                shared = shared + weights[i] * onA[i];
-            const Vec3<double> candidates[3] = {shared, 0.5 * (shared + transformPoint(poseA, a.centre)),
-                                                0.5 * (shared + transformPoint(poseB, b.centre))};
-            for (const Vec3<double> &x : candidates)
-                if (detail::behindAllPlanes(a, poseA, x, planeMargin) &&
-                    detail::behindAllPlanes(b, poseB, x, planeMargin))
-                    return true;
-        }
-        for (int i = 0; i < count; ++i)
-        {
-            if (a.surfaceVertices && detail::behindAllPlanes(b, poseB, onA[i], planeMargin))
-                return true;
-            if (b.surfaceVertices && detail::behindAllPlanes(a, poseA, onA[i] - simplex[i], planeMargin))
-                return true;
-        }
-        return scanSurfaces && (detail::surfaceVertexInside(a, poseA, b, poseB, planeMargin) ||
-                                detail::surfaceVertexInside(b, poseB, a, poseA, planeMargin) ||
-                                detail::surfaceEdgeInside(a, poseA, b, poseB, planeMargin) ||
-                                detail::surfaceEdgeInside(b, poseB, a, poseA, planeMargin));
+        return proveOverlap && detail::overlapProvenInA(a, poseA, b, poseB, bInA, onA, simplex, weights, count,
+                                                        rounding + kPlaneSlack * (a.radius + b.radius), scanSurfaces);
     };
     // Reading every vertex is worth it for pieces of a few thousand; a solid finer than that has
     // patches (SolidRelation.h), whose own proofs read only the vertices near the other solid.
@@ -683,26 +701,32 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
     const auto apart = [&](const Vec3<double> &proof)
     {
         if (direction)
-            *direction = proof;
+            *direction = rotateVector(poseA, proof);
         return HullRelation::Apart;
     };
     bool proofTried = false;
     // The hull points' gap along v (times |v|), infinite until it is measured for the current v: no
     // vertex's gap along v is larger, since the hull points are vertices.
     double gapOfV = HUGE_VAL;
+    // The origin on or inside the simplex: the hulls touch or overlap, and only an overlap proof is
+    // left to try (after the loop: one copy of its code, not one per exit).
+    bool touching = false;
     for (int iteration = 0; iteration < kMaxIterations; ++iteration)
     {
         const double vv = dot(v, v);
-        if (!(vv > rounding * rounding))  // the origin is on the simplex: the hulls touch or overlap
-            return overlapProven() ? HullRelation::Overlapping : HullRelation::Unknown;
+        if (!(vv > rounding * rounding))
+        {
+            touching = true;
+            break;
+        }
         // |v| bounds the hull points' distance from above, and every gap from below: once it is
         // within the margin no plane can prove the pair apart, and only an overlap proof could still
         // come of going on (a pair within a certified midpoint's sweep: 4 700 -> 2 700 cycles with
         // the other early exits, docs/benchmarks.md "Where a certified midpoint's check goes").
         if (!proveOverlap && !(vv > margin * margin))
             return HullRelation::Unknown;
-        const Vec3<double> pointOfA = detail::worldSupport(a, poseA, Vec3<double>{-v.x, -v.y, -v.z});
-        const Vec3<double> w = pointOfA - detail::worldSupport(b, poseB, v);
+        const Vec3<double> pointOfA = supportOfA(Vec3<double>{-v.x, -v.y, -v.z});
+        const Vec3<double> w = pointOfA - detail::placedSupport(b, bInA, v);
         const double vw = dot(v, w);
         gapOfV = vw;
         // v . w / |v| is the gap the plane normal to v leaves between the hull points' hulls (it
@@ -715,7 +739,7 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         if (!proofTried && readEveryVertex && vw > margin * length)
         {
             proofTried = true;
-            if (gapAlong(v, a, poseA, b, poseB) > margin * length)
+            if (gapAlong(v, a, b, bInA) > margin * length)
                 return apart(v);
         }
         if (vv - vw <= 1e-10 * vv)
@@ -725,17 +749,22 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         Vec3<double> next = v;  // written by closestOnSimplex when it gets closer, with its weights
         const detail::SimplexStep step = detail::closestOnSimplex(simplex, count, next, onA, weights);
         if (step == detail::SimplexStep::OriginInside)
-            return overlapProven() ? HullRelation::Overlapping : HullRelation::Unknown;
+        {
+            touching = true;
+            break;
+        }
         if (!(dot(next, next) < vv))
             break;  // no progress left
         v = next;
         gapOfV = HUGE_VAL;
     }
+    if (touching)
+        return overlapProven() ? HullRelation::Overlapping : HullRelation::Unknown;
     // Every vertex along v, unless the hull points' gap along it already misses the margin.
     const double needed = margin * std::sqrt(dot(v, v));
     if (!readEveryVertex || !(gapOfV > needed))
         return HullRelation::Unknown;
-    return gapAlong(v, a, poseA, b, poseB) > needed ? apart(v) : HullRelation::Unknown;
+    return gapAlong(v, a, b, bInA) > needed ? apart(v) : HullRelation::Unknown;
 }
 
 }  // namespace rastercheck::device

@@ -239,8 +239,8 @@ RC_HD void boundsInFrame(const ConvexProxy &piece, const Pose<double> &pose, con
         const Vec3<double> axis{frame.m[k], frame.m[4 + k], frame.m[8 + k]};  // the frame's k-th axis, world
         const double offset = dot(axis, origin);
         const Vec3<double> back{-axis.x, -axis.y, -axis.z};
-        upper[k] = dot(axis, detail::worldSupport(piece, pose, axis)) - offset + piece.hullSlack + grow;
-        lower[k] = dot(axis, detail::worldSupport(piece, pose, back)) - offset - piece.hullSlack - grow;
+        upper[k] = dot(axis, detail::placedSupport(piece, pose, axis)) - offset + piece.hullSlack + grow;
+        lower[k] = dot(axis, detail::placedSupport(piece, pose, back)) - offset - piece.hullSlack - grow;
     }
 }
 
@@ -463,7 +463,7 @@ RC_HD HullRelation relatePatches(const ConvexArrays &arrays, std::uint32_t a, co
     {
         const ConvexProxy shell = convexProxy(arrays, i);
         const Vec3<double> d = pointB - transformPoint(poseA, shell.centre);
-        const double beyond = dot(d, pointB) - dot(d, detail::worldSupport(shell, poseA, d));
+        const double beyond = dot(d, pointB) - dot(d, detail::placedSupport(shell, poseA, d));
         if (!(beyond > (shell.hullSlack + rounding) * std::sqrt(dot(d, d))))
             return HullRelation::Unknown;
     }
