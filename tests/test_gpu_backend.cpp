@@ -309,3 +309,33 @@ TEST(GpuBackend, TheCheckerSaysWhichDeviceItUses)
     const rc::Checker chosen(suite.robot, suite.scene, automatic);
     EXPECT_EQ(chosen.backendName(), gpu->backendName());  // auto picks the device
 }
+
+TEST(GpuBackend, TheLightKernelsBlockSizeIsSetByTheEnvironmentAndABadOneIsNamed)
+{
+    // RASTERCHECK_CUDA_BLOCK_THREADS sets the threads per block of the light kernels (64 unless
+    // set): another size gives the same verdicts; a size the device cannot take is a warning that
+    // names the variable, and the checker runs on the CPU.
+    const rc::test::StateSuite suite = rc::test::accuracySuites(200)[0];
+    const std::unique_ptr<rc::Checker> gpu = gpuChecker(suite);
+    REQUIRE_GPU(gpu);
+    struct Restore
+    {
+        ~Restore() { unsetenv("RASTERCHECK_CUDA_BLOCK_THREADS"); }
+    } restore;
+    setenv("RASTERCHECK_CUDA_BLOCK_THREADS", "256", 1);
+    const std::unique_ptr<rc::Checker> wide = gpuChecker(suite);
+    ASSERT_TRUE(wide) << "256 threads a block should run on the device";
+    const rc::CpuBackend cpu(sameModel(*wide));
+    rc::test::expectSameDecisions(wide->backend(), cpu, wide->collisionModel(), suite.states, {},
+                                  suite.name + " (256 threads a block)");
+    for (const char *bad : {"100", "2048", "0", "64x"})
+    {
+        setenv("RASTERCHECK_CUDA_BLOCK_THREADS", bad, 1);
+        rc::test::LogCapture log;
+        EXPECT_FALSE(gpuChecker(suite)) << bad;
+        EXPECT_TRUE(log.warned(std::string("RASTERCHECK_CUDA_BLOCK_THREADS=") + bad +
+                               ": expected a multiple of 32 from 32 to 1024 (threads per block); using the CPU "
+                               "backend"))
+            << bad;
+    }
+}
