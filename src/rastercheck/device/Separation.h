@@ -318,7 +318,8 @@ RC_HD_CALL void nearestOnSegment(const Vec3<double> *simplex, int i, int j, Face
     the edges opposite the corners whose weight is not positive (the edges whose lines part the
     projection from the triangle); of every edge when the triangle is flat. It and nearestOnSegment
     are calls of their own on the device: inlined at each of closestOnSimplex's call sites they took
-    the light proof from 168 to 200 registers a thread (sm_90), 12 warps an SM down to 10. */
+    the light proof from 168 to 200 registers a thread (sm_90): at 64 threads a block, 10 warps an SM
+    instead of 12. */
 RC_HD_CALL void nearestOnTriangle(const Vec3<double> *simplex, int i, int j, int k, FaceNearest &best)
 {
     const Vec3<double> s0 = simplex[i], e0 = simplex[j] - s0, e1 = simplex[k] - s0;
@@ -455,12 +456,18 @@ RC_HD std::uint32_t hullSupportIndex(const ConvexProxy &solid, const Vec3<double
     return index;
 }
 
+/** \brief The hull point of \a solid extreme along \a d, both in the solid's own frame. */
+RC_HD Vec3<double> localSupport(const ConvexProxy &solid, const Vec3<double> &d)
+{
+    const double *p = solid.hullPoints + 3 * hullSupportIndex(solid, d);
+    return {p[0], p[1], p[2]};
+}
+
 /** \brief The hull point of \a solid extreme along \a d, placed by \a pose (\a d in the frame the pose
     places the solid in: the world's, or another solid's). */
 RC_HD Vec3<double> placedSupport(const ConvexProxy &solid, const Pose<double> &pose, const Vec3<double> &d)
 {
-    const double *p = solid.hullPoints + 3 * hullSupportIndex(solid, inverseRotate(pose, d));
-    return transformPoint(pose, Vec3<double>{p[0], p[1], p[2]});
+    return transformPoint(pose, localSupport(solid, inverseRotate(pose, d)));
 }
 
 /** \brief True when world point \a x lies behind every face plane of \a piece (placed by \a pose)
@@ -592,8 +599,7 @@ RC_HD double hullDistanceBound(const Vec3<double> &x, const ConvexProxy &piece, 
 {
     const auto pointOfSet = [&](const Vec3<double> &d)  // the point of x - hull extreme along d
     {
-        const double *p = piece.hullPoints + 3 * detail::hullSupportIndex(piece, Vec3<double>{-d.x, -d.y, -d.z});
-        return x - Vec3<double>{p[0], p[1], p[2]};
+        return x - detail::localSupport(piece, Vec3<double>{-d.x, -d.y, -d.z});
     };
     const double *points = piece.hullPoints;
     Vec3<double> v = x - Vec3<double>{points[0], points[1], points[2]};
@@ -663,11 +669,6 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
     // rotations of placing both in the world, and one pose held instead of two (a GPU thread's
     // registers). Directions come in and go out in the world frame.
     const Pose<double> bInA = relativePose(poseA, poseB);
-    const auto supportOfA = [&](const Vec3<double> &d)
-    {
-        const double *p = a.hullPoints + 3 * detail::hullSupportIndex(a, d);
-        return Vec3<double>{p[0], p[1], p[2]};
-    };
     // v: the closest point to the origin of the simplex's hull, a part of the Minkowski difference
     // A - B. The simplex starts as one point of A - B, so every step's v is no farther than the last.
     Vec3<double> v = Vec3<double>{0.0, 0.0, 0.0} - translationOf(bInA), onA[4];  // onA: A's point of each simplex point
@@ -676,7 +677,7 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         // The direction that proved this pair apart at a nearby state (the caller's last call):
         // its gap settles most pairs at once; else its support points start GJK.
         const Vec3<double> d = inverseRotate(poseA, *direction);
-        onA[0] = supportOfA(Vec3<double>{-d.x, -d.y, -d.z});
+        onA[0] = detail::localSupport(a, Vec3<double>{-d.x, -d.y, -d.z});
         v = onA[0] - detail::placedSupport(b, bInA, d);
         if (dot(d, v) > (margin + a.hullSlack + b.hullSlack) * std::sqrt(dot(d, d)))
             return HullRelation::Apart;
@@ -685,7 +686,7 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
     {
         if (!(dot(v, v) > 0.0))
             v = {1.0, 0.0, 0.0};
-        onA[0] = supportOfA(v);
+        onA[0] = detail::localSupport(a, v);
         v = onA[0] - detail::placedSupport(b, bInA, Vec3<double>{-v.x, -v.y, -v.z});
     }
     Vec3<double> simplex[4] = {v};
@@ -727,7 +728,7 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
         // the other early exits, docs/benchmarks.md "Where a certified midpoint's check goes").
         if (!proveOverlap && !(vv > margin * margin))
             return HullRelation::Unknown;
-        const Vec3<double> pointOfA = supportOfA(Vec3<double>{-v.x, -v.y, -v.z});
+        const Vec3<double> pointOfA = detail::localSupport(a, Vec3<double>{-v.x, -v.y, -v.z});
         const Vec3<double> w = pointOfA - detail::placedSupport(b, bInA, v);
         const double vw = dot(v, w);
         gapOfV = vw;
