@@ -17,6 +17,14 @@
 #define RC_HD_CALL inline
 #endif
 
+// RC_ROLLED_LOOP before a loop keeps nvcc from unrolling it (on the host, nothing): an unrolled
+// search holds several iterations' loads at once, registers a whole kernel then pays for.
+#if defined(__CUDA_ARCH__)
+#define RC_ROLLED_LOOP _Pragma("unroll 1")
+#else
+#define RC_ROLLED_LOOP
+#endif
+
 namespace rastercheck::device
 {
 /** \brief Lowers *address to value atomically (the per-pair "first hit pixel" reduction, the first

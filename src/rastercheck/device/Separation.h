@@ -222,6 +222,7 @@ RC_HD double supportValue(const double *points, std::uint32_t count, const Vec3<
 {
     double best = d.x * points[0] + d.y * points[1] + d.z * points[2];
     std::uint32_t bestIndex = 0;
+    RC_ROLLED_LOOP
     for (std::uint32_t i = 1; i < count; ++i)
     {
         const double value = d.x * points[3 * i] + d.y * points[3 * i + 1] + d.z * points[3 * i + 2];
@@ -443,6 +444,7 @@ RC_HD std::uint32_t hullSupportIndex(const ConvexProxy &solid, const Vec3<double
     index = *candidate;
     const double *first = solid.hullPoints + 3 * index;
     double best = d.x * first[0] + d.y * first[1] + d.z * first[2];
+    RC_ROLLED_LOOP
     for (++candidate; candidate < end; ++candidate)
     {
         const double *p = solid.hullPoints + 3 * *candidate;
@@ -554,13 +556,13 @@ RC_HD bool surfaceEdgeInside(const ConvexProxy &p, const Pose<double> &poseP, co
     A - B, A's frame, with A's point of each in \a onA and the origin's weights). The same weights
     on A's points give a point of both hulls; it or a point halfway to either piece's centre,
     behind every face of both, proves it. So does a vertex of one (a point of its surface: an open
-    mesh too) behind every face of the other: that surface reaches inside the other solid. With
-    \a scanSurfaces, then every vertex and edge of each. A call of its own on a GPU: the GJK loop's
-    registers are not held through it. */
-RC_HD_CALL bool overlapProvenInA(const ConvexProxy &a, const Pose<double> &poseA, const ConvexProxy &b,
-                                 const Pose<double> &poseB, const Pose<double> &bInA, const Vec3<double> *onA,
-                                 const Vec3<double> *simplex, const double *weights, int count, double planeMargin,
-                                 bool scanSurfaces)
+    mesh too) behind every face of the other: that surface reaches inside the other solid. A call
+    of its own on a GPU: the GJK loop's registers are not held through it. It takes no world pose
+    (surfacesProvenInside, the scans that follow when asked, does), so where the scans are not
+    asked (the light proof) both poses die once B's pose in A's frame is made. */
+RC_HD_CALL bool overlapProvenInA(const ConvexProxy &a, const ConvexProxy &b, const Pose<double> &bInA,
+                                 const Vec3<double> *onA, const Vec3<double> *simplex, const double *weights, int count,
+                                 double planeMargin)
 {
     if (a.numPlanes > 0 && b.numPlanes > 0)
     {
@@ -580,10 +582,17 @@ RC_HD_CALL bool overlapProvenInA(const ConvexProxy &a, const Pose<double> &poseA
         if (b.surfaceVertices && behindAllPlanesLocal(a, onA[i] - simplex[i], planeMargin))
             return true;
     }
-    return scanSurfaces &&
-           (surfaceVertexInside(a, poseA, b, poseB, planeMargin) ||
-            surfaceVertexInside(b, poseB, a, poseA, planeMargin) ||
-            surfaceEdgeInside(a, poseA, b, poseB, planeMargin) || surfaceEdgeInside(b, poseB, a, poseA, planeMargin));
+    return false;
+}
+
+/** \brief relateHulls' last overlap proofs: every vertex, then every edge, of each piece behind
+    every face of the other. */
+RC_HD_CALL bool surfacesProvenInside(const ConvexProxy &a, const Pose<double> &poseA, const ConvexProxy &b,
+                                     const Pose<double> &poseB, double planeMargin)
+{
+    return surfaceVertexInside(a, poseA, b, poseB, planeMargin) ||
+           surfaceVertexInside(b, poseB, a, poseA, planeMargin) || surfaceEdgeInside(a, poseA, b, poseB, planeMargin) ||
+           surfaceEdgeInside(b, poseB, a, poseA, planeMargin);
 }
 }  // namespace detail
 
@@ -694,8 +703,9 @@ RC_HD HullRelation relateHulls(const ConvexProxy &a, const Pose<double> &poseA, 
     int count = 1;
     const auto overlapProven = [&]()
     {
-        return proveOverlap && detail::overlapProvenInA(a, poseA, b, poseB, bInA, onA, simplex, weights, count,
-                                                        rounding + kPlaneSlack * (a.radius + b.radius), scanSurfaces);
+        const double planeMargin = rounding + kPlaneSlack * (a.radius + b.radius);
+        return proveOverlap && (detail::overlapProvenInA(a, b, bInA, onA, simplex, weights, count, planeMargin) ||
+                                (scanSurfaces && detail::surfacesProvenInside(a, poseA, b, poseB, planeMargin)));
     };
     // Reading every vertex is worth it for pieces of a few thousand; a solid finer than that has
     // patches (SolidRelation.h), whose own proofs read only the vertices near the other solid.
