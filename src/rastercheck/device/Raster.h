@@ -171,6 +171,7 @@ RC_HD int rasterizeTriangle(const RasterGrid &grid, const Vec3<float> &p0, const
     for (std::int64_t j = y0; j <= y1; ++j)
     {
         const std::int64_t py = j * kSubpixel + half;
+        RC_ROLLED_LOOP
         for (std::int64_t i = x0; i <= x1; ++i)
         {
             const std::int64_t px = i * kSubpixel + half;
