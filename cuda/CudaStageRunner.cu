@@ -53,9 +53,9 @@ constexpr unsigned kHeavyBlockThreads = 256;
 /** \brief Threads per block of the other stage kernels, unless RASTERCHECK_CUDA_BLOCK_THREADS says
     otherwise (a multiple of 32 up to 1024: to measure one size against another in the same run,
     scripts/gpu-check.sh). An SM holds whole blocks only, so small blocks leave fewer registers
-    unusable: at 64 threads the light proof (168 registers a thread, sm_90) and the per-triangle
-    cull (166) keep 12 warps an SM resident instead of 8, and no stage kernel fewer
-    than at 256 (32 blocks of 2 warps fill an SM's 64). */
+    unusable: at 64 threads the light proof (141 registers a thread, sm_90) keeps 14 warps an SM
+    resident instead of 8, and no stage kernel fewer than at 256 (32 blocks of 2 warps fill an
+    SM's 64). */
 unsigned blockThreads()
 {
     constexpr unsigned kDefault = 64;

@@ -318,9 +318,8 @@ RC_HD_CALL void nearestOnSegment(const Vec3<double> *simplex, int i, int j, Face
     nearer: the origin's projection on its plane when that falls inside, else the nearest point of
     the edges opposite the corners whose weight is not positive (the edges whose lines part the
     projection from the triangle); of every edge when the triangle is flat. It and nearestOnSegment
-    are calls of their own on the device: inlined at each of closestOnSimplex's call sites they took
-    the light proof from 168 to 200 registers a thread (sm_90): at 64 threads a block, 10 warps an SM
-    instead of 12. */
+    are calls of their own on the device: inlined at each of closestOnSimplex's call sites they added
+    32 registers a thread to the light proof (sm_90, docs/benchmarks.md). */
 RC_HD_CALL void nearestOnTriangle(const Vec3<double> *simplex, int i, int j, int k, FaceNearest &best)
 {
     const Vec3<double> s0 = simplex[i], e0 = simplex[j] - s0, e1 = simplex[k] - s0;
