@@ -479,6 +479,24 @@ RC_HD void pairSolids(const ModelArrays &model, std::uint32_t pair, const Pose<f
     b = component(self[1]);
 }
 
+/** \brief Pair \a pair's two solids in the numbering of ConvexArrays and CurvedArrays (the
+    components, then the objects): A a component; B a component (a self pair) or, for an
+    environment pair, the number of components plus the object's. */
+RC_HD void pairSolidNumbers(const ModelArrays &model, std::uint32_t pair, std::uint32_t &a, std::uint32_t &b)
+{
+    const std::uint32_t m = static_cast<std::uint32_t>(model.numComponents);
+    const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
+    if (pair < environmentPairs)
+    {
+        a = pair % m;
+        b = m + pair / m;
+        return;
+    }
+    const int *self = model.selfPairs + 2 * (pair - environmentPairs);
+    a = static_cast<std::uint32_t>(self[0]);
+    b = static_cast<std::uint32_t>(self[1]);
+}
+
 /** \brief \a relate (WholeHullsProof or FullProof) on the
     two solids of a pair (CpuBackend's hullRelation). \a links are the state's link poses (double,
     world frame), as the CPU backend's. */
@@ -505,25 +523,13 @@ template <class Relate>
 RC_HD HullRelation pairHullRelation(const ModelArrays &model, std::uint32_t pair, const Pose<double> *links,
                                     double padding, bool proveOverlap, Relate &&relate)
 {
-    const std::uint32_t m = static_cast<std::uint32_t>(model.numComponents);
-    const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model.numObjects) * m;
     // One call of the proof for both kinds of pair: on the device a call site is an inlined copy,
     // and two copies cost the light proof 11 registers a thread (sm_90).
     std::uint32_t a, b;
-    Pose<double> poseB = Pose<double>::identity();
-    if (pair < environmentPairs)
-    {
-        a = pair % m;
-        b = m + pair / m;
-    }
-    else
-    {
-        const int *self = model.selfPairs + 2 * (pair - environmentPairs);
-        a = static_cast<std::uint32_t>(self[0]);
-        b = static_cast<std::uint32_t>(self[1]);
-        poseB = links[model.componentLink[b]];
-    }
-    return relate(model.convex, a, links[model.componentLink[a]], b, poseB, padding, proveOverlap);
+    pairSolidNumbers(model, pair, a, b);
+    const bool objectB = b >= static_cast<std::uint32_t>(model.numComponents);
+    return relate(model.convex, a, links[model.componentLink[a]], b,
+                  objectB ? Pose<double>::identity() : links[model.componentLink[b]], padding, proveOverlap);
 }
 
 RC_HD Vec3<float> stageVertex(const StageSolid &solid, std::uint32_t index)
@@ -702,14 +708,8 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         const double padding = pairPadding(md, st, out.state, out.pair);
         if (curved)
         {
-            // Solids in CurvedArrays' numbering: the components, then the objects.
-            const std::uint32_t solidA = out.pair < environmentPairs
-                                             ? out.pair % m
-                                             : static_cast<std::uint32_t>(md.selfPairs[2 * (out.pair - environmentPairs)]);
-            const std::uint32_t solidB =
-                out.pair < environmentPairs
-                    ? m + out.pair / m
-                    : static_cast<std::uint32_t>(md.selfPairs[2 * (out.pair - environmentPairs) + 1]);
+            std::uint32_t solidA, solidB;
+            pairSolidNumbers(md, out.pair, solidA, solidB);
             if (!curvedPairCollides(md.curvedShapes, solidA, poseA, a, closedA, solidB, poseB, b, closedB, padding))
             {
                 out.status = PairApart;
