@@ -39,9 +39,28 @@ void check(cudaError_t status, const char *what)
     }
 }
 
+/** \brief The first statement of every stage kernel, for programmatic dependent launch (sm_90 on):
+    wait until the kernel before it in the stream has finished and its writes are visible, then
+    let the next kernel be launched. A kernel launched with the programmatic-serialization
+    attribute (CudaExecutor::launch) may start before its predecessor ends, so its blocks are
+    resident and waiting here when the predecessor's last block exits: the launch's latency
+    overlaps the predecessor instead of following it. Launched without the attribute (or where
+    the predecessor is a copy or a CUB kernel, which does not trigger) both instructions return at
+    once. The trigger comes after the wait, so a kernel's successor is scheduled only once every
+    block of this kernel has started and its own predecessor has ended: waiting blocks never take
+    an SM from the kernels before them. */
+__device__ __forceinline__ void followPreviousKernel()
+{
+#if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
+    asm volatile("griddepcontrol.wait;" ::: "memory");
+    asm volatile("griddepcontrol.launch_dependents;" :::);
+#endif
+}
+
 template <class F>
 __global__ void forEachKernel(std::size_t n, F f)
 {
+    followPreviousKernel();
     const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i < n)
         f(i);
@@ -77,6 +96,7 @@ unsigned blockThreads()
 template <class F>
 __global__ void __launch_bounds__(kHeavyBlockThreads, 2) forEachHeavyKernel(std::size_t n, F f)
 {
+    followPreviousKernel();
     const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i < n)
         f(i);
@@ -86,6 +106,7 @@ __global__ void __launch_bounds__(kHeavyBlockThreads, 2) forEachHeavyKernel(std:
 template <class F>
 __global__ void forEachCountedKernel(device::Extent extent, F f)
 {
+    followPreviousKernel();
     const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i < extent.size())
         f(i);
@@ -193,10 +214,34 @@ bool graphsAllowed()
     return !(setting && std::strcmp(setting, "0") == 0);
 }
 
+/** \brief Whether stage kernels may be launched before the kernel ahead of them ends (programmatic
+    dependent launch, sm_90 on): yes unless RASTERCHECK_CUDA_PDL=0 (to measure one against the other
+    in the same run, scripts/gpu-check.sh). */
+bool programmaticLaunchAllowed()
+{
+    const char *setting = std::getenv("RASTERCHECK_CUDA_PDL");
+    return !(setting && std::strcmp(setting, "0") == 0);
+}
+
+/** \brief Whether the stage kernels were compiled with followPreviousKernel's wait: from a virtual
+    architecture of 9.0 or later. Code for an earlier one (PTX the driver compiles for a newer
+    device) lacks it and must not overlap its predecessor. Every kernel of this file comes from the
+    same images, so probeKernel answers for all of them. */
+bool kernelsFollowPreviousKernel()
+{
+    cudaFuncAttributes attributes{};
+    const bool known = cudaFuncGetAttributes(&attributes, probeKernel) == cudaSuccess;
+    cudaGetLastError();
+    return known && attributes.ptxVersion >= 90;
+}
+
 class CudaExecutor
 {
 public:
-    explicit CudaExecutor(unsigned blockThreads) : graphs_(graphsAllowed()), threads_(blockThreads)
+    explicit CudaExecutor(unsigned blockThreads)
+        : graphs_(graphsAllowed()),
+          programmaticLaunch_(programmaticLaunchAllowed() && kernelsFollowPreviousKernel()),
+          threads_(blockThreads)
     {
         check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
     }
@@ -293,13 +338,8 @@ public:
         if (n == 0)
             return;
         ++counts_.launches;
-        recorder_.issue(
-            [this, n, f]
-            {
-                forEachKernel<<<blocksFor(n, threads_), threads_, 0, stream_>>>(n, f);
-                check(cudaGetLastError(), "kernel launch");
-            },
-            reinterpret_cast<const void *>(&forEachKernel<F>), n, f);
+        recorder_.issue([this, n, f] { launch(&forEachKernel<F>, blocksFor(n, threads_), threads_, n, f); },
+                        reinterpret_cast<const void *>(&forEachKernel<F>), n, f);
     }
 
     /** \brief forEach for a stage whose per-element code is register-heavy (forEachHeavyKernel). */
@@ -309,13 +349,9 @@ public:
         if (n == 0)
             return;
         ++counts_.launches;
-        recorder_.issue(
-            [this, n, f]
-            {
-                forEachHeavyKernel<<<blocksFor(n, kHeavyBlockThreads), kHeavyBlockThreads, 0, stream_>>>(n, f);
-                check(cudaGetLastError(), "kernel launch");
-            },
-            reinterpret_cast<const void *>(&forEachHeavyKernel<F>), n, f);
+        recorder_.issue([this, n, f]
+                        { launch(&forEachHeavyKernel<F>, blocksFor(n, kHeavyBlockThreads), kHeavyBlockThreads, n, f); },
+                        reinterpret_cast<const void *>(&forEachHeavyKernel<F>), n, f);
     }
 
     /** \brief f(i) for i below the extent's count, read on the device: a thread per element of its
@@ -326,13 +362,9 @@ public:
         if (extent.bound == 0)
             return;
         ++counts_.launches;
-        recorder_.issue(
-            [this, extent, f]
-            {
-                forEachCountedKernel<<<blocksFor(extent.bound, threads_), threads_, 0, stream_>>>(extent, f);
-                check(cudaGetLastError(), "kernel launch");
-            },
-            reinterpret_cast<const void *>(&forEachCountedKernel<F>), extent, f);
+        recorder_.issue([this, extent, f]
+                        { launch(&forEachCountedKernel<F>, blocksFor(extent.bound, threads_), threads_, extent, f); },
+                        reinterpret_cast<const void *>(&forEachCountedKernel<F>), extent, f);
     }
 
     /** \brief The indices i < n with flags[i] set into \a selected, their number into *count
@@ -453,6 +485,30 @@ public:
     }
 
 private:
+    /** \brief \a kernel (one that begins with followPreviousKernel) over \a blocks blocks of
+        \a threads on the stream; where its wait was compiled in, with programmatic stream
+        serialization, so that
+        its launch overlaps the kernel before it. A small call is some twenty kernels in a row,
+        most of them a few microseconds long; in a CUDA graph the attribute becomes a programmatic
+        edge. */
+    template <class... Params, class... Args>
+    void launch(void (*kernel)(Params...), unsigned blocks, unsigned threads, Args... args)
+    {
+        cudaLaunchAttribute overlap{};
+        overlap.id = cudaLaunchAttributeProgrammaticStreamSerialization;
+        overlap.val.programmaticStreamSerializationAllowed = 1;
+        cudaLaunchConfig_t config{};
+        config.gridDim = dim3(blocks);
+        config.blockDim = dim3(threads);
+        config.stream = stream_;
+        if (programmaticLaunch_)
+        {
+            config.attrs = &overlap;
+            config.numAttrs = 1;
+        }
+        check(cudaLaunchKernelEx(&config, kernel, args...), "kernel launch");
+    }
+
     using Recorder = PassRecorder<GraphExec>;
     using Operation = Recorder::Operation;
     /** \brief Tags of the operations that are not kernels of the driver's, in signatures. */
@@ -576,6 +632,7 @@ private:
     std::array<PinnedAllocation, device::kNumStageBuffers> mirrors_;
     std::array<bool, device::kNumStageBuffers> mirrorInUse_{};  // a queued copy reads or writes it
     bool graphs_;
+    bool programmaticLaunch_;  ///< programmaticLaunchAllowed()
     unsigned threads_;  ///< per block, forEach and forEachCounted (blockThreads())
     Recorder recorder_;
 };

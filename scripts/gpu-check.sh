@@ -105,7 +105,10 @@ run() {
                 step bench-raster 200 .gpu/bin/rastercheck_bench_backends 100000 raster
                 # Small calls without CUDA graphs (each kernel launched, as before they were
                 # replayed), for the per-call columns side by side.
-                step bench-safe-nographs 200 env RASTERCHECK_CUDA_GRAPHS=0 .gpu/bin/rastercheck_bench_backends 1000 safe ;;
+                step bench-safe-nographs 200 env RASTERCHECK_CUDA_GRAPHS=0 .gpu/bin/rastercheck_bench_backends 1000 safe
+                # And with each stage kernel launched only once the one before it has ended (no
+                # programmatic dependent launch), graphs on.
+                step bench-safe-nopdl 200 env RASTERCHECK_CUDA_PDL=0 .gpu/bin/rastercheck_bench_backends 1000 safe ;;
             plan)
                 # BatchRRTConnect on Panda problems 1-10 of every scenario, certified edges, 1 s: the
                 # checker on the GPU (batches of 8 and 256 samples, every batch of 32 states or more
