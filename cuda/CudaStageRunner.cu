@@ -487,10 +487,9 @@ public:
 private:
     /** \brief \a kernel (one that begins with followPreviousKernel) over \a blocks blocks of
         \a threads on the stream; where its wait was compiled in, with programmatic stream
-        serialization, so that
-        its launch overlaps the kernel before it. A small call is some twenty kernels in a row,
-        most of them a few microseconds long; in a CUDA graph the attribute becomes a programmatic
-        edge. */
+        serialization, so that its launch overlaps the kernel before it. A small call is some
+        twenty kernels in a row, most of them a few microseconds long; in a CUDA graph the
+        attribute becomes a programmatic edge. */
     template <class... Params, class... Args>
     void launch(void (*kernel)(Params...), unsigned blocks, unsigned threads, Args... args)
     {
