@@ -522,33 +522,52 @@ private:
         kSort
     };
 
+    /** \brief The graph instantiated from \a operations issued in stream capture, or null where
+        capturing or instantiating fails (nothing has run then). */
+    cudaGraphExec_t capture(std::vector<Operation> &operations)
+    {
+        if (cudaStreamBeginCapture(stream_, cudaStreamCaptureModeRelaxed) != cudaSuccess)
+        {
+            cudaGetLastError();  // a failed capture must not resurface at the next launch check
+            return nullptr;
+        }
+        bool issued = true;
+        try
+        {
+            Recorder::issueAll(operations);
+        }
+        catch (const std::exception &)
+        {
+            issued = false;
+        }
+        cudaGraph_t graph = nullptr;
+        cudaGraphExec_t exec = nullptr;
+        const bool captured = cudaStreamEndCapture(stream_, &graph) == cudaSuccess && issued && graph;
+        if (captured && cudaGraphInstantiate(&exec, graph, 0) != cudaSuccess)
+            exec = nullptr;
+        if (graph)
+            cudaGraphDestroy(graph);
+        if (!exec)
+            cudaGetLastError();
+        return exec;
+    }
+
     /** \brief A pass's operations captured as a CUDA graph, which is launched. Where capturing
         fails, nothing has run: the operations are issued one by one, now and at each replay. */
     GraphExec compile(std::vector<Operation> &operations)
     {
-        cudaGraph_t graph = nullptr;
-        cudaGraphExec_t exec = nullptr;
-        bool captured = cudaStreamBeginCapture(stream_, cudaStreamCaptureModeRelaxed) == cudaSuccess;
-        if (captured)
+        cudaGraphExec_t exec = capture(operations);
+        if (!exec && programmaticLaunch_)
         {
-            try
-            {
-                Recorder::issueAll(operations);
-            }
-            catch (const std::exception &)
-            {
-                captured = false;
-            }
-            captured = cudaStreamEndCapture(stream_, &graph) == cudaSuccess && captured && graph;
-            captured = captured && cudaGraphInstantiate(&exec, graph, 0) == cudaSuccess;
-            if (graph)
-                cudaGraphDestroy(graph);
+            // A driver that cannot capture programmatic launches: graphs save more than the
+            // overlapped launches, so this executor gives those up (unless the pass fails to
+            // capture without them as well: then they were not the reason).
+            programmaticLaunch_ = false;
+            exec = capture(operations);
+            programmaticLaunch_ = !exec;
         }
-        if (!captured)
+        if (!exec)
         {
-            cudaGetLastError();  // a failed capture must not resurface at the next launch check
-            if (exec)
-                cudaGraphExecDestroy(exec);
             Recorder::issueAll(operations);
             return GraphExec();
         }
