@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include <cub/block/block_scan.cuh>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 #include <cub/device/device_select.cuh>
@@ -119,6 +120,78 @@ __global__ void iotaKernel(std::uint32_t *out, std::size_t n)
     const std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i < n)
         out[i] = static_cast<std::uint32_t>(i);
+}
+
+/** \brief Threads and items a thread of the one-block scan and compaction below: tiles of 8 192
+    elements. */
+constexpr unsigned kOneBlockThreads = 1024;
+constexpr int kOneBlockItems = 8;
+/** \brief Up to this many elements a scan or a compaction is one kernel of one block (two tiles).
+    CUB's are two kernels (the tiles' look-back states, then the tiles) and, for a scan's total, a
+    copy: three steps of a small call's chain, each at least a launch's minimum, for a few thousand
+    elements (32 Panda states are 3 136 to 8 064 (state, pair) elements). */
+constexpr std::size_t kOneBlockMost = 2 * std::size_t{kOneBlockThreads} * kOneBlockItems;
+
+/** \brief out[i] = sum of in[0..i) for i < n (in and out may alias), *total = out[n - 1]; n >= 1.
+    One block, tile after tile, each thread holding kOneBlockItems consecutive elements. */
+__global__ void __launch_bounds__(kOneBlockThreads)
+    oneBlockExclusiveSumKernel(const unsigned long long *in, unsigned long long *out, std::size_t n,
+                               unsigned long long *total)
+{
+    followPreviousKernel();
+    using Scan = cub::BlockScan<unsigned long long, kOneBlockThreads>;
+    __shared__ typename Scan::TempStorage scratch;
+    unsigned long long carry = 0;  // the sum of the tiles before, the same in every thread
+    for (std::size_t base = 0; base < n; base += std::size_t{kOneBlockThreads} * kOneBlockItems)
+    {
+        const std::size_t first = base + std::size_t{threadIdx.x} * kOneBlockItems;
+        unsigned long long items[kOneBlockItems];
+        for (int j = 0; j < kOneBlockItems; ++j)
+            items[j] = first + j < n ? in[first + j] : 0;
+        unsigned long long tileSum = 0;
+        Scan(scratch).ExclusiveSum(items, items, tileSum);  // every thread's loads come before its barrier
+        for (int j = 0; j < kOneBlockItems; ++j)
+            if (first + j < n)
+            {
+                out[first + j] = carry + items[j];
+                if (first + j == n - 1)
+                    *total = carry + items[j];
+            }
+        carry += tileSum;
+        __syncthreads();  // the next tile reuses the scan's shared memory
+    }
+}
+
+/** \brief The indices i < n with flags[i] set into \a selected, in order, and their number into
+ *count: one block, as oneBlockExclusiveSumKernel. */
+__global__ void __launch_bounds__(kOneBlockThreads)
+    oneBlockSelectFlaggedKernel(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected,
+                                unsigned long long *count)
+{
+    followPreviousKernel();
+    using Scan = cub::BlockScan<std::uint32_t, kOneBlockThreads>;
+    __shared__ typename Scan::TempStorage scratch;
+    unsigned long long carry = 0;  // selected in the tiles before, the same in every thread
+    for (std::size_t base = 0; base < n; base += std::size_t{kOneBlockThreads} * kOneBlockItems)
+    {
+        const std::size_t first = base + std::size_t{threadIdx.x} * kOneBlockItems;
+        bool kept[kOneBlockItems];
+        std::uint32_t place[kOneBlockItems];
+        for (int j = 0; j < kOneBlockItems; ++j)
+        {
+            kept[j] = first + j < n && flags[first + j] != 0;
+            place[j] = kept[j] ? 1 : 0;
+        }
+        std::uint32_t tileCount = 0;
+        Scan(scratch).ExclusiveSum(place, place, tileCount);
+        for (int j = 0; j < kOneBlockItems; ++j)
+            if (kept[j])
+                selected[carry + place[j]] = static_cast<std::uint32_t>(first + j);
+        carry += tileCount;
+        __syncthreads();  // the next tile reuses the scan's shared memory
+    }
+    if (threadIdx.x == 0)
+        *count = carry;
 }
 
 /** \brief One allocation that only grows, freed with its owner: device memory, or page-locked
@@ -378,13 +451,20 @@ public:
                             kZeroCount, count);
             return;
         }
+        ++counts_.launches;
+        if (n <= kOneBlockMost)
+        {
+            recorder_.issue([=]
+                            { launch(&oneBlockSelectFlaggedKernel, 1, kOneBlockThreads, flags, n, selected, count); },
+                            kOneBlockSelect, flags, n, selected, count);
+            return;
+        }
         const thrust::counting_iterator<std::uint32_t> indices(0);
         const auto items = static_cast<std::int64_t>(n);
         std::size_t bytes = 0;
         check(cub::DeviceSelect::Flagged(nullptr, bytes, indices, flags, selected, count, items, stream_),
               "cub::DeviceSelect::Flagged (size)");
         void *temp = reserve(temp_, bytes, "cudaMalloc (CUB scratch)");
-        ++counts_.launches;
         recorder_.issue(
             [=]
             {
@@ -435,10 +515,16 @@ public:
         total, copied to *total (device memory, not waited for). */
     void exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n, unsigned long long *total)
     {
+        ++counts_.launches;
+        if (n <= kOneBlockMost)
+        {
+            recorder_.issue([=] { launch(&oneBlockExclusiveSumKernel, 1, kOneBlockThreads, in, out, n, total); },
+                            kOneBlockScan, in, out, n, total);
+            return;
+        }
         std::size_t bytes = 0;
         check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, n, stream_), "cub::DeviceScan::ExclusiveSum (size)");
         void *temp = reserve(temp_, bytes, "cudaMalloc (CUB scratch)");
-        ++counts_.launches;
         recorder_.issue(
             [=]
             {
@@ -517,8 +603,10 @@ private:
         kDownload,
         kZeroCount,
         kSelect,
+        kOneBlockSelect,
         kOrder,
         kScan,
+        kOneBlockScan,
         kSort
     };
 
