@@ -162,8 +162,8 @@ __global__ void __launch_bounds__(kOneBlockThreads)
     }
 }
 
-/** \brief The indices i < n with flags[i] set into \a selected, in order, and their number into
- *count: one block, as oneBlockExclusiveSumKernel. */
+/** \brief The indices i < n with flags[i] set into \a selected, in order, and how many into the
+    count: one block, as oneBlockExclusiveSumKernel. */
 __global__ void __launch_bounds__(kOneBlockThreads)
     oneBlockSelectFlaggedKernel(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected,
                                 unsigned long long *count)
