@@ -45,9 +45,9 @@ void check(cudaError_t status, const char *what)
     let the next kernel be launched. A kernel launched with the programmatic-serialization
     attribute (CudaExecutor::launch) may start before its predecessor ends, so its blocks are
     resident and waiting here when the predecessor's last block exits: the launch's latency
-    overlaps the predecessor instead of following it. Launched without the attribute (or where
-    the predecessor is a copy or a CUB kernel, which does not trigger) both instructions return at
-    once. The trigger comes after the wait, so a kernel's successor is scheduled only once every
+    overlaps the predecessor instead of following it. Launched without the attribute, both
+    instructions return at once; after a copy, or a CUB kernel (which does not trigger), the kernel
+    starts when that ends, as it would without the attribute. The trigger comes after the wait, so a kernel's successor is scheduled only once every
     block of this kernel has started and its own predecessor has ended: waiting blocks never take
     an SM from the kernels before them. */
 __device__ __forceinline__ void followPreviousKernel()
