@@ -591,7 +591,17 @@ private:
             config.attrs = &overlap;
             config.numAttrs = 1;
         }
-        check(cudaLaunchKernelEx(&config, kernel, args...), "kernel launch");
+        cudaError_t status = cudaLaunchKernelEx(&config, kernel, args...);
+        if (status != cudaSuccess && config.numAttrs > 0)
+        {
+            // A driver that refuses the attribute: this executor launches as before from now on.
+            cudaGetLastError();
+            programmaticLaunch_ = false;
+            config.attrs = nullptr;
+            config.numAttrs = 0;
+            status = cudaLaunchKernelEx(&config, kernel, args...);
+        }
+        check(status, "kernel launch");
     }
 
     using Recorder = PassRecorder<GraphExec>;
