@@ -347,7 +347,7 @@ public:
             return destination;
         T *staged = static_cast<T *>(mirror(slot, count * sizeof(T), true));
         const std::size_t bytes = count * sizeof(T);
-        std::memcpy(staged, source, bytes);  // now: the copy to the device may run later
+        copyInParallel(staged, source, bytes);  // now: the copy to the device may run later
         recorder_.issue(
             [this, destination, staged, bytes] {
                 check(cudaMemcpyAsync(destination, staged, bytes, cudaMemcpyHostToDevice, stream_),

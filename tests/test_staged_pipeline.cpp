@@ -482,6 +482,33 @@ TEST(StagedPipeline, ASmallBatchWaitsOnceAndAllocatesNothingAfterTheFirst)
     EXPECT_GT(stages.fragments, 0u);
 }
 
+TEST(StageChunks, CopyInParallelCopiesEveryByteAtEverySize)
+{
+    // Below, at and past the size where the copy is split over threads, an odd size whose last piece
+    // is short, and inside another parallel region (where it runs on one thread).
+    constexpr std::size_t kSplitFrom = std::size_t(1) << 20;
+    for (const std::size_t bytes :
+         {std::size_t(0), std::size_t(1), kSplitFrom - 1, kSplitFrom, kSplitFrom + 1, std::size_t(3670019)})
+        for (const bool nested : {false, true})
+        {
+            std::vector<unsigned char> from(bytes), to(bytes + 1, 0xAB);
+            for (std::size_t i = 0; i < bytes; ++i)
+                from[i] = static_cast<unsigned char>((i * 2654435761u) >> 13);
+            if (nested)
+            {
+#pragma omp parallel num_threads(2)
+                {
+#pragma omp single
+                    rc::copyInParallel(to.data(), from.data(), bytes);
+                }
+            }
+            else
+                rc::copyInParallel(to.data(), from.data(), bytes);
+            EXPECT_TRUE(std::equal(from.begin(), from.end(), to.begin())) << bytes << " bytes, nested " << nested;
+            EXPECT_EQ(to[bytes], 0xAB) << "wrote past the end: " << bytes << " bytes";
+        }
+}
+
 TEST(PassRecorder, IssuesInOrderRemembersSixteenPassesAndComparesValuesNotPadding)
 {
     struct Compiled

@@ -72,6 +72,24 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.objectTreePlacement};
 }
 
+void copyInParallel(void *to, const void *from, std::size_t bytes)
+{
+    constexpr std::size_t kPiece = std::size_t(1) << 18;
+    if (bytes < 4 * kPiece)
+    {
+        std::memcpy(to, from, bytes);
+        return;
+    }
+    const auto pieces = static_cast<std::ptrdiff_t>((bytes + kPiece - 1) / kPiece);
+#pragma omp parallel for schedule(static)
+    for (std::ptrdiff_t k = 0; k < pieces; ++k)
+    {
+        const std::size_t start = static_cast<std::size_t>(k) * kPiece;
+        std::memcpy(static_cast<char *>(to) + start, static_cast<const char *>(from) + start,
+                    std::min(kPiece, bytes - start));
+    }
+}
+
 device::StageSettings stageSettings(const CollisionModel &model, const CollisionRequest &request, bool contactsAsked)
 {
     device::StageSettings settings{};
@@ -140,7 +158,7 @@ public:
     {
         T *destination = buffer<T>(slot, std::max<std::size_t>(count, 1));
         if (count > 0)
-            std::memcpy(destination, source, count * sizeof(T));
+            copyInParallel(destination, source, count * sizeof(T));
         return destination;
     }
 
