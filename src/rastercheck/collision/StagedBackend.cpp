@@ -75,6 +75,8 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
 void copyInParallel(void *to, const void *from, std::size_t bytes)
 {
     constexpr std::size_t kPiece = std::size_t(1) << 18;
+    if (bytes == 0)
+        return;  // memcpy may not be handed a null pointer, even for no bytes
     if (bytes < 4 * kPiece)
     {
         std::memcpy(to, from, bytes);
