@@ -748,7 +748,9 @@ private:
     std::array<PinnedAllocation, device::kNumStageBuffers> mirrors_;
     std::array<bool, device::kNumStageBuffers> mirrorInUse_{};  // a queued copy reads or writes it
     bool graphs_;
-    bool programmaticLaunch_;  ///< programmaticLaunchAllowed()
+    /// programmaticLaunchAllowed() and kernelsFollowPreviousKernel(); off for good once the driver
+    /// refuses the attribute at a launch or in a graph (launch, compile)
+    bool programmaticLaunch_;
     unsigned threads_;  ///< per block, forEach and forEachCounted (blockThreads())
     Recorder recorder_;
 };
