@@ -47,9 +47,9 @@ void check(cudaError_t status, const char *what)
     resident and waiting here when the predecessor's last block exits: the launch's latency
     overlaps the predecessor instead of following it. Launched without the attribute, both
     instructions return at once; after a copy, or a CUB kernel (which does not trigger), the kernel
-    starts when that ends, as it would without the attribute. The trigger comes after the wait, so a kernel's successor is scheduled only once every
-    block of this kernel has started and its own predecessor has ended: waiting blocks never take
-    an SM from the kernels before them. */
+    starts when that ends, as it would without the attribute. The trigger comes after the wait, so
+    a kernel's successor is scheduled only once every block of this kernel has started and its own
+    predecessor has ended: waiting blocks never take an SM from the kernels before them. */
 __device__ __forceinline__ void followPreviousKernel()
 {
 #if defined(__CUDA_ARCH__) && __CUDA_ARCH__ >= 900
@@ -279,20 +279,13 @@ private:
     cudaGraphExec_t exec_;
 };
 
-/** \brief Whether small passes may be replayed as CUDA graphs: yes unless RASTERCHECK_CUDA_GRAPHS=0
-    (to measure one against the other in the same run, scripts/gpu-check.sh). */
-bool graphsAllowed()
+/** \brief Whether the executor's optimisation named by \a variable is on: yes unless the variable
+    is 0 (to measure one against the other in the same run, scripts/gpu-check.sh).
+    RASTERCHECK_CUDA_GRAPHS: small passes replayed as CUDA graphs. RASTERCHECK_CUDA_PDL: stage
+    kernels launched before the kernel ahead of them ends (programmatic dependent launch, sm_90 on). */
+bool allowedUnlessZero(const char *variable)
 {
-    const char *setting = std::getenv("RASTERCHECK_CUDA_GRAPHS");
-    return !(setting && std::strcmp(setting, "0") == 0);
-}
-
-/** \brief Whether stage kernels may be launched before the kernel ahead of them ends (programmatic
-    dependent launch, sm_90 on): yes unless RASTERCHECK_CUDA_PDL=0 (to measure one against the other
-    in the same run, scripts/gpu-check.sh). */
-bool programmaticLaunchAllowed()
-{
-    const char *setting = std::getenv("RASTERCHECK_CUDA_PDL");
+    const char *setting = std::getenv(variable);
     return !(setting && std::strcmp(setting, "0") == 0);
 }
 
@@ -312,8 +305,8 @@ class CudaExecutor
 {
 public:
     explicit CudaExecutor(unsigned blockThreads)
-        : graphs_(graphsAllowed()),
-          programmaticLaunch_(programmaticLaunchAllowed() && kernelsFollowPreviousKernel()),
+        : graphs_(allowedUnlessZero("RASTERCHECK_CUDA_GRAPHS")),
+          programmaticLaunch_(allowedUnlessZero("RASTERCHECK_CUDA_PDL") && kernelsFollowPreviousKernel()),
           threads_(blockThreads)
     {
         check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
@@ -748,7 +741,7 @@ private:
     std::array<PinnedAllocation, device::kNumStageBuffers> mirrors_;
     std::array<bool, device::kNumStageBuffers> mirrorInUse_{};  // a queued copy reads or writes it
     bool graphs_;
-    /// programmaticLaunchAllowed() and kernelsFollowPreviousKernel(); off for good once the driver
+    /// RASTERCHECK_CUDA_PDL not 0 and kernelsFollowPreviousKernel(); off for good once the driver
     /// refuses the attribute at a launch or in a graph (launch, compile)
     bool programmaticLaunch_;
     unsigned threads_;  ///< per block, forEach and forEachCounted (blockThreads())
