@@ -829,6 +829,11 @@ public:
         arrays_.curvedShapes.shapes = uploadOnce(model_memory_, host.curvedShapes.shapes, host.numCurvedShapes);
         arrays_.curvedShapes.reach = uploadOnce(model_memory_, host.curvedShapes.reach, host.numCurvedShapes);
         arrays_.curvedShapes.solidShapes = uploadOnce(model_memory_, host.curvedShapes.solidShapes, m + o + 1);
+        if (host.clearanceTables.tableOf)
+            arrays_.clearanceTables = device::ClearanceTableArrays{
+                uploadOnce(model_memory_, host.clearanceTables.tableOf, static_cast<std::size_t>(host.numSelfPairs)),
+                uploadOnce(model_memory_, host.clearanceTables.tables, host.numClearanceTables),
+                uploadOnce(model_memory_, host.clearanceTables.clearance, host.numClearanceNodes)};
         arrays_.objectExact = uploadExact(host.objectExact, host.numObjectTriangleIndices / 3, host.numObjectGridCells,
                                           host.numObjectProbeDoubles, host.numObjectShellStarts, o);
 

@@ -349,6 +349,53 @@ TEST(StagedPipeline, TheTwoProofKernelsSettleWhatOneFullProofPerPairSettles)
     EXPECT_GT(suites, 0u);
 }
 
+TEST(StagedPipeline, ThePairCullDropsTheSelfPairsTheClearanceTablesProveApart)
+{
+    // Safe and exact mode: a self pair that its joint-space clearance table proves apart skips the
+    // proofs in the stages, as it does in the CPU backend's self-pair loop (SelfPairTables). Exact
+    // mode returns every pair past the culls: with the tables, none of those the tables prove apart
+    // (at the request's padding); without, exactly those more.
+    std::size_t provenApart = 0;
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(100)))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        if (model->selfPairTables.numTables() == 0)
+            continue;
+        rc::CollisionRequest request;
+        request.mode = rc::CollisionMode::Exact;
+        request.padding = 0.002;
+        rc::device::StageSettings settings = rc::stageSettings(*model, request, false);
+        ASSERT_TRUE(settings.clearanceTables) << "exact mode reads the tables";
+        const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
+        std::vector<std::uint8_t> admissible(n);
+        for (std::size_t i = 0; i < n; ++i)
+            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model->numObjects() * model->numComponents());
+        // The (state, pair) outcomes of self pairs the tables prove apart, and all outcomes.
+        const auto run = [&](bool tables, std::size_t &tableApart)
+        {
+            settings.clearanceTables = tables;
+            std::vector<rc::device::PairOutcome> outcomes;
+            poisonedStages(model)->run(suite.states.data(), admissible.data(), n, settings, outcomes);
+            tableApart = 0;
+            for (const rc::device::PairOutcome &o : outcomes)
+                if (o.pair >= environmentPairs &&
+                    model->selfPairTables.apart(o.pair - environmentPairs, suite.states.data() + o.state * dof,
+                                                request.padding))
+                    ++tableApart;
+            return outcomes.size();
+        };
+        std::size_t withTables = 0, withoutTables = 0;
+        const std::size_t pastWith = run(true, withTables), pastWithout = run(false, withoutTables);
+        EXPECT_EQ(withTables, 0u) << suite.name << ": pairs the tables prove apart went past the cull";
+        EXPECT_EQ(pastWithout - pastWith, withoutTables) << suite.name;
+        std::printf("%s: %zu pairs past the box culls, %zu of them self pairs the tables prove apart\n",
+                    suite.name.c_str(), pastWithout, withoutTables);
+        provenApart += withoutTables;
+    }
+    EXPECT_GT(provenApart, 0u) << "no suite has a self pair past the box culls that its table proves apart";
+}
+
 TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
 {
     // Certified midpoints (CertifiedMotionValidator, BatchRRTConnect) give every (state, pair) its own

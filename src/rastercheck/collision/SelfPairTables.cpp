@@ -77,13 +77,13 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
         const int a = model.selfPairs[p].first, b = model.selfPairs[p].second;  // (a lambda below reads them)
         if (!pairCoordinates(robot, bound, a, b, followed, coordinates))
             continue;
-        Table table;
+        device::ClearanceTable table;
         table.numAxes = static_cast<int>(coordinates.size());
         std::size_t numNodes = 1;
         bool finiteRates = true;
         for (int k = 0; k < table.numAxes; ++k)
         {
-            Axis &axis = table.axes[k];
+            device::ClearanceAxis &axis = table.axes[k];
             axis.coordinate = coordinates[static_cast<std::size_t>(k)];
             const auto c = static_cast<std::size_t>(axis.coordinate);
             axis.lower = robot.lowerBounds[c];
@@ -119,7 +119,7 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
                         std::size_t rest = node;
                         for (int k = table.numAxes; k-- > 0;)
                         {
-                            const Axis &axis = table.axes[k];
+                            const device::ClearanceAxis &axis = table.axes[k];
                             const auto index = static_cast<int>(rest % static_cast<std::size_t>(axis.nodes));
                             rest /= static_cast<std::size_t>(axis.nodes);
                             q[static_cast<std::size_t>(axis.coordinate)] =
@@ -159,27 +159,12 @@ SelfPairTables::SelfPairTables(const CollisionModel &model)
 
 bool SelfPairTables::apart(std::size_t pair, const double *q, double padding) const
 {
-    if (pair >= tableOf_.size() || tableOf_[pair] < 0)
-        return false;
-    const Table &table = tables_[static_cast<std::size_t>(tableOf_[pair])];
-    double sweep = 0.0;
-    std::size_t index = 0;
-    for (int k = 0; k < table.numAxes; ++k)
-    {
-        const Axis &axis = table.axes[k];
-        const double value = q[axis.coordinate];
-        if (!std::isfinite(value))
-            return false;
-        const double node = std::clamp(std::round((value - axis.lower) / axis.step), 0.0, double(axis.nodes - 1));
-        sweep += axis.rate * std::fabs(value - (axis.lower + static_cast<int>(node) * axis.step));
-        index = index * static_cast<std::size_t>(axis.nodes) + static_cast<std::size_t>(node);
-    }
-    // The sweep's own rounding: a relative 1e-12 of it.
-    return static_cast<double>(clearance_[table.firstClearance + index]) - sweep * (1 + 1e-12) > padding;
+    return pair < tableOf_.size() && device::selfPairApartByTable(arrays(), pair, q, padding);
 }
 
 std::size_t SelfPairTables::memoryBytes() const
 {
-    return tableOf_.size() * sizeof(int) + tables_.size() * sizeof(Table) + clearance_.size() * sizeof(float);
+    return tableOf_.size() * sizeof(int) + tables_.size() * sizeof(device::ClearanceTable) +
+           clearance_.size() * sizeof(float);
 }
 }  // namespace rastercheck

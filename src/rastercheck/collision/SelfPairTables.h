@@ -3,6 +3,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "rastercheck/device/ClearanceTables.h"
+
 namespace rastercheck
 {
 class CollisionModel;
@@ -46,23 +48,19 @@ public:
     /** \brief Bytes the tables hold. */
     std::size_t memoryBytes() const;
 
+    /** \brief The tables as flat arrays (device::selfPairApartByTable reads them), valid while this
+        object lives. */
+    device::ClearanceTableArrays arrays() const
+    {
+        return tableOf_.empty() ? device::ClearanceTableArrays{}
+                                : device::ClearanceTableArrays{tableOf_.data(), tables_.data(), clearance_.data()};
+    }
+    /** \brief The number of nodes of all tables (the size of arrays().clearance). */
+    std::size_t numNodes() const { return clearance_.size(); }
+
 private:
-    struct Axis
-    {
-        int coordinate = -1;
-        double lower = 0.0;
-        double step = 0.0;  ///< between nodes
-        int nodes = 1;
-        double rate = 0.0;  ///< MotionBound's pair sweep per unit change of the coordinate
-    };
-    struct Table
-    {
-        Axis axes[2];
-        int numAxes = 0;
-        std::size_t firstClearance = 0;  ///< the table's nodes in clearance_
-    };
     std::vector<int> tableOf_;      ///< per self pair: index into tables_, or -1
-    std::vector<Table> tables_;     ///< n_tables
+    std::vector<device::ClearanceTable> tables_;  ///< n_tables
     std::vector<float> clearance_;  ///< per table, per node (axis 0 slowest); -infinity where no proof held
 };
 }  // namespace rastercheck

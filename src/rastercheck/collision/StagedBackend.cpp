@@ -69,7 +69,10 @@ device::ModelArrays hostModelArrays(const CollisionModel &model)
                                model.curved.refinedPairs().size(),
                                model.curved.arrays(),
                                model.curved.shapes().size(),
-                               model.objectTreePlacement};
+                               model.objectTreePlacement,
+                               model.selfPairTables.arrays(),
+                               model.selfPairTables.numTables(),
+                               model.selfPairTables.numNodes()};
 }
 
 void copyInParallel(void *to, const void *from, std::size_t bytes)
@@ -108,6 +111,7 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
     settings.proveOverlaps = rules.proveOverlaps;
     settings.meshObstaclesUnproven = rules.meshObstaclesExact;
     settings.unprovenCollides = rules.unprovenCollides;
+    settings.clearanceTables = rules.clearanceTables;
     settings.confirmCurvedOverlaps = request.mode == CollisionMode::Safe || request.mode == CollisionMode::Exact;
     return settings;
 }

@@ -33,6 +33,7 @@
 #include <cstdint>
 
 #include "rastercheck/device/Boxes.h"
+#include "rastercheck/device/ClearanceTables.h"
 #include "rastercheck/device/CurvedShapes.h"
 #include "rastercheck/device/ExactPhase.h"
 #include "rastercheck/device/HostDevice.h"
@@ -115,6 +116,11 @@ struct ModelArrays
     /** \brief Places the objects' trees (world frame) in the stages' float frame (relative to
         origin). */
     Pose<float> objectTreePlacement;
+    /** \brief The self pairs' clearance tables (SelfPairTables): numSelfPairs entries of tableOf,
+        numClearanceTables tables, numClearanceNodes clearances. */
+    ClearanceTableArrays clearanceTables;
+    std::size_t numClearanceTables;
+    std::size_t numClearanceNodes;
 
     RC_HD std::uint32_t numPairs() const
     {
@@ -176,6 +182,9 @@ struct StageSettings
     /** \brief An overlap of a pair with curved primitives is decided again on the exact shapes
         (safe and exact mode), in the exact phase (decideOpenPairs). */
     bool confirmCurvedOverlaps;
+    /** \brief The clearance tables may prove a self pair apart in the pair cull (safe and exact
+        mode, ModeRules::clearanceTables), as the CPU backend's self-pair loop does. */
+    bool clearanceTables;
     /** \brief Only the outcomes the per-state reduction reads come back (reduceOutcomes): per state,
         the pairs up to its first settled overlap, none settled apart. */
     bool onlyDecisive;
@@ -967,9 +976,12 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             else
             {
                 const int *self = md.selfPairs + 2 * (pair - environmentPairs);
+                const double padding = pairPadding(md, st, s, pair);
                 survives = st.checkSelfCollision &&
                            solidsMayMeet(bounds[s * m + self[0]], boxes[s * m + self[0]], bounds[s * m + self[1]],
-                                         boxes[s * m + self[1]], floatPadding(pairPadding(md, st, s, pair)));
+                                         boxes[s * m + self[1]], floatPadding(padding)) &&
+                           !(st.clearanceTables && selfPairApartByTable(md.clearanceTables, pair - environmentPairs,
+                                                                        states + s * dof, padding));
             }
         }
         flags[i] = survives ? 1 : 0;
