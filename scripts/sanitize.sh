@@ -11,8 +11,9 @@
 # RASTERCHECK_TEST_OPTIMIZATION, CMakeLists.txt's RASTERCHECK_CLI_OPTIMIZATION), assertions on (ours, Eigen's, and libstdc++'s bounds checks), no benchmarks,
 # examples or CUDA (sanitizers check host code). -g1 (line tables, no variables) gives the reports'
 # stack traces the same functions, files, lines and inlined frames as -g, in less compile time. Both run tests/test_concurrency.cpp at a tenth of
-# its size (RASTERCHECK_CONCURRENCY_STATES), and asan tests/test_nonconvex.cpp at a quarter
-# (RASTERCHECK_NONCONVEX_SCALE), the viewer's load tests at a twentieth (RASTERCHECK_VIEW_LOAD_SCALE)
+# its size (RASTERCHECK_CONCURRENCY_STATES), and asan the accuracy and property tests' samples at a
+# quarter (RASTERCHECK_SAMPLE_SCALE: tests/test_nonconvex.cpp, test_staged_pipeline.cpp,
+# test_motion_bound.cpp), the viewer's load tests at a twentieth (RASTERCHECK_VIEW_LOAD_SCALE)
 # and the long-running tests at a fiftieth (RASTERCHECK_SOAK_SCALE): the sanitizers slow the
 # checker 10 to 50 times. asan leaves out the tests labelled slurm (a real Slurm's daemons; the
 # sweep's code itself is in test_sweep), install (the installed package's layout and a consumer
@@ -43,7 +44,7 @@ asan() {
     export LSAN_OPTIONS="suppressions=$root/scripts/lsan.supp:print_suppressions=0"
     export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
     export RASTERCHECK_CONCURRENCY_STATES=${RASTERCHECK_CONCURRENCY_STATES:-10000}
-    export RASTERCHECK_NONCONVEX_SCALE=${RASTERCHECK_NONCONVEX_SCALE:-0.25}
+    export RASTERCHECK_SAMPLE_SCALE=${RASTERCHECK_SAMPLE_SCALE:-0.25}
     export RASTERCHECK_VIEW_LOAD_SCALE=${RASTERCHECK_VIEW_LOAD_SCALE:-0.05}
     export RASTERCHECK_SOAK_SCALE=${RASTERCHECK_SOAK_SCALE:-0.02}
     configure build-asan -DCMAKE_CXX_COMPILER=g++ -DRASTERCHECK_SANITIZE=ON

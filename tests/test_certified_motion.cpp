@@ -313,10 +313,13 @@ TEST(CertifiedMotion, EveryAcceptedCraneEdgeIsCollisionFreeAtEveryPoint)
 {
     const rc::Problem &plant = rc::test::plant();
     const Context context = makeContext(plant);
+    // A quarter of the edges under the sanitizers (RASTERCHECK_SAMPLE_SCALE): each edge's dense
+    // check is most of the test's time.
+    const int edges = rc::test::scaledCount(20, "RASTERCHECK_SAMPLE_SCALE");
     for (const Sizing &sizing : kSizings)
     {
         const std::array<int, 3> counts =
-            checkRandomEdges(context, 20, 0.1 * context.si->getMaximumExtent(), 5, sizing.options());
+            checkRandomEdges(context, edges, 0.1 * context.si->getMaximumExtent(), 5, sizing.options());
         EXPECT_GT(counts[0], 2);
         std::printf("crane, %s: %d edges certified, %d not (%d of them accepted by the discrete validator)\n",
                     sizing.name, counts[0], counts[1], counts[2]);

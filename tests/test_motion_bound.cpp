@@ -207,12 +207,15 @@ TEST(MotionBound, SweepsAboutAReferenceHoldOverTheirSpanAndAreTighter)
     // every vertex and vertex pair within them, and on average tighter than the chain's bound
     // (which sweeps() about the middle never exceeds).
     RASTERCHECK_REQUIRE_DATA(root);
+    // The samples per span: their pairs' vertex loops are the test's time (a quarter under the
+    // sanitizers: RASTERCHECK_SAMPLE_SCALE); the mean ratios depend on the edges alone.
+    const int steps = rc::test::scaledCount(24, "RASTERCHECK_SAMPLE_SCALE");
     double panda = 1.0, crane = 1.0;
-    measureSpanSweeps(rc::test::pandaProblem(root, "table_pick").robot, 40, 24, panda);
-    measureSpanSweeps(rc::test::plant().robot, 40, 24, crane);
+    measureSpanSweeps(rc::test::pandaProblem(root, "table_pick").robot, 40, steps, panda);
+    measureSpanSweeps(rc::test::plant().robot, 40, steps, crane);
     // The UR5's base and upper arm: a pair whose first joint counts from the base's side.
     double ur5 = 1.0;
-    measureSpanSweeps(rc::loadUrdf(root + "/mbm/ur5/ur5.urdf"), 8, 24, ur5);
+    measureSpanSweeps(rc::loadUrdf(root + "/mbm/ur5/ur5.urdf"), 8, steps, ur5);
     std::cout << "span sweep / chain sweep, mean over components: Panda " << panda << ", crane " << crane << ", UR5 "
               << ur5 << "\n";
     EXPECT_LT(panda, 0.95);
@@ -224,7 +227,7 @@ TEST(MotionBound, EveryPandaVertexMovesLessThanTheBoundAlongOmplsInterpolation)
     RASTERCHECK_REQUIRE_DATA(root);
     const rc::Problem panda = rc::test::pandaProblem(root, "table_pick");
     double worst = 0.0;
-    measureSweeps(panda.robot, 40, 32, worst);
+    measureSweeps(panda.robot, 40, rc::test::scaledCount(32, "RASTERCHECK_SAMPLE_SCALE"), worst);
     // Not loose beyond use: some vertex moves at least a fifth of what the bound allows.
     EXPECT_GT(worst, 0.2);
     std::cout << "Panda: the fastest vertex step is " << worst << " of the bound's\n";

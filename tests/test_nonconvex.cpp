@@ -8,7 +8,7 @@
 // is only counted; the oracle against FCL where surfaces cross; batches against single states; the
 // staged (GPU) pipeline on the host against the CPU backend.
 //
-// RASTERCHECK_NONCONVEX_SCALE multiplies the number of states (default 1; the sanitizer runs may
+// RASTERCHECK_SAMPLE_SCALE multiplies the number of states (default 1; the sanitizer runs may
 // lower it, a soak run raise it).
 #include <algorithm>
 #include <cmath>
@@ -43,16 +43,10 @@ namespace
 const rc::CollisionMode kModes[] = {rc::CollisionMode::Safe, rc::CollisionMode::Raster, rc::CollisionMode::Exact,
                                     rc::CollisionMode::Conservative};
 
-double stateScale()
-{
-    const char *text = std::getenv("RASTERCHECK_NONCONVEX_SCALE");
-    const double scale = text && *text ? std::atof(text) : 1.0;
-    return scale > 0 && std::isfinite(scale) ? scale : 1.0;
-}
-
 std::size_t scaled(std::size_t n)
 {
-    return std::max<std::size_t>(8, std::size_t(std::lround(double(n) * stateScale())));
+    return std::max<std::size_t>(
+        8, std::size_t(std::lround(double(n) * rc::test::scaleFromEnvironment("RASTERCHECK_SAMPLE_SCALE"))));
 }
 
 /** \brief The U's pose in the world: turned about a skew axis, so no face is parallel to a ray. */
@@ -432,7 +426,7 @@ Tally tally(const std::vector<std::uint8_t> &valid, const std::vector<std::uint8
 
 /** \brief The share of free states (padding 0) conservative mode may call invalid here: what the
     code measured when these scenes were added (this test prints it), with room for
-    other seeds and RASTERCHECK_NONCONVEX_SCALE. Hulls hold the robot almost everywhere in these
+    other seeds and RASTERCHECK_SAMPLE_SCALE. Hulls hold the robot almost everywhere in these
     scenes and the convex proofs count every pair they cannot separate as colliding, so the rates
     are high; tighten these as the proofs learn to see into the hulls. */
 double conservativeFalseAlarmBound(const std::string &scenario)

@@ -33,10 +33,10 @@ std::string label(const std::string &suite, rc::CollisionMode mode)
 }
 
 /** \brief \a states per suite, a quarter under the sanitizers (scripts/sanitize.sh sets
-    RASTERCHECK_NONCONVEX_SCALE), which slow these comparisons 10 to 50 times. */
+    RASTERCHECK_SAMPLE_SCALE), which slow these comparisons 10 to 50 times. */
 std::size_t sanitizerScaled(int states)
 {
-    return static_cast<std::size_t>(rc::test::scaledCount(states, "RASTERCHECK_NONCONVEX_SCALE"));
+    return static_cast<std::size_t>(rc::test::scaledCount(states, "RASTERCHECK_SAMPLE_SCALE"));
 }
 
 /** \brief The stages on the host with poisoned scratch, as uninitialised device memory may be. */

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <cstdlib>
 #include <filesystem>
@@ -179,7 +180,7 @@ double scaleFromEnvironment(const char *variable)
 {
     const char *text = std::getenv(variable);
     const double scale = text && *text ? std::atof(text) : 1.0;
-    return scale > 0 ? scale : 1.0;
+    return scale > 0 && std::isfinite(scale) ? scale : 1.0;
 }
 
 int scaledCount(int count, const char *variable)
