@@ -851,7 +851,7 @@ public:
         check(cudaMemGetInfo(&freeBytes, &totalBytes), "cudaMemGetInfo");
         const std::size_t usable = memoryLimit > 0 ? std::min(memoryLimit, freeBytes) : freeBytes / 2;
         const std::size_t perState = 8 * static_cast<std::size_t>(host.numCoordinates) +
-                                     96 * static_cast<std::size_t>(host.numJoints + host.numLinks) + 160 * m + 32;
+                                     96 * static_cast<std::size_t>(host.numJoints + host.numLinks) + 160 * m + 64;
         budget_.maxFragments = std::max<std::size_t>(1, usable / 10 * 4 / 56);
         budget_.maxItems = std::max<std::size_t>(1, usable / 10 * 2 / 20);
         budget_.maxPairElements = std::max<std::size_t>(host.numPairs(), usable / 100 * 15 / 8);

@@ -396,6 +396,87 @@ TEST(StagedPipeline, ThePairCullDropsTheSelfPairsTheClearanceTablesProveApart)
     EXPECT_GT(provenApart, 0u) << "no suite has a self pair past the box culls that its table proves apart";
 }
 
+TEST(StagedPipeline, ThePairCullKeepsExactlyThePairsWhoseOwnBoxesMeet)
+{
+    // The cull takes an object's pairs with the robot in one thread, behind one test of the robot's
+    // bounds at the largest of their paddings: it must keep exactly the pairs whose own boxes meet
+    // at their own padding (and, for self pairs, that no clearance table proves apart), every
+    // suite, paddings per (state, pair) among them. Exact mode returns every pair past the cull.
+    std::size_t suites = 0, outOfReach = 0;
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(100)))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::device::ModelArrays md = rc::hostModelArrays(*model);
+        const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
+        rc::CollisionRequest request;
+        request.mode = rc::CollisionMode::Exact;
+        request.padding = 0.001;
+        request.pairPadding = rc::test::randomPairPaddings(*model, n, 5);
+        const rc::device::StageSettings settings = rc::stageSettings(*model, request, false);
+        std::vector<std::uint8_t> admissible(n);
+        for (std::size_t i = 0; i < n; ++i)
+            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        std::vector<rc::device::PairOutcome> outcomes;
+        poisonedStages(model)->run(suite.states.data(), admissible.data(), n, settings, outcomes);
+
+        const std::uint32_t m = static_cast<std::uint32_t>(md.numComponents);
+        const std::uint32_t environmentPairs = static_cast<std::uint32_t>(md.numObjects) * m;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> expected;  // (state, pair), in that order
+        std::vector<double> jointValues(static_cast<std::size_t>(md.numJoints) + 1);
+        std::vector<rc::device::Pose<double>> links(static_cast<std::size_t>(md.numLinks));
+        std::vector<rc::device::OrientedBox> boxes(m);
+        std::vector<rc::device::Box> bounds(m);
+        for (std::uint32_t s = 0; s < n; ++s)
+        {
+            if (!admissible[s])
+                continue;
+            const double *q = suite.states.data() + static_cast<std::size_t>(s) * dof;
+            rc::device::linkPoses(md.joints, md.numJoints, q, jointValues.data(), links.data());
+            for (std::uint32_t c = 0; c < m; ++c)
+            {
+                boxes[c] = rc::device::transformBox(rc::device::toFloatPose(links[md.componentLink[c]], md.origin),
+                                                    md.componentLocalBoxes[c]);
+                bounds[c] = rc::device::boundsOf(boxes[c]);
+            }
+            for (std::uint32_t pair = 0; pair < md.numPairs(); ++pair)
+            {
+                const float padding = rc::device::floatPadding(rc::device::pairPadding(md, settings, s, pair));
+                bool meet;
+                if (pair < environmentPairs)
+                {
+                    const std::uint32_t o = pair / m, k = pair % m;
+                    meet = rc::device::solidsMayMeet(bounds[k], boxes[k], md.objectBoxes[o], md.objectOrientedBoxes[o],
+                                                     padding);
+                }
+                else
+                {
+                    const std::uint32_t p = pair - environmentPairs;
+                    const int a = md.selfPairs[2 * p], b = md.selfPairs[2 * p + 1];
+                    meet = rc::device::solidsMayMeet(bounds[a], boxes[a], bounds[b], boxes[b], padding) &&
+                           !model->selfPairTables.apart(p, q, rc::device::pairPadding(md, settings, s, pair));
+                }
+                if (meet)
+                    expected.emplace_back(s, pair);
+            }
+            // Objects whose pairs all fail: what the robot's reach lets the cull skip at once.
+            for (std::uint32_t o = 0; o < static_cast<std::uint32_t>(md.numObjects); ++o)
+            {
+                bool any = false;
+                for (std::uint32_t k = 0; k < m && !any; ++k)
+                    any = rc::device::boxesOverlap(bounds[k], md.objectBoxes[o], 0.06f);
+                outOfReach += any ? 0 : 1;
+            }
+        }
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> kept;
+        for (const rc::device::PairOutcome &o : outcomes)
+            kept.emplace_back(o.state, o.pair);
+        EXPECT_EQ(kept, expected) << suite.name;
+        ++suites;
+    }
+    EXPECT_GT(suites, 0u);
+    EXPECT_GT(outOfReach, 0u) << "no object was out of every component's reach: the robot's test skipped nothing";
+}
+
 TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
 {
     // Certified midpoints (CertifiedMotionValidator, BatchRRTConnect) give every (state, pair) its own

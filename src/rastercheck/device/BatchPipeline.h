@@ -10,8 +10,10 @@
 // Stages per chunk of states:
 //   1. forward kinematics (each joint's local pose per (state, joint), the chain per state), component
 //      poses, OBBs and AABBs (per state x component);
-//   2. culls per (state, pair): the component's AABB and OBB tests (which imply the CPU backend's
-//      distance filter and layer tests); compaction of survivors;
+//   2. the robot's reach per state (its components' bounds); culls per (state, object): the robot's
+//      reach, then each component's AABB and OBB tests (which imply the CPU backend's distance
+//      filter and layer tests), and per (state, self pair): the boxes, the clearance tables;
+//      compaction of the survivors;
 //   3. per surviving pair (in pair order when there are many): image window, the convex
 //      separation proof, the grid, and the candidate triangles (both meshes' trees walked with the
 //      node culls, counted, scanned, written); per (pair, candidate triangle): the per-triangle
@@ -400,6 +402,7 @@ enum StageBuffer : int
     BufferComponentPose,
     BufferComponentBox,
     BufferComponentBounds,
+    BufferRobotReach,
     BufferExtraEnvironment,
     BufferExtraSelf,
     BufferPairFlags,
@@ -434,6 +437,14 @@ enum StageBuffer : int
     BufferKeptOutcomes,
     BufferTallies,
     kNumStageBuffers
+};
+
+/** \brief A state's robot as the pair cull sees it first: the union of its components' bounds, and
+    the largest padding of its pairs with an object. */
+struct RobotReach
+{
+    Box bounds;
+    float padding;
 };
 
 /** \brief One solid of a pair as the per-triangle stages see it. */
@@ -953,39 +964,74 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     });
 
     // 2. Culls per (state, pair), then compaction: the survivors in (state, pair) order. Each pair
-    // is tested by its component's boxes alone. The CPU backend's walk first tests the robot's
-    // bounding sphere against the object (the distance filter) and then the layers, to skip many
-    // pairs at once; a thread per pair would only repeat those tests for each pair, and they pass
-    // wherever the component's own box test at the pair's padding passes (the sphere and every
-    // layer that holds component k contain k's bounds, and their padding is no smaller).
+    // is decided by its component's boxes alone. A thread takes one object and all its pairs with
+    // the robot, first testing the robot's bounds (the union of its components', per state) at the
+    // largest of those pairs' paddings: an object out of that reach has none of its pairs survive,
+    // as the CPU backend's distance filter skips them at once. That test passes wherever one of the
+    // pairs' own box tests does (the union holds each component's bounds, and boxesOverlap grows
+    // with the boxes and the margin), so the survivors are those of a test per pair; but a scene
+    // of many objects takes one test per object and state instead of one per component (the crane
+    // in the plant: 101 objects, 9 components, 935 pairs a state, whose tests were two fifths of
+    // its stages' work). A self pair is a thread of its own.
+    const int numObjects = model.numObjects;
+    const bool environment = settings.checkEnvironment && numObjects > 0 && m > 0;
+    RobotReach *reach = nullptr;
+    if (environment)
+    {
+        reach = ex.template buffer<RobotReach>(BufferRobotReach, static_cast<std::size_t>(numStates) + 1);
+        ex.forEach(numStates,
+                   [=] RC_LAMBDA(std::size_t s)
+                   {
+                       if (!admissible[s])
+                           return;
+                       RobotReach r{emptyBox(), 0.0f};
+                       for (int k = 0; k < m; ++k)
+                       {
+                           extend(r.bounds, bounds[s * m + k]);
+                           const float padding = floatPadding(pairPadding(md, st, s, static_cast<std::uint32_t>(k)));
+                           r.padding = padding > r.padding ? padding : r.padding;
+                       }
+                       reach[s] = r;
+                   });
+    }
+    const int numSelfPairs = model.numSelfPairs;
+    const std::size_t cullsPerState = static_cast<std::size_t>(numObjects + numSelfPairs);
     std::uint8_t *flags = ex.template buffer<std::uint8_t>(BufferPairFlags, pairElements + 1);
-    ex.forEach(pairElements, [=] RC_LAMBDA(std::size_t i) {
-        const std::size_t s = i / pairs;
-        const std::uint32_t pair = static_cast<std::uint32_t>(i % pairs);
-        bool survives = false;
-        if (admissible[s])
-        {
-            if (pair < environmentPairs)
-            {
-                const int o = static_cast<int>(pair / m), k = static_cast<int>(pair % m);
-                const Box &objectBox = md.objectBoxes[o];
-                survives = st.checkEnvironment &&
-                           solidsMayMeet(bounds[s * m + k], boxes[s * m + k], objectBox, md.objectOrientedBoxes[o],
-                                         floatPadding(pairPadding(md, st, s, pair)));
-            }
-            else
-            {
-                const int *self = md.selfPairs + 2 * (pair - environmentPairs);
-                const double padding = pairPadding(md, st, s, pair);
-                survives = st.checkSelfCollision &&
-                           solidsMayMeet(bounds[s * m + self[0]], boxes[s * m + self[0]], bounds[s * m + self[1]],
-                                         boxes[s * m + self[1]], floatPadding(padding)) &&
-                           !(st.clearanceTables && selfPairApartByTable(md.clearanceTables, pair - environmentPairs,
-                                                                        states + s * dof, padding));
-            }
-        }
-        flags[i] = survives ? 1 : 0;
-    });
+    ex.forEach(static_cast<std::size_t>(numStates) * cullsPerState,
+               [=] RC_LAMBDA(std::size_t i)
+               {
+                   const std::size_t s = i / cullsPerState;
+                   const int j = static_cast<int>(i % cullsPerState);
+                   if (j < numObjects)
+                   {
+                       const int o = j;
+                       std::uint8_t *objectFlags = flags + s * pairs + static_cast<std::size_t>(o) * m;
+                       const Box &objectBox = md.objectBoxes[o];
+                       const bool inReach =
+                           environment && admissible[s] && boxesOverlap(reach[s].bounds, objectBox, reach[s].padding);
+                       for (int k = 0; k < m; ++k)
+                       {
+                           const std::uint32_t pair = static_cast<std::uint32_t>(o * m + k);
+                           objectFlags[k] = inReach && solidsMayMeet(bounds[s * m + k], boxes[s * m + k], objectBox,
+                                                                     md.objectOrientedBoxes[o],
+                                                                     floatPadding(pairPadding(md, st, s, pair)))
+                                                ? 1
+                                                : 0;
+                       }
+                       return;
+                   }
+                   const int p = j - numObjects;
+                   const std::uint32_t pair = environmentPairs + static_cast<std::uint32_t>(p);
+                   const int *self = md.selfPairs + 2 * p;
+                   const double padding = pairPadding(md, st, s, pair);
+                   const bool survives =
+                       admissible[s] && st.checkSelfCollision &&
+                       solidsMayMeet(bounds[s * m + self[0]], boxes[s * m + self[0]], bounds[s * m + self[1]],
+                                     boxes[s * m + self[1]], floatPadding(padding)) &&
+                       !(st.clearanceTables && selfPairApartByTable(md.clearanceTables, static_cast<std::size_t>(p),
+                                                                    states + s * dof, padding));
+                   flags[s * pairs + pair] = survives ? 1 : 0;
+               });
     std::uint32_t *candidates = ex.template buffer<std::uint32_t>(BufferCandidates, pairElements + 1);
     ex.selectFlagged(flags, pairElements, candidates, tallies + TallyCandidates);
     // Per surviving pair from here on: element c < survivors.size() is candidates[c]. In a small
