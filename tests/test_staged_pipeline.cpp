@@ -477,6 +477,65 @@ TEST(StagedPipeline, ThePairCullKeepsExactlyThePairsWhoseOwnBoxesMeet)
     EXPECT_GT(outOfReach, 0u) << "no object was out of every component's reach: the robot's test skipped nothing";
 }
 
+TEST(StagedPipeline, OnlyAStatesPairsUpToItsFirstOverlapAreDecided)
+{
+    // The reduction reads each state's pairs up to its first overlap (StageSettings::onlyDecisive),
+    // and the stages skip the pairs behind an overlap they have found (pastFirstOverlap): the
+    // outcomes must be exactly those of deciding every pair, cut at each state's first overlap
+    // (none settled apart), with the same statuses and first contacts, and the exact phase must
+    // decide fewer pairs (the crane in the plant: a state's pairs with the plant often reach it
+    // together).
+    unsigned long long exactAll = 0, exactDecisive = 0;
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(100)))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
+        std::vector<std::uint8_t> admissible(n);
+        for (std::size_t i = 0; i < n; ++i)
+            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        for (rc::CollisionMode mode : kModes)
+        {
+            rc::CollisionRequest request;
+            request.mode = mode;
+            rc::device::StageSettings settings = rc::stageSettings(*model, request, true);
+            const auto run = [&](bool onlyDecisive, unsigned long long &exactPairs)
+            {
+                settings.onlyDecisive = onlyDecisive;
+                const std::unique_ptr<rc::StageRunner> runner = poisonedStages(model);
+                runner->countStages(true);
+                std::vector<rc::device::PairOutcome> outcomes;
+                runner->run(suite.states.data(), admissible.data(), n, settings, outcomes);
+                exactPairs += runner->counts().exactPairs;
+                return outcomes;
+            };
+            const std::vector<rc::device::PairOutcome> all = run(false, exactAll);
+            const std::vector<rc::device::PairOutcome> decisive = run(true, exactDecisive);
+            std::vector<rc::device::PairOutcome> expected;
+            std::uint32_t settledState = ~0u;  // the last state whose first overlap was passed
+            for (const rc::device::PairOutcome &o : all)
+            {
+                if (o.state == settledState || o.status == rc::device::PairApart)
+                    continue;
+                expected.push_back(o);
+                if (o.status == rc::device::PairOverlaps)
+                    settledState = o.state;
+            }
+            ASSERT_EQ(decisive.size(), expected.size()) << label(suite.name, mode);
+            for (std::size_t i = 0; i < expected.size(); ++i)
+            {
+                const rc::device::PairOutcome &a = decisive[i], &b = expected[i];
+                EXPECT_TRUE(a.state == b.state && a.pair == b.pair && a.status == b.status &&
+                            a.triangle == b.triangle && a.position[0] == b.position[0] &&
+                            a.position[1] == b.position[1] && a.position[2] == b.position[2])
+                    << label(suite.name, mode) << ": outcome " << i << ", state " << b.state << ", pair " << b.pair;
+            }
+        }
+    }
+    std::printf("the exact phase decided %llu pairs, %llu with only the pairs up to a state's first overlap\n",
+                exactAll, exactDecisive);
+    EXPECT_LT(exactDecisive, exactAll);
+}
+
 TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
 {
     // Certified midpoints (CertifiedMotionValidator, BatchRRTConnect) give every (state, pair) its own

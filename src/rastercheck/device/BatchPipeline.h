@@ -23,6 +23,9 @@
 //      (atomic minimum); outcomes;
 //   6. the exact phase (device/ExactPhase.h) on every pair still open, with its first contact;
 //      the per-state reduction's compaction: only the outcomes that decide a state come back.
+// Each stage notes the overlaps it settles per state (noteOverlap); with only the deciding
+// outcomes asked for, the later stages skip a state's pairs behind its first overlap, and its
+// walks stop (pastFirstOverlap), as the CPU backend stops at a state's first colliding pair.
 // The host finishes the reduction (the first colliding pair in pair order), confirms curved
 // primitives on their exact shapes, and places conservative mode's unproven pairs (StagedBackend).
 //
@@ -621,6 +624,26 @@ RC_HD bool curvedOverlapDecidedAgain(const ModelArrays &md, const StageSettings 
     return st.confirmCurvedOverlaps && pair < md.numCurvedPairFlags && md.curvedPairs[pair];
 }
 
+/** \brief Each state's first overlap as the stages find it: per state, the lowest surviving-pair
+    element (in (state, pair) order, so in pair order within the state) known to overlap for good,
+    lowered by noteOverlap wherever a stage settles one, and read by the reduction. */
+RC_HD void noteOverlap(unsigned long long *firstOverlap, std::size_t s, std::size_t c)
+{
+    atomicMinimum(firstOverlap + s, static_cast<unsigned long long>(c));
+}
+
+/** \brief Whether element \a c of state \a s need not be decided: only the outcomes the reduction
+    reads come back (StageSettings::onlyDecisive), which end at the state's first overlap, and an
+    earlier pair of the state already overlaps. The CPU backend stops at a state's first colliding
+    pair; the stages decide a state's pairs side by side, and skip those behind an overlap found
+    in an earlier kernel, or while they run (their walks stop). Such a pair is left as it stands,
+    and never read. */
+RC_HD bool pastFirstOverlap(const StageSettings &st, const unsigned long long *firstOverlap, std::size_t s,
+                            std::size_t c)
+{
+    return st.onlyDecisive && atomicLoad(firstOverlap + s) < static_cast<unsigned long long>(c);
+}
+
 /** \brief The exact phase in the stages: every pair still open after the raster (or without one) is
     decided on the executor by the exact test (solidsOverlap, what the CPU backend decides it by),
     with its first contact: the triangle of B and the place. Not conservative mode's unproven pairs
@@ -640,7 +663,8 @@ RC_HD bool curvedOverlapDecidedAgain(const ModelArrays &md, const StageSettings 
 template <class Exec>
 void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
                      Extent survivors, Extent items, Extent fragments, const std::uint32_t *order,
-                     std::uint32_t walkParts, std::size_t walkThreads, PairOutcome *decided, std::uint8_t *exactFlags)
+                     std::uint32_t walkParts, std::size_t walkThreads, PairOutcome *decided,
+                     unsigned long long *firstOverlap, std::uint8_t *exactFlags)
 {
     const int numLinks = md.numLinks;
     const std::uint32_t m = static_cast<std::uint32_t>(md.numComponents);
@@ -672,6 +696,8 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         const bool meshObstacle = out.pair < environmentPairs && hasPatches(md.convex, m + out.pair / m);
         if (out.status == PairOpen && st.unprovenCollides && !(st.meshObstaclesUnproven && meshObstacle))
             return;
+        if (pastFirstOverlap(st, firstOverlap, out.state, c))
+            return;
         exactFlags[c] = 1;
         ExactTree a, b;
         Pose<double> poseA, poseB;
@@ -694,15 +720,25 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         if (j >= partCount[c])
             return;
         const PairOutcome &out = decided[c];
+        if (pastFirstOverlap(st, firstOverlap, out.state, c))
+            return;
         ExactTree a, b;
         Pose<double> poseA, poseB;
         bool closedA = false, closedB = false;
         exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
                     closedB);
-        const WalkPart part{partStarts[c * perPair + j], j, &firstPart[c]};
+        // The walk stops once an earlier part of the pair, or an earlier pair of the state, has
+        // found a contact (the latter only where pastFirstOverlap would skip the pair).
+        const WalkPart part{partStarts[c * perPair + j], j, &firstPart[c],
+                            st.onlyDecisive ? firstOverlap + out.state : nullptr, c};
         if (surfacesWithin(a, poseA, b, poseB, pairPadding(md, st, out.state, out.pair),
                            &partContacts[c * perPair + j], nullptr, part))
+        {
             atomicMinimum(&firstPart[c], j);
+            // Surfaces within the padding collide, unless curved shapes decide the pair again.
+            if (!curvedOverlapDecidedAgain(md, st, out.pair))
+                noteOverlap(firstOverlap, out.state, c);
+        }
     });
     // 3. Each pair's end: the surfaces' first contact, or containment; curved shapes.
     ex.forEachHeavy(bound, [=] RC_LAMBDA(std::size_t k) {
@@ -710,6 +746,11 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         if (c >= survivors.size() || !exactFlags[c])
             return;
         PairOutcome &out = decided[c];
+        if (pastFirstOverlap(st, firstOverlap, out.state, c))
+        {
+            exactFlags[c] = 0;  // not decided here after all
+            return;
+        }
         const bool curved = curvedOverlapDecidedAgain(md, st, out.pair);
         ExactTree a, b;
         Pose<double> poseA, poseB;
@@ -737,6 +778,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
             }
         }
         out.status = PairOverlaps;
+        noteOverlap(firstOverlap, out.state, c);
         out.triangle = contact.triangleB;
         out.position[0] = contact.position.x;
         out.position[1] = contact.position.y;
@@ -748,26 +790,18 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     \a numKept (a tally). With StageSettings::onlyDecisive, the per-state reduction's part: of each
     state's outcomes (in pair order) only those the host reads: the first overlap, which settles the
     state, and the pairs before it the host must still decide; no pair settled apart. Every other outcome stays on the
-    executor, so a batch's download is about one outcome per colliding state. \a download: the
+    executor, so a batch's download is about one outcome per colliding state. \a firstSettled:
+    each state's first overlap, which the stages noted as they found it (noteOverlap). \a download: the
     outcomes to download. A \a small chunk downloads as many as it guessed before it knows the
     count, so those slots are written whatever the count (zeros past it); a large one waits for the
     count, which sizes the buffer and the download. */
 template <class Exec>
-const PairOutcome *reduceOutcomes(Exec &ex, const StageSettings &st, std::uint32_t numStates,
-                                  bool small, Extent survivors, const PairOutcome *decided, std::size_t &download,
-                                  unsigned long long *numKept)
+const PairOutcome *reduceOutcomes(Exec &ex, const StageSettings &st, bool small, Extent survivors,
+                                  const PairOutcome *decided, const unsigned long long *firstSettled,
+                                  std::size_t &download, unsigned long long *numKept)
 {
     const std::size_t bound = survivors.bound;
     const bool onlyDecisive = st.onlyDecisive;
-    unsigned long long *firstSettled = ex.template buffer<unsigned long long>(BufferFirstSettled, numStates + 1);
-    if (onlyDecisive)
-    {
-        ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) { firstSettled[s] = ~0ull; });
-        ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) {
-            if (decided[c].status == PairOverlaps)
-                atomicMinimum(&firstSettled[decided[c].state], static_cast<unsigned long long>(c));
-        });
-    }
     std::uint8_t *keep = ex.template buffer<std::uint8_t>(BufferKeep, bound + 1);
     ex.forEach(bound, [=] RC_LAMBDA(std::size_t c) {
         keep[c] = c < survivors.size() && (!onlyDecisive || (decided[c].status != PairApart &&
@@ -830,18 +864,18 @@ std::size_t countBound(Exec &ex, std::size_t limit, bool small, std::size_t &gue
 template <class Exec>
 ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, const StageBudget &budget,
                      const Pose<double> *links, std::uint32_t numStates, bool small, Extent survivors, Extent items,
-                     Extent fragments, const std::uint32_t *order, PairOutcome *decided, unsigned long long *tallies,
-                     const std::uint8_t *rasterized, const PairOutcome *&outcomes, std::uint32_t &numOutcomes,
-                     StageCounts *counts)
+                     Extent fragments, const std::uint32_t *order, PairOutcome *decided,
+                     unsigned long long *firstOverlap, unsigned long long *tallies, const std::uint8_t *rasterized,
+                     const PairOutcome *&outcomes, std::uint32_t &numOutcomes, StageCounts *counts)
 {
     const std::size_t bound = survivors.bound;
     std::uint8_t *exactFlags = ex.template buffer<std::uint8_t>(BufferExactFlags, bound + 1);
     decideOpenPairs(ex, md, st, links, survivors, items, fragments, order, small ? budget.exactWalkParts : 1,
-                    budget.exactWalkThreads, decided, exactFlags);
+                    budget.exactWalkThreads, decided, firstOverlap, exactFlags);
     CountGuesses &guesses = ex.guesses();
     std::size_t prefix = bound < numStates * guesses.outcomesPerState ? bound : numStates * guesses.outcomesPerState;
     const PairOutcome *kept =
-        reduceOutcomes(ex, st, numStates, small, survivors, decided, prefix, tallies + TallyOutcomes);
+        reduceOutcomes(ex, st, small, survivors, decided, firstOverlap, prefix, tallies + TallyOutcomes);
     if (counts)
     {
         std::uint32_t *list = ex.template buffer<std::uint32_t>(BufferRasterizedList, bound + 1);
@@ -948,11 +982,16 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                    const double *q = states + s * dof;
                    jointPoses[i] = jointLocalPose(md.joints[j], q, jointValue(md.joints, j, q));
                });
-    ex.forEach(numStates, [=] RC_LAMBDA(std::size_t s) {
-        if (admissible[s])
-            placeLinks(md.joints, numJoints, jointPoses + s * static_cast<std::size_t>(numJoints),
-                       links + s * numLinks);
-    });
+    unsigned long long *firstOverlap =
+        ex.template buffer<unsigned long long>(BufferFirstSettled, static_cast<std::size_t>(numStates) + 1);
+    ex.forEach(numStates,
+               [=] RC_LAMBDA(std::size_t s)
+               {
+                   firstOverlap[s] = ~0ull;  // none found yet (noteOverlap)
+                   if (admissible[s])
+                       placeLinks(md.joints, numJoints, jointPoses + s * static_cast<std::size_t>(numJoints),
+                                  links + s * numLinks);
+               });
     ex.forEach(componentElements, [=] RC_LAMBDA(std::size_t i) {
         const std::size_t s = i / m;
         const int c = static_cast<int>(i % m);
@@ -1089,14 +1128,27 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     });
     ex.forEachHeavy(survivorBound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = pairOrdered ? proofOrder[k] : k;
-        if (c >= survivors.size() || status[c] != kFullProofNeeded)
+        if (c >= survivors.size())
             return;
         const std::size_t s = candidates[c] / pairs;
         const std::uint32_t pair = candidates[c] % pairs;
+        // The light proof's overlaps are noted here, not in its own kernel, whose registers bound
+        // its occupancy.
+        if (status[c] == PairOverlaps && !curvedOverlapDecidedAgain(md, st, pair))
+            noteOverlap(firstOverlap, s, c);
+        if (status[c] != kFullProofNeeded)
+            return;
+        if (pastFirstOverlap(st, firstOverlap, s, c))
+        {
+            status[c] = PairOpen;  // and not decided further (pastFirstOverlap)
+            return;
+        }
         const HullRelation relation = pairHullRelation(md, pair, links + s * numLinks, pairPadding(md, st, s, pair),
                                                        st.proveOverlaps, FullProof{});
         // An overlap proven by the hulls has no triangle or place (the contact is not asked).
         status[c] = pairStatusOf(relation, PairOpen);
+        if (status[c] == PairOverlaps && !curvedOverlapDecidedAgain(md, st, pair))
+            noteOverlap(firstOverlap, s, c);
     });
     // The open pairs' images: grid, margin, and how many triangles to rasterize.
     ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t k) {
@@ -1107,6 +1159,8 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             return;  // past the survivors: zeros for the scan, whose last output is then the total
         const std::size_t s = candidates[c] / pairs;
         const std::uint32_t pair = candidates[c] % pairs;
+        if (pastFirstOverlap(st, firstOverlap, s, c))
+            return;
         StageSolid a, b;
         pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
         const double padding = pairPadding(md, st, s, pair);
@@ -1132,7 +1186,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
         });
         const Extent none{0, tallies + TallyItems};  // no raster: its tallies stay zero
         return finishPass(ex, md, st, budget, links, numStates, small, survivors, none, none, proofOrder, decided,
-                          tallies, rasterized, outcomes, numOutcomes, counts);
+                          firstOverlap, tallies, rasterized, outcomes, numOutcomes, counts);
     }
     unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, survivorBound + 1);
     ex.exclusiveSum(triangleCount, itemStart, survivorBound + 1, tallies + TallyItems);
@@ -1275,14 +1329,16 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                 for (int k = 0; k < 3; ++k)
                     out.position[k] = static_cast<double>(position[k]) + md.origin[k];
                 out.status = PairOverlaps;
+                if (!curvedOverlapDecidedAgain(md, st, out.pair))
+                    noteOverlap(firstOverlap, s, c);
             }
             else if (!st.confirmMisses && !(pairPadding(md, st, out.state, out.pair) > 0))
                 out.status = PairApart;
         }
         decided[c] = out;
     });
-    return finishPass(ex, md, st, budget, links, numStates, small, survivors, items, fragmentExtent, proofOrder, decided,
-                      tallies, rasterized, outcomes, numOutcomes, counts);
+    return finishPass(ex, md, st, budget, links, numStates, small, survivors, items, fragmentExtent, proofOrder,
+                      decided, firstOverlap, tallies, rasterized, outcomes, numOutcomes, counts);
 }
 
 /** \brief Runs the stages for \a numStates states (host arrays: \a hostStates row-major,

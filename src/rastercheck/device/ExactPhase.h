@@ -287,6 +287,11 @@ struct WalkPart
     NodePair start{0, 0};
     std::uint32_t index = 0;
     const unsigned long long *earliestFound = nullptr;
+    /** \brief Where the stages note the lowest pair element of the walk's state that overlaps
+        (noteOverlap; null: not read), and the walk's own: the walk stops once an earlier pair of
+        the state overlaps, as the CPU backend stops at a state's first colliding pair. */
+    const unsigned long long *stateFirstOverlap = nullptr;
+    unsigned long long pairElement = 0;
 };
 
 /** \brief The surface query for walkPairs, with the fixed tree's frame as the working frame and the
@@ -347,8 +352,11 @@ struct SurfaceQuery
     RC_HD bool test(NodePair pair)
     {
         // A part stops once an earlier part has found a contact: the walk's first contact is not
-        // in this one. Its pairs still on the stack are dropped unread.
+        // in this one; or once an earlier pair of its state overlaps: the pair is not read. Its
+        // pairs still on the stack are dropped unread.
         if (part.earliestFound && atomicLoad(part.earliestFound) < part.index)
+            return false;
+        if (part.stateFirstOverlap && atomicLoad(part.stateFirstOverlap) < part.pairElement)
             return false;
         const TreeNode &nf = fixed.tree.nodes[pair.a], &nm = moving.tree.nodes[pair.b];
         const PlacedNode &pm = placed(pair.b);
