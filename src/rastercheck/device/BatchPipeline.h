@@ -1112,6 +1112,11 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             return;
         const std::size_t s = candidates[c] / pairs;
         const std::uint32_t pair = candidates[c] % pairs;
+        if (pastFirstOverlap(st, firstOverlap, s, c))
+        {
+            status[c] = PairOpen;  // and not decided further (pastFirstOverlap)
+            return;
+        }
         const double padding = pairPadding(md, st, s, pair);
         // A mesh obstacle's proof walks its patches, serially per thread: on FCL's env.obj (an H200,
         // 2026-11-26) the stages ran at 0.3x the CPU backend on 16 cores, which skips that proof.
@@ -1125,19 +1130,15 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             : meshObstacle  ? HullRelation::Unknown
                             : pairHullRelation(md, pair, links + s * numLinks, padding, st.proveOverlaps, WholeHullsProof{});
         status[c] = pairStatusOf(relation, meshObstacle ? PairOpen : kFullProofNeeded);
+        if (status[c] == PairOverlaps && !curvedOverlapDecidedAgain(md, st, pair))
+            noteOverlap(firstOverlap, s, c);
     });
     ex.forEachHeavy(survivorBound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = pairOrdered ? proofOrder[k] : k;
-        if (c >= survivors.size())
+        if (c >= survivors.size() || status[c] != kFullProofNeeded)
             return;
         const std::size_t s = candidates[c] / pairs;
         const std::uint32_t pair = candidates[c] % pairs;
-        // The light proof's overlaps are noted here, not in its own kernel, whose registers bound
-        // its occupancy.
-        if (status[c] == PairOverlaps && !curvedOverlapDecidedAgain(md, st, pair))
-            noteOverlap(firstOverlap, s, c);
-        if (status[c] != kFullProofNeeded)
-            return;
         if (pastFirstOverlap(st, firstOverlap, s, c))
         {
             status[c] = PairOpen;  // and not decided further (pastFirstOverlap)
