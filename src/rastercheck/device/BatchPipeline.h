@@ -434,7 +434,7 @@ enum StageBuffer : int
     BufferWalkPartCount,
     BufferFirstPart,
     BufferPartContacts,
-    BufferFirstSettled,
+    BufferFirstOverlap,
     BufferKeep,
     BufferKept,
     BufferKeptOutcomes,
@@ -624,9 +624,9 @@ RC_HD bool curvedOverlapDecidedAgain(const ModelArrays &md, const StageSettings 
     return st.confirmCurvedOverlaps && pair < md.numCurvedPairFlags && md.curvedPairs[pair];
 }
 
-/** \brief Each state's first overlap as the stages find it: per state, the lowest surviving-pair
-    element (in (state, pair) order, so in pair order within the state) known to overlap for good,
-    lowered by noteOverlap wherever a stage settles one, and read by the reduction. */
+/** \brief Notes that surviving-pair element \a c of state \a s overlaps for good: \a firstOverlap
+    holds per state the lowest such element (in (state, pair) order, so in pair order within the
+    state), which the later stages (pastFirstOverlap) and the reduction read. */
 RC_HD void noteOverlap(unsigned long long *firstOverlap, std::size_t s, std::size_t c)
 {
     atomicMinimum(firstOverlap + s, static_cast<unsigned long long>(c));
@@ -790,14 +790,14 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     \a numKept (a tally). With StageSettings::onlyDecisive, the per-state reduction's part: of each
     state's outcomes (in pair order) only those the host reads: the first overlap, which settles the
     state, and the pairs before it the host must still decide; no pair settled apart. Every other outcome stays on the
-    executor, so a batch's download is about one outcome per colliding state. \a firstSettled:
+    executor, so a batch's download is about one outcome per colliding state. \a firstOverlap:
     each state's first overlap, which the stages noted as they found it (noteOverlap). \a download: the
     outcomes to download. A \a small chunk downloads as many as it guessed before it knows the
     count, so those slots are written whatever the count (zeros past it); a large one waits for the
     count, which sizes the buffer and the download. */
 template <class Exec>
 const PairOutcome *reduceOutcomes(Exec &ex, const StageSettings &st, bool small, Extent survivors,
-                                  const PairOutcome *decided, const unsigned long long *firstSettled,
+                                  const PairOutcome *decided, const unsigned long long *firstOverlap,
                                   std::size_t &download, unsigned long long *numKept)
 {
     const std::size_t bound = survivors.bound;
@@ -805,7 +805,7 @@ const PairOutcome *reduceOutcomes(Exec &ex, const StageSettings &st, bool small,
     std::uint8_t *keep = ex.template buffer<std::uint8_t>(BufferKeep, bound + 1);
     ex.forEach(bound, [=] RC_LAMBDA(std::size_t c) {
         keep[c] = c < survivors.size() && (!onlyDecisive || (decided[c].status != PairApart &&
-                                                             c <= firstSettled[decided[c].state]))
+                                                             c <= firstOverlap[decided[c].state]))
                       ? 1
                       : 0;
     });
@@ -983,7 +983,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                    jointPoses[i] = jointLocalPose(md.joints[j], q, jointValue(md.joints, j, q));
                });
     unsigned long long *firstOverlap =
-        ex.template buffer<unsigned long long>(BufferFirstSettled, static_cast<std::size_t>(numStates) + 1);
+        ex.template buffer<unsigned long long>(BufferFirstOverlap, static_cast<std::size_t>(numStates) + 1);
     ex.forEach(numStates,
                [=] RC_LAMBDA(std::size_t s)
                {
