@@ -632,6 +632,16 @@ RC_HD void noteOverlap(unsigned long long *firstOverlap, std::size_t s, std::siz
     atomicMinimum(firstOverlap + s, static_cast<unsigned long long>(c));
 }
 
+/** \brief Notes an overlap a proof, the raster or a walk found for element \a c (pair \a pair) of
+    state \a s: final, unless the pair has curved primitives, whose overlap the exact phase's end
+    decides again on their exact shapes (and notes there). */
+RC_HD void noteFoundOverlap(const ModelArrays &md, const StageSettings &st, unsigned long long *firstOverlap,
+                            std::size_t s, std::size_t c, std::uint32_t pair)
+{
+    if (!curvedOverlapDecidedAgain(md, st, pair))
+        noteOverlap(firstOverlap, s, c);
+}
+
 /** \brief Whether element \a c of state \a s need not be decided: only the outcomes the reduction
     reads come back (StageSettings::onlyDecisive), which end at the state's first overlap, and an
     earlier pair of the state already overlaps. The CPU backend stops at a state's first colliding
@@ -735,9 +745,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
                            &partContacts[c * perPair + j], nullptr, part))
         {
             atomicMinimum(&firstPart[c], j);
-            // Surfaces within the padding collide, unless curved shapes decide the pair again.
-            if (!curvedOverlapDecidedAgain(md, st, out.pair))
-                noteOverlap(firstOverlap, out.state, c);
+            noteFoundOverlap(md, st, firstOverlap, out.state, c, out.pair);  // surfaces within the padding
         }
     });
     // 3. Each pair's end: the surfaces' first contact, or containment; curved shapes.
@@ -1130,8 +1138,8 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             : meshObstacle  ? HullRelation::Unknown
                             : pairHullRelation(md, pair, links + s * numLinks, padding, st.proveOverlaps, WholeHullsProof{});
         status[c] = pairStatusOf(relation, meshObstacle ? PairOpen : kFullProofNeeded);
-        if (status[c] == PairOverlaps && !curvedOverlapDecidedAgain(md, st, pair))
-            noteOverlap(firstOverlap, s, c);
+        if (status[c] == PairOverlaps)
+            noteFoundOverlap(md, st, firstOverlap, s, c, pair);
     });
     ex.forEachHeavy(survivorBound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = pairOrdered ? proofOrder[k] : k;
@@ -1148,8 +1156,8 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                                                        st.proveOverlaps, FullProof{});
         // An overlap proven by the hulls has no triangle or place (the contact is not asked).
         status[c] = pairStatusOf(relation, PairOpen);
-        if (status[c] == PairOverlaps && !curvedOverlapDecidedAgain(md, st, pair))
-            noteOverlap(firstOverlap, s, c);
+        if (status[c] == PairOverlaps)
+            noteFoundOverlap(md, st, firstOverlap, s, c, pair);
     });
     // The open pairs' images: grid, margin, and how many triangles to rasterize.
     ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t k) {
@@ -1330,8 +1338,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                 for (int k = 0; k < 3; ++k)
                     out.position[k] = static_cast<double>(position[k]) + md.origin[k];
                 out.status = PairOverlaps;
-                if (!curvedOverlapDecidedAgain(md, st, out.pair))
-                    noteOverlap(firstOverlap, s, c);
+                noteFoundOverlap(md, st, firstOverlap, s, c, out.pair);
             }
             else if (!st.confirmMisses && !(pairPadding(md, st, out.state, out.pair) > 0))
                 out.status = PairApart;
