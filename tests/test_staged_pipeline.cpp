@@ -45,6 +45,16 @@ std::unique_ptr<rc::StageRunner> poisonedStages(const rc::CollisionModelConstPtr
 {
     return rc::makeHostStageRunner(model, budget, rc::HostScratch::Poisoned);
 }
+
+/** \brief 1 per state of \a suite within \a model's bounds (what StagedBackend hands the stages). */
+std::vector<std::uint8_t> admissibleStates(const rc::CollisionModel &model, const rc::test::StateSuite &suite)
+{
+    const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
+    std::vector<std::uint8_t> admissible(n);
+    for (std::size_t i = 0; i < n; ++i)
+        admissible[i] = model.configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+    return admissible;
+}
 }  // namespace
 
 TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySuites)
@@ -265,9 +275,7 @@ TEST(StagedPipeline, TheStagesSettleEveryPairAndNeverContradictTheOracle)
         runner->countStages(true);
         const rc::CollisionRequest request;  // safe mode, no padding
         const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
-        std::vector<std::uint8_t> admissible(n);
-        for (std::size_t i = 0; i < n; ++i)
-            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        const std::vector<std::uint8_t> admissible = admissibleStates(*model, suite);
         std::vector<rc::device::PairOutcome> outcomes;
         runner->run(suite.states.data(), admissible.data(), n, rc::stageSettings(*model, request, false), outcomes);
         std::unique_ptr<rc::CpuWorkspace> ws = oracle.makeWorkspace();
@@ -316,9 +324,7 @@ TEST(StagedPipeline, TheTwoProofKernelsSettleWhatOneFullProofPerPairSettles)
         const rc::device::StageSettings settings = rc::stageSettings(*model, request, false);
         ASSERT_FALSE(settings.onlyDecisive) << "every pair past the culls must come back";
         const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
-        std::vector<std::uint8_t> admissible(n);
-        for (std::size_t i = 0; i < n; ++i)
-            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        const std::vector<std::uint8_t> admissible = admissibleStates(*model, suite);
         std::vector<rc::device::PairOutcome> outcomes;
         runner->run(suite.states.data(), admissible.data(), n, settings, outcomes);
         const std::uint32_t m = static_cast<std::uint32_t>(arrays.numComponents);
@@ -367,9 +373,7 @@ TEST(StagedPipeline, ThePairCullDropsTheSelfPairsTheClearanceTablesProveApart)
         rc::device::StageSettings settings = rc::stageSettings(*model, request, false);
         ASSERT_TRUE(settings.clearanceTables) << "exact mode reads the tables";
         const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
-        std::vector<std::uint8_t> admissible(n);
-        for (std::size_t i = 0; i < n; ++i)
-            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        const std::vector<std::uint8_t> admissible = admissibleStates(*model, suite);
         const std::uint32_t environmentPairs = static_cast<std::uint32_t>(model->numObjects() * model->numComponents());
         // The (state, pair) outcomes of self pairs the tables prove apart, and all outcomes.
         const auto run = [&](bool tables, std::size_t &tableApart)
@@ -413,9 +417,7 @@ TEST(StagedPipeline, ThePairCullKeepsExactlyThePairsWhoseOwnBoxesMeet)
         request.padding = 0.001;
         request.pairPadding = rc::test::randomPairPaddings(*model, n, 5);
         const rc::device::StageSettings settings = rc::stageSettings(*model, request, false);
-        std::vector<std::uint8_t> admissible(n);
-        for (std::size_t i = 0; i < n; ++i)
-            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        const std::vector<std::uint8_t> admissible = admissibleStates(*model, suite);
         std::vector<rc::device::PairOutcome> outcomes;
         poisonedStages(model)->run(suite.states.data(), admissible.data(), n, settings, outcomes);
 
@@ -489,10 +491,8 @@ TEST(StagedPipeline, OnlyAStatesPairsUpToItsFirstOverlapAreDecided)
     for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(100)))
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
-        const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
-        std::vector<std::uint8_t> admissible(n);
-        for (std::size_t i = 0; i < n; ++i)
-            admissible[i] = model->configurationAdmissible(suite.states.data() + i * dof) ? 1 : 0;
+        const std::size_t n = suite.numStates();
+        const std::vector<std::uint8_t> admissible = admissibleStates(*model, suite);
         for (rc::CollisionMode mode : kModes)
         {
             rc::CollisionRequest request;
