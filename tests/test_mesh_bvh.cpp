@@ -536,9 +536,9 @@ TEST(SurfacesWithin, MatchesBruteForceOverAllTrianglePairs)
 
 TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
 {
-    // The stages share one pair's walk among threads (splitSurfaceWalk): walked one after the other,
-    // the parts must decide as the whole walk does, and the first part that finds a contact must find
-    // the whole walk's first contact (the CPU backend's), whatever the number of parts.
+    // The stages share one pair's walk among threads (WalkPart, walkPartStart): walked one after the
+    // other, the parts must decide as the whole walk does, and the first part that finds a contact
+    // must find the whole walk's first contact (the CPU backend's), whatever the number of parts.
     std::mt19937_64 rng(5);
     for (const Scenario &s : scenarios())
     {
@@ -554,45 +554,45 @@ TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
                 rc::device::ExactContact whole;
                 const bool meet = rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, &whole);
                 touching += meet;
-                for (std::uint32_t capacity : {1u, 2u, 3u, 8u, rc::device::kMaxWalkParts})
+                for (std::uint32_t depth : {1u, 2u, 3u, 5u})
                 {
-                    rc::device::NodePair parts[rc::device::kMaxWalkParts], scratch[rc::device::kMaxWalkParts];
-                    const std::uint32_t n =
-                        rc::device::splitSurfaceWalk(ta, poseA, tb, poseB, padding, parts, scratch, capacity);
-                    ASSERT_LE(n, capacity);
-                    split += n > 1;
+                    const std::uint32_t numParts = 1u << depth;
                     bool found = false;
-                    for (std::uint32_t j = 0; j < n && !found; ++j)
+                    int meeting = 0;  // parts whose walk alone finds a contact
+                    for (std::uint32_t j = 0; j < numParts; ++j)
                     {
                         rc::device::ExactContact contact;
-                        found = rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, &contact, nullptr,
-                                                           rc::device::WalkPart{parts[j]});
-                        if (found && j > 0)
+                        const bool partFinds = rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, &contact,
+                                                                          nullptr, rc::device::WalkPart{j, depth});
+                        meeting += partFinds;
+                        if (partFinds && found)
                         {
                             // A part stops once an earlier part has found a contact (its own cannot
                             // be the walk's first), and not for a later one's.
                             const unsigned long long earlier = j - 1, itself = j;
                             EXPECT_FALSE(rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, nullptr, nullptr,
-                                                                    rc::device::WalkPart{parts[j], j, &earlier}))
+                                                                    rc::device::WalkPart{j, depth, &earlier}))
                                 << s.name << " trial " << trial;
                             EXPECT_TRUE(rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, nullptr, nullptr,
-                                                                   rc::device::WalkPart{parts[j], j, &itself}))
+                                                                   rc::device::WalkPart{j, depth, &itself}))
                                 << s.name << " trial " << trial;
                             ++stoppedByAnEarlierPart;
                         }
-                        if (found)
+                        if (partFinds && !found)
                         {
                             EXPECT_EQ(contact.triangleA, whole.triangleA) << s.name << " trial " << trial;
                             EXPECT_EQ(contact.triangleB, whole.triangleB) << s.name << " trial " << trial;
                             EXPECT_EQ(contact.position.x, whole.position.x) << s.name << " trial " << trial;
                             EXPECT_EQ(contact.position.z, whole.position.z) << s.name << " trial " << trial;
                         }
+                        found = found || partFinds;
                     }
-                    ASSERT_EQ(found, meet) << s.name << " trial " << trial << ", " << n << " parts of " << capacity;
+                    split += meeting > 1;
+                    ASSERT_EQ(found, meet) << s.name << " trial " << trial << ", " << numParts << " parts";
                 }
             }
         }
-        EXPECT_GT(split, 0) << s.name << ": no walk was ever split";
+        EXPECT_GT(split, 0) << s.name << ": no walk's contacts were ever in two parts";
         EXPECT_GT(touching, 0) << s.name;
         EXPECT_GT(stoppedByAnEarlierPart, 0) << s.name << ": no contact was found past the first part";
     }
@@ -1111,6 +1111,82 @@ TEST(Traversal, APairWalkWithAShrinkingReachFindsTheNearestPairAsADistanceQueryW
         EXPECT_LT(query.leafPairs, 50) << "the reach did not shrink: " << query.leafPairs << " of "
                                        << a.size() * b.size();
     }
+}
+
+TEST(Traversal, TheWalksPartsOneAfterTheOtherVisitTheWholeWalksLeafPairsInItsOrder)
+{
+    // Pairs of points on two lines within a reach: the parts of the walk (walkPartStart, 2^depth of
+    // them), walked one after the other, visit exactly the leaf pairs of the whole walk, in its order;
+    // and a long walk spreads over many parts, pruned or not.
+    std::mt19937_64 rng(41);
+    std::uniform_real_distribution<double> u(0.0, 100.0);
+    int longWalks = 0, spreadWalks = 0;  // of 32 leaf pairs or more; of those, over 8 parts or more
+    for (int trial = 0; trial < 40; ++trial)
+    {
+        std::vector<double> a(1 + rng() % 120), b(1 + rng() % 90);
+        for (double &x : a)
+            x = u(rng);
+        for (double &x : b)
+            x = u(rng) + 20.0 * (trial % 4);
+        std::sort(a.begin(), a.end());
+        std::sort(b.begin(), b.end());
+        std::vector<LineNode> treeA(1), treeB(1);
+        buildLine(treeA, a, 0, a.size(), 0);
+        buildLine(treeB, b, 0, b.size(), 0);
+        struct Within
+        {
+            const std::vector<LineNode> &ta, &tb;
+            double reach;
+            std::vector<std::pair<std::int32_t, std::int32_t>> visited;
+            double gap(rc::device::NodePair p) const
+            {
+                const LineNode &na = ta[p.a], &nb = tb[p.b];
+                return std::max({0.0, nb.lower - na.upper, na.lower - nb.upper});
+            }
+            bool test(rc::device::NodePair p) const { return gap(p) <= reach; }
+            bool leaves(rc::device::NodePair p)
+            {
+                visited.emplace_back(p.a, p.b);
+                return true;
+            }
+            bool splitA(rc::device::NodePair p) const
+            {
+                return ta[p.a].upper - ta[p.a].lower >= tb[p.b].upper - tb[p.b].lower;
+            }
+            bool secondFirst(rc::device::NodePair first, rc::device::NodePair second) const
+            {
+                return gap(second) < gap(first);
+            }
+        };
+        const double reach = 0.5 + u(rng) / 20.0;
+        Within whole{treeA, treeB, reach, {}};
+        ASSERT_EQ(rc::device::walkPairs(treeA.data(), treeB.data(), whole), rc::device::WalkEnd::Finished);
+        for (std::uint32_t depth = 0; depth <= 5; ++depth)
+        {
+            Within parts{treeA, treeB, reach, {}};
+            int partsVisiting = 0;
+            for (std::uint32_t index = 0; index < (1u << depth); ++index)
+            {
+                rc::device::NodePair start{};
+                if (!rc::device::walkPartStart(treeA.data(), treeB.data(), parts, index, depth, start))
+                    continue;
+                const std::size_t before = parts.visited.size();
+                ASSERT_EQ(rc::device::walkPairs(treeA.data(), treeB.data(), parts, start),
+                          rc::device::WalkEnd::Finished);
+                partsVisiting += parts.visited.size() > before;
+            }
+            EXPECT_EQ(parts.visited, whole.visited) << "trial " << trial << ", depth " << depth;
+            if (depth == 5 && whole.visited.size() >= 32)
+            {
+                ++longWalks;
+                spreadWalks += partsVisiting >= 8;
+            }
+        }
+    }
+    // The node test keeps pairs whose leaves it then drops (overlapping ranges of distant points), so
+    // a part may visit nothing; but long walks spread.
+    EXPECT_GT(longWalks, 5);
+    EXPECT_GT(spreadWalks, longWalks / 2) << spreadWalks << " of " << longWalks;
 }
 
 TEST(MeshBvh, ALargeMeshBuiltOnManyThreadsIsTheTreeOneThreadBuilds)

@@ -101,10 +101,11 @@ TEST(StagedPipeline, SplitWalksKeepTheirThreadsWithinTheBudget)
     EXPECT_EQ(walkPartsPerPair(0, 32, 65536), 32u);
     EXPECT_EQ(walkPartsPerPair(100, 32, 65536), 32u);
     EXPECT_EQ(walkPartsPerPair(2048, 32, 65536), 32u);
-    EXPECT_EQ(walkPartsPerPair(10000, 32, 65536), 6u);
+    EXPECT_EQ(walkPartsPerPair(10000, 32, 65536), 4u);  // a power of two: parts are paths of bits
     EXPECT_EQ(walkPartsPerPair(40000, 32, 65536), 1u);
     EXPECT_EQ(walkPartsPerPair(100000, 32, 65536), 1u);
     EXPECT_EQ(walkPartsPerPair(10, 1, 65536), 1u);
+    EXPECT_EQ(walkPartsPerPair(10, 3, 65536), 2u);
 }
 
 TEST(StagedPipeline, PaddingAndSwitchedOffChecksMatchTheCpuBackend)

@@ -274,12 +274,25 @@ struct StageBudget
     std::size_t exactWalkThreads = std::size_t(1) << 16;
 };
 
-/** \brief Parts each open pair's walk is split into (decideOpenPairs): up to \a parts, as many as
-    keep \a pairs pairs (past the culls) within \a walkThreads threads, at least one. */
+/** \brief Parts each open pair's walk is split into (decideOpenPairs): a power of two (walkPartStart),
+    the largest of up to \a parts that keeps \a pairs pairs (past the culls) within \a walkThreads
+    threads, at least one. */
 RC_HD std::uint32_t walkPartsPerPair(std::size_t pairs, std::uint32_t parts, std::size_t walkThreads)
 {
     const std::size_t fit = pairs > 0 ? walkThreads / pairs : parts;
-    return fit >= parts ? parts : (fit > 1 ? static_cast<std::uint32_t>(fit) : 1u);
+    std::uint32_t perPair = 1;
+    while (2 * perPair <= parts && 2 * perPair <= fit)
+        perPair *= 2;
+    return perPair;
+}
+
+/** \brief The bits of a part's path for \a perPair parts (a power of two). */
+RC_HD std::uint32_t walkPartDepth(std::uint32_t perPair)
+{
+    std::uint32_t depth = 0;
+    while ((2u << depth) <= perPair)
+        ++depth;
+    return depth;
 }
 
 /** \brief What the stages did, summed over the chunks of a runner's passes: how much work the
@@ -430,8 +443,6 @@ enum StageBuffer : int
     BufferHit,
     BufferOutcomes,
     BufferExactFlags,
-    BufferWalkParts,
-    BufferWalkPartCount,
     BufferFirstPart,
     BufferPartContacts,
     BufferFirstOverlap,
@@ -664,12 +675,13 @@ RC_HD bool pastFirstOverlap(const StageSettings &st, const unsigned long long *f
     outgrew their bounds: that pass runs again.
 
     A pair's walk of both trees is serial, and in a small batch the slowest pair's walk is the
-    call's latency, so each pair's walk is split into up to \a walkParts parts (splitSurfaceWalk),
-    one thread each, as many as keep the pairs past the culls within \a walkThreads threads
-    (walkPartsPerPair); the first part in walk order that finds a contact gives the pair's first
-    contact, the one the whole walk finds, and the parts after it stop. Then one thread per pair
-    ends it: the contact, or the containment test (solidsContain), and curved shapes. Three
-    kernels; with \a walkParts 1, the pair's whole walk in one thread, as a large batch takes it. */
+    call's latency, so each pair's walk is split into up to \a walkParts parts (walkPartStart: each
+    part finds its start in its own thread), one thread each, as many as keep the pairs past the
+    culls within \a walkThreads threads (walkPartsPerPair); the first part in walk order that finds
+    a contact gives the pair's first contact, the one the whole walk finds, and the parts after it
+    stop. Then one thread per pair ends it: the contact, or the containment test (solidsContain),
+    and curved shapes. Three kernels; with \a walkParts 1, the pair's whole walk in one thread, as
+    a large batch takes it. */
 template <class Exec>
 void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
                      Extent survivors, Extent items, Extent fragments, const std::uint32_t *order,
@@ -685,15 +697,12 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     // walkThreads (or the survivors, one part each) and which is at most bound x parts.
     const std::size_t splitThreads = bound * parts < walkThreads ? bound * parts : walkThreads;
     const std::size_t partThreads = parts > 1 && splitThreads > bound ? splitThreads : bound;
-    NodePair *partStarts = ex.template buffer<NodePair>(BufferWalkParts, partThreads + 1);
-    std::uint32_t *partCount = ex.template buffer<std::uint32_t>(BufferWalkPartCount, bound + 1);
     unsigned long long *firstPart = ex.template buffer<unsigned long long>(BufferFirstPart, bound + 1);
     ExactContact *partContacts = ex.template buffer<ExactContact>(BufferPartContacts, partThreads + 1);
-    // 1. Which pairs the exact phase decides, and their walks' parts.
+    // 1. Which pairs the exact phase decides.
     ex.forEach(bound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = order ? order[k] : k;
         exactFlags[c] = 0;
-        partCount[c] = 0;
         firstPart[c] = parts;  // no part found a contact
         if (c >= survivors.size() || !items.fits() || !fragments.fits())
             return;
@@ -709,15 +718,6 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         if (pastFirstOverlap(st, firstOverlap, out.state, c))
             return;
         exactFlags[c] = 1;
-        ExactTree a, b;
-        Pose<double> poseA, poseB;
-        bool closedA = false, closedB = false;
-        exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
-                    closedB);
-        const std::uint32_t perPair = walkPartsPerPair(survivors.size(), parts, walkThreads);
-        NodePair scratch[kMaxWalkParts];
-        partCount[c] = splitSurfaceWalk(a, poseA, b, poseB, pairPadding(md, st, out.state, out.pair),
-                                        partStarts + c * perPair, scratch, perPair);
     });
     // 2. The parts' walks, a thread each; the first contact in walk order wins.
     ex.forEachHeavy(partThreads, [=] RC_LAMBDA(std::size_t t) {
@@ -726,9 +726,9 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         if (k >= survivors.size())
             return;
         const std::size_t c = order ? order[k] : k;
-        const std::uint32_t j = static_cast<std::uint32_t>(t % perPair);
-        if (j >= partCount[c])
+        if (!exactFlags[c])
             return;
+        const std::uint32_t j = static_cast<std::uint32_t>(t % perPair);
         const PairOutcome &out = decided[c];
         if (pastFirstOverlap(st, firstOverlap, out.state, c))
             return;
@@ -739,7 +739,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
                     closedB);
         // The walk stops once an earlier part of the pair, or an earlier pair of the state, has
         // found a contact (the latter only where pastFirstOverlap would skip the pair).
-        const WalkPart part{partStarts[c * perPair + j], j, &firstPart[c],
+        const WalkPart part{j, walkPartDepth(perPair), &firstPart[c],
                             st.onlyDecisive ? firstOverlap + out.state : nullptr, c};
         if (surfacesWithin(a, poseA, b, poseB, pairPadding(md, st, out.state, out.pair),
                            &partContacts[c * perPair + j], nullptr, part))

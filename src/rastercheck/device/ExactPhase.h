@@ -279,13 +279,13 @@ RC_HD_CALL bool boxesMayMeet(const TreeNode &nf, const PlacedNode &pm, const Tre
     return true;
 }
 
-/** \brief One part of a walk split among threads (splitSurfaceWalk): where it starts, its index in
+/** \brief One part of a walk split among threads (walkPartStart): its index of 2^depth parts, in
     walk order, and where the parts lower the index of the earliest part that found a contact
-    (atomicMinimum; null: the part runs to its end). The whole walk from the roots by default. */
+    (atomicMinimum; null: the part runs to its end). The whole walk by default. */
 struct WalkPart
 {
-    NodePair start{0, 0};
     std::uint32_t index = 0;
+    std::uint32_t depth = 0;
     const unsigned long long *earliestFound = nullptr;
     /** \brief Where the stages note the lowest pair element of the walk's state that overlaps
         (noteOverlap; null: not read), and the walk's own: the walk stops once an earlier pair of
@@ -312,7 +312,7 @@ struct SurfaceQuery
     Vec3<double> between{0.0, 0.0, 0.0};  // of the pair last tested: the moving node's centre less the fixed one's
     double nearestGap = HUGE_VAL;
     std::uint32_t slotFixed = 0, slotMoving = 0;
-    WalkPart part{};  // the walk's part (its start is walkPairs' argument)
+    WalkPart part{};  // the walk's part (whose start surfacesWithin finds: walkPartStart)
 
     RC_HD const PlacedNode &placed(std::int32_t index)
     {
@@ -467,8 +467,9 @@ RC_HD SurfaceQuery surfaceQuery(const ExactTree &a, const Pose<double> &poseA, c
     change which contact is found first, never the answer, so a query with \a contact skips it and
     its first contact does not depend on earlier queries. A tree too deep for the walk's stack
     (which MeshBvh's builder rules out) answers true, with no triangles named. \a part: walk only
-    from its start (a part from splitSurfaceWalk, in the query's numbering), and stop with false
-    once an earlier part has found a contact; the whole walk by default. */
+    its part (walkPartStart, in the query's numbering), and stop with false once an earlier part has
+    found a contact; the whole walk by default. The parts of a walk, one after the other, decide
+    as the whole walk does, and the first in order that finds a contact finds its first contact. */
 RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b,
                                const Pose<double> &poseB, double padding, ExactContact *contact = nullptr,
                                ExactScratch *scratch = nullptr, WalkPart part = WalkPart{})
@@ -492,7 +493,10 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
         if (query.triangles(hint->slotFixed, placedTriangle))
             return true;
     }
-    const WalkEnd end = walkPairs(fixed.tree.nodes, moving.tree.nodes, query, part.start);
+    NodePair start{0, 0};
+    if (part.depth > 0 && !walkPartStart(fixed.tree.nodes, moving.tree.nodes, query, part.index, part.depth, start))
+        return false;
+    const WalkEnd end = walkPairs(fixed.tree.nodes, moving.tree.nodes, query, start);
     if (end == WalkEnd::Finished)
         return false;
     const Pose<double> &fixedPose = movingIsA ? poseB : poseA;
@@ -511,21 +515,6 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
         contact->triangleB = movingIsA ? triangleFixed : triangleMoving;
     }
     return true;
-}
-
-/** \brief surfacesWithin's walk (no scratch) split into up to \a capacity parts for as many threads
-    (splitWalk): surfacesWithin from each part as its start decides the same, and the first part in
-    order that finds a contact finds surfacesWithin's own first contact. \a parts and \a scratch: room
-    for \a capacity pairs. 0 parts: the surfaces cannot meet. */
-RC_HD std::uint32_t splitSurfaceWalk(const ExactTree &a, const Pose<double> &poseA, const ExactTree &b,
-                                     const Pose<double> &poseB, double padding, NodePair *parts, NodePair *scratch,
-                                     std::uint32_t capacity)
-{
-    if (a.empty() || b.empty())
-        return 0;
-    Vec3<double> point{0.0, 0.0, 0.0};
-    SurfaceQuery query = surfaceQuery(a, poseA, b, poseB, padding, nullptr, &point);
-    return splitWalk(query.fixed.tree.nodes, query.moving.tree.nodes, query, parts, scratch, capacity);
 }
 
 /** \brief Is some shell of \a inner (placed by \a innerPose) inside the closed solid \a outer (placed
