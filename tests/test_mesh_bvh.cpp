@@ -1020,6 +1020,39 @@ std::int32_t buildLine(std::vector<LineNode> &nodes, const std::vector<double> &
     return 1 + std::max(left, buildLine(nodes, points, middle, end, child + 1));
 }
 
+/** \brief Two sets of random points on a line, sorted, B's shifted by \a offset, and their trees. */
+struct LinePair
+{
+    std::vector<double> a, b;
+    std::vector<LineNode> treeA{1}, treeB{1};
+
+    LinePair(std::mt19937_64 &rng, std::size_t sizeA, std::size_t sizeB, double offset) : a(sizeA), b(sizeB)
+    {
+        std::uniform_real_distribution<double> u(0.0, 100.0);
+        for (double &x : a)
+            x = u(rng);
+        for (double &x : b)
+            x = u(rng) + offset;
+        std::sort(a.begin(), a.end());
+        std::sort(b.begin(), b.end());
+        buildLine(treeA, a, 0, a.size(), 0);
+        buildLine(treeB, b, 0, b.size(), 0);
+    }
+
+    /** The distance between two nodes' ranges: a lower bound on their points' distances. */
+    double gap(rc::device::NodePair p) const
+    {
+        const LineNode &na = treeA[p.a], &nb = treeB[p.b];
+        return std::max({0.0, nb.lower - na.upper, na.lower - nb.upper});
+    }
+
+    /** Descend into the wider node. */
+    bool splitA(rc::device::NodePair p) const
+    {
+        return treeA[p.a].upper - treeA[p.a].lower >= treeB[p.b].upper - treeB[p.b].lower;
+    }
+};
+
 std::vector<LineNode> chain(int depth)
 {
     std::vector<LineNode> nodes(1);
@@ -1066,46 +1099,30 @@ TEST(Traversal, APairWalkWithAShrinkingReachFindsTheNearestPairAsADistanceQueryW
     // The nearest pair of two point sets on a line: the node test is a lower bound on the
     // distance of a node pair against the best distance so far, which the leaf visitor lowers.
     std::mt19937_64 rng(33);
-    std::uniform_real_distribution<double> u(0.0, 100.0);
     for (int trial = 0; trial < 20; ++trial)
     {
-        std::vector<double> a(300), b(200);
-        for (double &x : a)
-            x = u(rng);
-        for (double &x : b)
-            x = u(rng) + 100.5;  // apart by at least half a unit
-        std::sort(a.begin(), a.end());
-        std::sort(b.begin(), b.end());
-        std::vector<LineNode> treeA(1), treeB(1);
-        buildLine(treeA, a, 0, a.size(), 0);
-        buildLine(treeB, b, 0, b.size(), 0);
+        const LinePair lines(rng, 300, 200, 100.5);  // apart by at least half a unit
+        const std::vector<double> &a = lines.a, &b = lines.b;
+        const std::vector<LineNode> &treeA = lines.treeA, &treeB = lines.treeB;
         struct Nearest
         {
-            const std::vector<LineNode> &ta, &tb;
-            const std::vector<double> &a, &b;
+            const LinePair &lines;
             double best = std::numeric_limits<double>::infinity();
             int leafPairs = 0;
-            double bound(rc::device::NodePair p) const
-            {
-                const LineNode &na = ta[p.a], &nb = tb[p.b];
-                return std::max({0.0, nb.lower - na.upper, na.lower - nb.upper});
-            }
-            bool test(rc::device::NodePair p) const { return bound(p) < best; }
+            bool test(rc::device::NodePair p) const { return lines.gap(p) < best; }
             bool leaves(rc::device::NodePair p)
             {
                 ++leafPairs;
-                best = std::min(best, std::abs(a[-(ta[p.a].first + 1)] - b[-(tb[p.b].first + 1)]));
+                best = std::min(
+                    best, std::abs(lines.a[-(lines.treeA[p.a].first + 1)] - lines.b[-(lines.treeB[p.b].first + 1)]));
                 return true;
             }
-            bool splitA(rc::device::NodePair p) const
-            {
-                return ta[p.a].upper - ta[p.a].lower >= tb[p.b].upper - tb[p.b].lower;
-            }
+            bool splitA(rc::device::NodePair p) const { return lines.splitA(p); }
             bool secondFirst(rc::device::NodePair first, rc::device::NodePair second) const
             {
-                return bound(second) < bound(first);
+                return lines.gap(second) < lines.gap(first);
             }
-        } query{treeA, treeB, a, b};
+        } query{lines};
         ASSERT_EQ(rc::device::walkPairs(treeA.data(), treeB.data(), query), rc::device::WalkEnd::Finished);
         EXPECT_DOUBLE_EQ(query.best, b.front() - a.back()) << trial;
         EXPECT_LT(query.leafPairs, 50) << "the reach did not shrink: " << query.leafPairs << " of "
@@ -1123,47 +1140,32 @@ TEST(Traversal, TheWalksPartsOneAfterTheOtherVisitTheWholeWalksLeafPairsInItsOrd
     int longWalks = 0, spreadWalks = 0;  // of 32 leaf pairs or more; of those, over 8 parts or more
     for (int trial = 0; trial < 40; ++trial)
     {
-        std::vector<double> a(1 + rng() % 120), b(1 + rng() % 90);
-        for (double &x : a)
-            x = u(rng);
-        for (double &x : b)
-            x = u(rng) + 20.0 * (trial % 4);
-        std::sort(a.begin(), a.end());
-        std::sort(b.begin(), b.end());
-        std::vector<LineNode> treeA(1), treeB(1);
-        buildLine(treeA, a, 0, a.size(), 0);
-        buildLine(treeB, b, 0, b.size(), 0);
+        const std::size_t sizeA = 1 + rng() % 120, sizeB = 1 + rng() % 90;
+        const LinePair lines(rng, sizeA, sizeB, 20.0 * (trial % 4));
+        const std::vector<LineNode> &treeA = lines.treeA, &treeB = lines.treeB;
         struct Within
         {
-            const std::vector<LineNode> &ta, &tb;
+            const LinePair &lines;
             double reach;
             std::vector<std::pair<std::int32_t, std::int32_t>> visited;
-            double gap(rc::device::NodePair p) const
-            {
-                const LineNode &na = ta[p.a], &nb = tb[p.b];
-                return std::max({0.0, nb.lower - na.upper, na.lower - nb.upper});
-            }
-            bool test(rc::device::NodePair p) const { return gap(p) <= reach; }
+            bool test(rc::device::NodePair p) const { return lines.gap(p) <= reach; }
             bool leaves(rc::device::NodePair p)
             {
                 visited.emplace_back(p.a, p.b);
                 return true;
             }
-            bool splitA(rc::device::NodePair p) const
-            {
-                return ta[p.a].upper - ta[p.a].lower >= tb[p.b].upper - tb[p.b].lower;
-            }
+            bool splitA(rc::device::NodePair p) const { return lines.splitA(p); }
             bool secondFirst(rc::device::NodePair first, rc::device::NodePair second) const
             {
-                return gap(second) < gap(first);
+                return lines.gap(second) < lines.gap(first);
             }
         };
         const double reach = 0.5 + u(rng) / 20.0;
-        Within whole{treeA, treeB, reach, {}};
+        Within whole{lines, reach, {}};
         ASSERT_EQ(rc::device::walkPairs(treeA.data(), treeB.data(), whole), rc::device::WalkEnd::Finished);
         for (std::uint32_t depth = 0; depth <= 5; ++depth)
         {
-            Within parts{treeA, treeB, reach, {}};
+            Within parts{lines, reach, {}};
             int partsVisiting = 0;
             for (std::uint32_t index = 0; index < (1u << depth); ++index)
             {
