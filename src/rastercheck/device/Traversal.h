@@ -120,11 +120,10 @@ RC_HD WalkEnd walkPairs(const NodeA *nodesA, const NodeB *nodesB, Visitor &visit
     other, visit the same leaf pairs in the same order as one walk from the roots, and the first
     part to stop in index order is the one walk's stop.
 
-    Each part finds its own start, in its own thread: a split by one thread ahead of the parts
-    (level by level) was the critical path of a small batch with mesh pairs (FCL's env/rob, the
-    crane in the plant: 8-11 us of a 32-state call's 13-16 us on one CPU core), as it tests about
-    twice as many pairs as there are parts. Here a part tests two pairs a level: 2 x depth and
-    the pruned levels. */
+    Each part finds its own start, in its own thread: one thread splitting the walk level by level
+    ahead of the parts (testing the pairs it kept again at every level) was most of a small
+    batch's critical path with mesh pairs (FCL's env/rob, the crane in the plant; docs/benchmarks.md
+    "A small call's critical path"). Here a part tests two pairs a level of its path. */
 template <class NodeA, class NodeB, class Visitor>
 RC_HD bool walkPartStart(const NodeA *nodesA, const NodeB *nodesB, Visitor &visitor, std::uint32_t index,
                          std::uint32_t depth, NodePair &start)
