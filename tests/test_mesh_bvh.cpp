@@ -296,6 +296,26 @@ TEST(MeshBvh, TreeCoversEveryTriangleOnceAndBoxesNest)
         }
         for (int count : seen)
             ASSERT_EQ(count, 1);
+        // A subtree's leaves hold consecutive slots, its first child's first (subtreeSlots, which
+        // the image walk reads a subtree's triangles by), and the root's are all of them.
+        const rc::device::TreeView view = bvh.view();
+        std::uint32_t begin = 1, end = 0;
+        rc::device::subtreeSlots(view.nodes, view.nodes[0], begin, end);
+        EXPECT_EQ(begin, 0u);
+        EXPECT_EQ(end, mesh.numTriangles());
+        for (std::size_t i = 0; i < bvh.numNodes(); ++i)
+        {
+            const rc::device::TreeNode &node = view.nodes[i];
+            if (node.isLeaf())
+                continue;
+            std::uint32_t firstBegin, firstEnd, secondBegin, secondEnd;
+            rc::device::subtreeSlots(view.nodes, node, begin, end);
+            rc::device::subtreeSlots(view.nodes, view.nodes[node.first], firstBegin, firstEnd);
+            rc::device::subtreeSlots(view.nodes, view.nodes[node.first + 1], secondBegin, secondEnd);
+            ASSERT_EQ(firstBegin, begin) << "node " << i;
+            ASSERT_EQ(firstEnd, secondBegin) << "node " << i;
+            ASSERT_EQ(secondEnd, end) << "node " << i;
+        }
         // The surface area heuristic's splits stay near balanced on an even mesh.
         EXPECT_LE(bvh.depth(), 2 * static_cast<int>(std::ceil(std::log2(double(mesh.numTriangles()) / leafSize))));
     }
@@ -379,7 +399,8 @@ TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
     // The batched stages pick a pair's triangles by walking the tree (device::forEachTriangleNearImage)
     // instead of testing every triangle (triangleMeetsImage): the walk must keep every triangle the
     // scan keeps, for components (vertices placed by a float pose) and for objects (vertices stored
-    // relative to a far origin), and read a small part of the mesh when the image is small.
+    // relative to a far origin), read a small part of the mesh when the image is small, and give
+    // the triangles of a walk that tests every node, in its order.
     const rc::Mesh meshes[] = {rc::test::mazeOnSlab(0.1), sphereMesh(1.0, 5)};
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -388,7 +409,7 @@ TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
         const rc::MeshBvh bvh(mesh);
         const rc::Aabb bounds = mesh.bounds();
         const Vec size = bounds.max - bounds.min;
-        std::size_t kept = 0, walked = 0, windows = 0, walkedSmall = 0, smallWindows = 0;
+        std::size_t kept = 0, walked = 0, windows = 0, walkedSmall = 0, smallWindows = 0, insideNodes = 0;
         for (int trial = 0; trial < 400; ++trial)
         {
             // Half the trials place the mesh as a component, half as an object far from its origin.
@@ -434,6 +455,7 @@ TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
             const float margin = rc::device::pairMargin(window, grid, 0.0f);
             std::vector<char> fromTree(mesh.triangles.size(), 0);
             std::size_t treeCount = 0;
+            std::vector<std::uint32_t> order;
             rc::device::forEachTriangleNearImage(bvh.view(), placement, grid, margin,
                                                  [&](std::uint32_t t)
                                                  {
@@ -441,7 +463,26 @@ TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
                                                      EXPECT_EQ(fromTree[t], 0) << "triangle " << t << " visited twice";
                                                      fromTree[t] = 1;
                                                      ++treeCount;
+                                                     order.push_back(t);
                                                  });
+            // The walk takes a subtree well inside the image at once: the triangles and order of
+            // testing every node.
+            std::vector<std::uint32_t> everyNode;
+            rc::device::walkTree(
+                bvh.view().nodes, bvh.view().numNodes,
+                [&](const rc::device::TreeNode &node)
+                {
+                    const rc::device::ImageSide side = rc::device::nodeAgainstImage(node, placement, grid, margin);
+                    insideNodes += side == rc::device::ImageSide::Inside && !node.isLeaf();
+                    return side != rc::device::ImageSide::Outside;
+                },
+                [&](const rc::device::TreeNode &leaf)
+                {
+                    for (std::uint32_t slot = leaf.firstSlot(); slot < leaf.firstSlot() + leaf.count; ++slot)
+                        everyNode.push_back(bvh.view().triangleOrder[slot]);
+                    return true;
+                });
+            ASSERT_EQ(order, everyNode) << "trial " << trial;
             for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
             {
                 const rc::Mesh::Triangle &tri = mesh.triangles[t];
@@ -462,6 +503,7 @@ TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
         }
         // The walk reads about what the scan keeps, not the whole mesh.
         EXPECT_LT(walked, 2 * kept + windows * 16) << mesh.triangles.size() << " triangles";
+        EXPECT_GT(insideNodes, windows) << "no subtree was taken at once";
         EXPECT_LT(walkedSmall, smallWindows * mesh.triangles.size() / 4);
     }
 }

@@ -41,22 +41,35 @@ struct TreeView
     std::uint32_t numNodes;
 };
 
+/** \brief Where a node's box, placed, lies against a raster image (nodeAgainstImage). */
+enum class ImageSide
+{
+    Outside,  ///< no triangle below it meets the image
+    Meets,    ///< some may
+    Inside    ///< well inside: every node below it meets the image too
+};
+
 /** \brief Whether the node, placed by \a placement, may hold a triangle whose projection along the
     grid's axis meets the image rectangle grown by \a margin (triangleMeetsImage's test): the box's
     extent along the two image axes, grown by a slack that covers the float rounding of the node
     and of the placement (a few 1e-7 of the coordinates in play; 4e-6 of them is kept, which only
-    keeps more nodes). */
-RC_HD bool nodeMeetsImage(const TreeNode &node, const Pose<float> &placement, const RasterGrid &grid, float margin)
+    keeps more nodes). Inside: the box's extent lies within the rectangle shrunk by that slack, so
+    every triangle below (each node holds its subtree's corners, up to the float storage's rounding)
+    meets the image, and so does every node between. */
+RC_HD ImageSide nodeAgainstImage(const TreeNode &node, const Pose<float> &placement, const RasterGrid &grid,
+                                 float margin)
 {
     const int u = (grid.axis + 1) % 3, v = (grid.axis + 2) % 3;
     const float *m = placement.m;
     const float *a = node.axes;
     const float magnitude = fabsf(node.centre[0]) + fabsf(node.centre[1]) + fabsf(node.centre[2]) + node.radius +
                             fabsf(m[3]) + fabsf(m[7]) + fabsf(m[11]);
-    const float reach = margin + 4e-6f * magnitude;
+    const float slack = 4e-6f * magnitude;
+    const float reach = margin + slack;
     const float lower[2] = {grid.origin[0], grid.origin[1]};
     const float upper[2] = {grid.origin[0] + grid.width * grid.pixel, grid.origin[1] + grid.height * grid.pixel};
     const int rows[2] = {u, v};
+    bool inside = true;
     for (int k = 0; k < 2; ++k)
     {
         const float *r = m + 4 * rows[k];  // the placement's row for this image axis
@@ -65,24 +78,57 @@ RC_HD bool nodeMeetsImage(const TreeNode &node, const Pose<float> &placement, co
         for (int j = 0; j < 3; ++j)  // |row . axis j| * extent j
             half += fabsf(r[0] * a[j] + r[1] * a[3 + j] + r[2] * a[6 + j]) * node.halfExtents[j];
         if (centre + half < lower[k] - reach || centre - half > upper[k] + reach)
-            return false;
+            return ImageSide::Outside;
+        inside = inside && centre - half >= lower[k] + slack && centre + half <= upper[k] - slack;
     }
-    return true;
+    return inside ? ImageSide::Inside : ImageSide::Meets;
+}
+
+/** \brief The slots [\a begin, \a end) of the triangles below \a node: a subtree's leaves hold
+    consecutive slots, its first child's first (MeshBvh's builder splits a node's slot range). */
+RC_HD void subtreeSlots(const TreeNode *nodes, const TreeNode &node, std::uint32_t &begin, std::uint32_t &end)
+{
+    const TreeNode *first = &node, *last = &node;
+    while (!first->isLeaf())
+        first = &nodes[first->first];
+    while (!last->isLeaf())
+        last = &nodes[last->first + 1];
+    begin = first->firstSlot();
+    end = last->firstSlot() + last->count;
 }
 
 /** \brief Calls \a visit(triangle) for every triangle (number within the mesh) in a leaf whose box
-    nodeMeetsImage(): a superset of the triangles triangleMeetsImage() keeps, found without
-    reading the others. Leaves come in tree order. */
+    and ancestors' boxes meet the image (nodeAgainstImage): a superset of the triangles
+    triangleMeetsImage() keeps, found without reading the others. Leaves come in tree order. A node
+    well inside the image gives its subtree's triangles at once, in the same order, without testing
+    the nodes below it (the same triangles: every one of those nodes meets the image): a pair's
+    image often holds most of a component, whose whole tree the walk tested node by node (at 1 000
+    Panda states, the raster's two walks per open pair were the largest terms of a call's
+    critical path; docs/benchmarks.md). */
 template <class Visit>
 RC_HD void forEachTriangleNearImage(const TreeView &tree, const Pose<float> &placement, const RasterGrid &grid,
                                     float margin, Visit &&visit)
 {
+    const auto visitSlots = [&](std::uint32_t begin, std::uint32_t end)
+    {
+        for (std::uint32_t slot = begin; slot < end; ++slot)
+            visit(tree.triangleOrder[slot]);
+    };
     walkTree(
-        tree.nodes, tree.numNodes, [&](const TreeNode &node) { return nodeMeetsImage(node, placement, grid, margin); },
+        tree.nodes, tree.numNodes,
+        [&](const TreeNode &node)
+        {
+            const ImageSide side = nodeAgainstImage(node, placement, grid, margin);
+            if (side != ImageSide::Inside || node.isLeaf())
+                return side != ImageSide::Outside;
+            std::uint32_t begin = 0, end = 0;
+            subtreeSlots(tree.nodes, node, begin, end);
+            visitSlots(begin, end);
+            return false;  // visited: not walked below
+        },
         [&](const TreeNode &leaf)
         {
-            for (std::uint32_t slot = leaf.firstSlot(); slot < leaf.firstSlot() + leaf.count; ++slot)
-                visit(tree.triangleOrder[slot]);
+            visitSlots(leaf.firstSlot(), leaf.firstSlot() + leaf.count);
             return true;
         });
 }
