@@ -13,11 +13,14 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
+#include "NonConvex.h"
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/collision/StageRunner.h"
 #include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/device/ConvexDistance.h"
+#include "rastercheck/device/CurvedShapes.h"
+#include "rastercheck/geometry/MeshBvh.h"
 #include "rastercheck/io/MoveItYaml.h"
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/io/UrdfLoader.h"
@@ -220,6 +223,54 @@ void expectExactLine(const rc::RobotModelConstPtr &robot, const rc::ScenePtr &sc
     }
 }
 }  // namespace
+
+TEST(CurvedPrimitives, ShapesAgainstAMeshTreeDecideAsEveryTriangleDoes)
+{
+    // shapesMeetTree walks the mesh's tree behind the shape's ball and box: the answer must be that
+    // of testing every triangle (then the shape's origin inside the closed solid), for long, flat
+    // and round shapes near a non-convex mesh, with and without padding.
+    const rc::Mesh mesh = rc::test::bookshelf(0.1);
+    const rc::MeshBvh bvh(mesh);
+    const rd::ExactTree tree = bvh.exactTree();
+    const rc::Aabb bounds = mesh.bounds();
+    std::mt19937 random(52);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    int meets = 0, apart = 0, inside = 0;
+    for (int i = 0; i < 600; ++i)
+    {
+        const auto kind = static_cast<rd::ConvexKind>(i % 4);
+        const Eigen::Vector3d centre =
+            bounds.min +
+            (bounds.max - bounds.min).cwiseProduct(Eigen::Vector3d(unit(random), unit(random), unit(random)));
+        const Eigen::Isometry3d pose =
+            at(centre.x(), centre.y(), centre.z(), Eigen::Quaterniond::UnitRandom().toRotationMatrix());
+        // Long or flat: one size up to half the mesh's, the others down to a millimetre.
+        const double big = 0.5 * (bounds.max - bounds.min).maxCoeff() * unit(random);
+        const double small = 0.001 + 0.05 * unit(random);
+        const rd::ConvexShape placed = shape(kind, pose, kind == rd::ConvexKind::Box ? big : small, big, small);
+        const rd::Vec3<double> half = rd::shapeHalfSizes(placed);
+        const double reach = std::sqrt(rd::dot(half, half));
+        const std::uint32_t solidShapes[2] = {0, 1};
+        const rd::CurvedArrays arrays{&placed, &reach, solidShapes};
+        const double padding = i % 3 == 0 ? 0.02 : 0.0;
+        bool everyTriangle = false;
+        for (std::uint32_t slot = 0; slot < tree.numTriangles && !everyTriangle; ++slot)
+            everyTriangle = rd::convexWithin(placed, rd::slotTriangle(tree, slot), padding);
+        const bool originInside =
+            !everyTriangle && rd::pointInsideClosedTree(tree, {centre.x(), centre.y(), centre.z()});
+        const bool expected = everyTriangle || originInside;
+        ASSERT_EQ(rd::shapesMeetTree(arrays, 0, rd::Pose<double>::identity(), tree, true, rd::Pose<double>::identity(),
+                                     padding),
+                  expected)
+            << "shape " << i << " (kind " << i % 4 << ")";
+        meets += everyTriangle;
+        inside += originInside;
+        apart += !expected;
+    }
+    EXPECT_GT(meets, 100);
+    EXPECT_GT(apart, 50);
+    EXPECT_GT(inside, 0);  // within a shelf board
+}
 
 TEST(CurvedPrimitives, CheckerDecidesSpheresCylindersAndConesExactly)
 {
