@@ -226,9 +226,9 @@ void expectExactLine(const rc::RobotModelConstPtr &robot, const rc::ScenePtr &sc
 
 TEST(CurvedPrimitives, ShapesAgainstAMeshTreeDecideAsEveryTriangleDoes)
 {
-    // shapesMeetTree walks the mesh's tree behind the shape's ball and box: the answer must be that
-    // of testing every triangle (then the shape's origin inside the closed solid), for long, flat
-    // and round shapes near a non-convex mesh, with and without padding.
+    // shapesMeetTree walks the mesh's tree behind the shape's ball and box, after a hinted triangle:
+    // the answer must be that of testing every triangle (then the shape's origin inside the closed
+    // solid), for long, flat and round shapes near a non-convex mesh, with and without padding.
     const rc::Mesh mesh = rc::test::bookshelf(0.1);
     const rc::MeshBvh bvh(mesh);
     const rd::ExactTree tree = bvh.exactTree();
@@ -254,8 +254,13 @@ TEST(CurvedPrimitives, ShapesAgainstAMeshTreeDecideAsEveryTriangleDoes)
         const rd::CurvedArrays arrays{&placed, &reach, solidShapes};
         const double padding = i % 3 == 0 ? 0.02 : 0.0;
         bool everyTriangle = false;
+        std::int32_t meeting = -1;  // the first slot whose triangle the shape meets
         for (std::uint32_t slot = 0; slot < tree.numTriangles && !everyTriangle; ++slot)
-            everyTriangle = rd::convexWithin(placed, rd::slotTriangle(tree, slot), padding);
+            if (rd::convexWithin(placed, rd::slotTriangle(tree, slot), padding))
+            {
+                everyTriangle = true;
+                meeting = static_cast<std::int32_t>(slot);
+            }
         const bool originInside =
             !everyTriangle && rd::pointInsideClosedTree(tree, {centre.x(), centre.y(), centre.z()});
         const bool expected = everyTriangle || originInside;
@@ -263,6 +268,12 @@ TEST(CurvedPrimitives, ShapesAgainstAMeshTreeDecideAsEveryTriangleDoes)
                                      padding),
                   expected)
             << "shape " << i << " (kind " << i % 4 << ")";
+        // A hint (the meshes' contact triangle, tested first) changes no answer, whatever it is.
+        for (std::int32_t hint : {meeting, static_cast<std::int32_t>(random() % tree.numTriangles)})
+            ASSERT_EQ(rd::shapesMeetTree(arrays, 0, rd::Pose<double>::identity(), tree, true,
+                                         rd::Pose<double>::identity(), padding, hint),
+                      expected)
+                << "shape " << i << " (kind " << i % 4 << "), hint " << hint;
         meets += everyTriangle;
         inside += originInside;
         apart += !expected;

@@ -779,7 +779,8 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         {
             std::uint32_t solidA, solidB;
             pairSolidNumbers(md, out.pair, solidA, solidB);
-            if (!curvedPairCollides(md.curvedShapes, solidA, poseA, a, closedA, solidB, poseB, b, closedB, padding))
+            if (!curvedPairCollides(md.curvedShapes, solidA, poseA, a, closedA, solidB, poseB, b, closedB, padding,
+                                    &contact))
             {
                 out.status = PairApart;
                 return;

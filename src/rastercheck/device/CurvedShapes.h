@@ -104,9 +104,12 @@ RC_HD bool nodeMayMeetShape(const TreeNode &node, const ConvexShape &shape, cons
     solid of \a mesh (placed by \a poseMesh; \a closed: it has an inside)? The test runs in the
     mesh's frame, so its triangles are read as stored; its tree's bounding spheres rule out the
     triangles beyond each shape's reach. A shape that no triangle comes near is inside the mesh's
-    solid or wholly outside it: one point (its origin) decides. */
+    solid or wholly outside it: one point (its origin) decides. \a hintSlot (a slot of \a mesh's
+    tree, or -1): a triangle tested first, the mesh's triangle where the two meshes touched, which
+    the exact shape most often meets too; it changes how soon a meeting is found, never the answer. */
 RC_HD_CALL bool shapesMeetTree(const CurvedArrays &arrays, std::uint32_t solid, const Pose<double> &poseShapes,
-                               const ExactTree &mesh, bool closed, const Pose<double> &poseMesh, double padding)
+                               const ExactTree &mesh, bool closed, const Pose<double> &poseMesh, double padding,
+                               std::int32_t hintSlot = -1)
 {
     if (mesh.empty())
         return false;
@@ -115,6 +118,9 @@ RC_HD_CALL bool shapesMeetTree(const CurvedArrays &arrays, std::uint32_t solid, 
     for (std::uint32_t k = arrays.solidShapes[solid]; k < arrays.solidShapes[solid + 1]; ++k)
     {
         const ConvexShape shape = placedShape(arrays.shapes[k], inMesh);
+        if (hintSlot >= 0 && static_cast<std::uint32_t>(hintSlot) < mesh.numTriangles &&
+            convexWithin(shape, slotTriangle(mesh, static_cast<std::uint32_t>(hintSlot)), padding))
+            return true;
         const Vec3<double> centre{shape.pose.m[3], shape.pose.m[7], shape.pose.m[11]};
         const double radius = arrays.reach[k] + padding;
         // Tree nodes are in float: grow their spheres and boxes by a rounding allowance.
@@ -151,10 +157,12 @@ RC_HD_CALL bool shapesMeetTree(const CurvedArrays &arrays, std::uint32_t solid, 
     component (its mesh \a meshA, closed or not), \a b the object or other component (solid
     numbers as CurvedArrays'). Both made of primitives: GJK on each pair of shapes; else the
     primitives of the one side against the other's mesh (shapesMeetTree). Only for the pairs
-    CurvedSolids refines: one side is made of primitives only. */
+    CurvedSolids refines: one side is made of primitives only. \a meshContact (or null): where the
+    two meshes touched, whose triangle on the mesh side is tested first (shapesMeetTree's hint). */
 RC_HD_CALL bool curvedPairCollides(const CurvedArrays &arrays, std::uint32_t a, const Pose<double> &poseA,
                                    const ExactTree &meshA, bool closedA, std::uint32_t b, const Pose<double> &poseB,
-                                   const ExactTree &meshB, bool closedB, double padding)
+                                   const ExactTree &meshB, bool closedB, double padding,
+                                   const ExactContact *meshContact = nullptr)
 {
     padding = padding > 0.0 ? padding : 0.0;
     const bool shapesA = arrays.solidShapes[a + 1] > arrays.solidShapes[a];
@@ -162,7 +170,7 @@ RC_HD_CALL bool curvedPairCollides(const CurvedArrays &arrays, std::uint32_t a, 
     if (shapesA && shapesB)
         return shapesWithin(arrays, a, poseA, b, poseB, padding);
     if (shapesA)
-        return shapesMeetTree(arrays, a, poseA, meshB, closedB, poseB, padding);
-    return shapesMeetTree(arrays, b, poseB, meshA, closedA, poseA, padding);
+        return shapesMeetTree(arrays, a, poseA, meshB, closedB, poseB, padding, meshContact ? meshContact->slotB : -1);
+    return shapesMeetTree(arrays, b, poseB, meshA, closedA, poseA, padding, meshContact ? meshContact->slotA : -1);
 }
 }  // namespace rastercheck::device

@@ -420,12 +420,15 @@ struct SurfaceQuery
 };
 
 /** \brief Where two meshes touch: a point (world frame) and the triangle of each mesh (-1 when found
-    by containment, with no surface crossing, or when a walk outgrew its stack). */
+    by containment, with no surface crossing, or when a walk outgrew its stack), as its number in
+    the mesh and its slot in the mesh's tree (ExactTree::slotCorners). */
 struct ExactContact
 {
     Vec3<double> position{0.0, 0.0, 0.0};
     std::int32_t triangleA = -1;
     std::int32_t triangleB = -1;
+    std::int32_t slotA = -1;
+    std::int32_t slotB = -1;
 };
 
 /** \brief The surface query of A (placed by \a poseA) and B (placed by \a poseB) within \a padding
@@ -503,8 +506,7 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
     if (contact && end == WalkEnd::Overflow)  // the safe answer, with no triangle to name
     {
         contact->position = transformPoint(fixedPose, nodeCentreOf(fixed.tree.nodes[0]));
-        contact->triangleA = -1;
-        contact->triangleB = -1;
+        contact->triangleA = contact->triangleB = contact->slotA = contact->slotB = -1;
     }
     else if (contact)
     {
@@ -513,6 +515,10 @@ RC_HD_CALL bool surfacesWithin(const ExactTree &a, const Pose<double> &poseA, co
         const auto triangleMoving = static_cast<std::int32_t>(moving.tree.triangleOrder[query.slotMoving]);
         contact->triangleA = movingIsA ? triangleMoving : triangleFixed;
         contact->triangleB = movingIsA ? triangleFixed : triangleMoving;
+        const auto slotFixed = static_cast<std::int32_t>(query.slotFixed);
+        const auto slotMoving = static_cast<std::int32_t>(query.slotMoving);
+        contact->slotA = movingIsA ? slotMoving : slotFixed;
+        contact->slotB = movingIsA ? slotFixed : slotMoving;
     }
     return true;
 }
@@ -544,8 +550,7 @@ RC_HD_CALL bool shellInside(const ExactTree &inner, const Pose<double> &innerPos
         if (contact)
         {
             contact->position = transformPoint(innerPose, probe);
-            contact->triangleA = -1;
-            contact->triangleB = -1;
+            contact->triangleA = contact->triangleB = contact->slotA = contact->slotB = -1;
         }
         return true;
     }
