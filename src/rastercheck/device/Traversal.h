@@ -123,7 +123,7 @@ RC_HD WalkEnd walkPairs(const NodeA *nodesA, const NodeB *nodesB, Visitor &visit
     Each part finds its own start, in its own thread: one thread splitting the walk level by level
     ahead of the parts (testing the pairs it kept again at every level) was most of a small
     batch's critical path with mesh pairs (FCL's env/rob, the crane in the plant; docs/benchmarks.md
-    "A small call's critical path"). Here a part tests two pairs a level of its path. */
+    "A call's critical path"). Here a part tests two pairs a level of its path. */
 template <class NodeA, class NodeB, class Visitor>
 RC_HD bool walkPartStart(const NodeA *nodesA, const NodeB *nodesB, Visitor &visitor, std::uint32_t index,
                          std::uint32_t depth, NodePair &start)
