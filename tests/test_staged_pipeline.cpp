@@ -108,6 +108,30 @@ TEST(StagedPipeline, SplitWalksKeepTheirThreadsWithinTheBudget)
     EXPECT_EQ(walkPartsPerPair(10, 3, 65536), 2u);
 }
 
+TEST(StagedPipeline, TimingEachElementKeepsTheVerdictsAndMeasuresACriticalPath)
+{
+    // rastercheck_bench_critical_path's runner: each kernel's elements one by one, each timed (a
+    // slow one twice). The verdicts and contacts stay the CPU backend's, and the slowest elements'
+    // times add up to a critical path within the passes' own time; an untimed runner counts none.
+    const std::vector<rc::test::StateSuite> suites = rc::test::accuracySuites(sanitizerScaled(100));
+    const rc::test::StateSuite &suite = suites.front();
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    const rc::CpuBackend cpu(model);
+    const rc::StagedBackend timed(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned, true));
+    const rc::StagedBackend untimed(model, poisonedStages(model));
+    for (rc::CollisionMode mode : kModes)
+    {
+        rc::CollisionRequest request;
+        request.mode = mode;
+        rc::test::expectSameDecisions(timed, cpu, *model, suite.states, request, label(suite.name, mode) + " timed");
+        rc::test::expectSameDecisions(untimed, cpu, *model, suite.states, request, label(suite.name, mode));
+    }
+    const rc::device::ExecutorCounts timedCounts = timed.executorCounts();
+    EXPECT_GT(timedCounts.criticalPathSeconds, 0.0);
+    EXPECT_LT(timedCounts.criticalPathSeconds, timedCounts.seconds);
+    EXPECT_EQ(untimed.executorCounts().criticalPathSeconds, 0.0);
+}
+
 TEST(StagedPipeline, PaddingAndSwitchedOffChecksMatchTheCpuBackend)
 {
     const std::vector<rc::test::StateSuite> suites = rc::test::accuracySuites(sanitizerScaled(80));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cstring>
 #include <numeric>
 #include <string>
@@ -129,8 +130,8 @@ struct NoGraph
 class HostExecutor
 {
 public:
-    HostExecutor(HostScratch scratch, std::size_t maxScratchBytes)
-        : scratch_(scratch), maxScratchBytes_(maxScratchBytes)
+    HostExecutor(HostScratch scratch, std::size_t maxScratchBytes, bool timeElements)
+        : scratch_(scratch), maxScratchBytes_(maxScratchBytes), timeElements_(timeElements)
     {
     }
 
@@ -203,7 +204,7 @@ public:
         if (n == 0)
             return;
         ++counts_.launches;
-        recorder_.issue([n, f] { loop(n, f); }, kernelId<F>(), n, f);
+        recorder_.issue([this, n, f] { loop(n, f); }, kernelId<F>(), n, f);
     }
 
     /** \brief The GPU holds these kernels to fewer registers; here the same loop. */
@@ -220,7 +221,8 @@ public:
         if (extent.bound == 0)
             return;
         ++counts_.launches;
-        recorder_.issue([extent, f] { loop(extent.size(), f); }, kernelId<F>(), extent, f);  // the count as it is then
+        recorder_.issue([this, extent, f] { loop(extent.size(), f); }, kernelId<F>(), extent,
+                        f);  // the count as it is then
     }
 
     void selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected, unsigned long long *count)
@@ -329,8 +331,31 @@ private:
     }
 
     template <class F>
-    static void loop(std::size_t n, const F &f)
+    void loop(std::size_t n, const F &f)
     {
+        if (timeElements_)
+        {
+            // An element over a microsecond runs again and the lower time counts: a timer interrupt
+            // inside one would otherwise count whole (a call timed element by element lasts
+            // milliseconds). A second run writes what the first did: elements write their own
+            // slots and lower minima (atomicMinimum), nothing they add to.
+            const auto timed = [&f](std::size_t i)
+            {
+                const auto start = std::chrono::steady_clock::now();
+                f(i);
+                return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            };
+            double slowest = 0.0;
+            for (std::size_t i = 0; i < n; ++i)
+            {
+                double seconds = timed(i);
+                if (seconds > 1e-6)
+                    seconds = std::min(seconds, timed(i));
+                slowest = std::max(slowest, seconds);
+            }
+            counts_.criticalPathSeconds += slowest;
+            return;
+        }
 #pragma omp parallel for schedule(static)
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i)
             f(static_cast<std::size_t>(i));
@@ -354,6 +379,7 @@ private:
 
     HostScratch scratch_;
     std::size_t maxScratchBytes_;
+    bool timeElements_;
     device::ExecutorCounts counts_;
     device::CountGuesses guesses_;
     std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
@@ -365,9 +391,10 @@ private:
 class HostStageRunner : public PooledStageRunner<HostExecutor>
 {
 public:
-    HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch)
-        : PooledStageRunner([scratch, budget]
-                            { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes); }),
+    HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch,
+                    bool timeElements)
+        : PooledStageRunner([scratch, budget, timeElements]
+                            { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes, timeElements); }),
           model_(std::move(model))
     {
         arrays_ = hostModelArrays(*model_);
@@ -382,9 +409,9 @@ private:
 }  // namespace
 
 std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget,
-                                                 HostScratch scratch)
+                                                 HostScratch scratch, bool timeElements)
 {
-    return std::make_unique<HostStageRunner>(std::move(model), budget, scratch);
+    return std::make_unique<HostStageRunner>(std::move(model), budget, scratch, timeElements);
 }
 
 /** \brief What one check() keeps on the host besides the executor's buffers: the states' bounds

@@ -27,9 +27,13 @@ enum class HostScratch
               ///< a stage that reads a slot nobody wrote then shows up in the CPU tests
 };
 
-/** \brief The stages on the host, through the same driver as the GPU (plain loops for kernels). */
+/** \brief The stages on the host, through the same driver as the GPU (plain loops for kernels).
+    \a timeElements: run each kernel's elements one after the other on the calling thread, each
+    timed (one over a microsecond twice, the lower time kept), and count per kernel the slowest
+    (ExecutorCounts::criticalPathSeconds): what one call would wait for on a device besides its
+    launches, measured without one (benches; the verdicts are the same). */
 std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget = {},
-                                                 HostScratch scratch = HostScratch::Reused);
+                                                 HostScratch scratch = HostScratch::Reused, bool timeElements = false);
 
 /** \brief A batch backend: the stages decide every pair they can for the whole batch in one pass,
     then the host reduces per state to the first colliding pair, deciding exactly (the CPU

@@ -335,6 +335,10 @@ struct ExecutorCounts
     unsigned long long compiledPasses = 0;
     unsigned long long replayedPasses = 0;
     double seconds = 0;                       ///< host clock inside the passes (kernels, copies, waits)
+    /** The host executor timing its elements (makeHostStageRunner): per kernel the slowest
+        element's time, summed. A device running a thread per element waits for that chain (at
+        its own thread speed) besides its launches; 0 from any other executor. */
+    double criticalPathSeconds = 0;
 
     ExecutorCounts &operator+=(const ExecutorCounts &other)
     {
@@ -347,6 +351,7 @@ struct ExecutorCounts
         compiledPasses += other.compiledPasses;
         replayedPasses += other.replayedPasses;
         seconds += other.seconds;
+        criticalPathSeconds += other.criticalPathSeconds;
         return *this;
     }
     /** \brief What happened between \a earlier and these counts (both of one runner). */
@@ -360,7 +365,8 @@ struct ExecutorCounts
                               allocations - earlier.allocations,
                               compiledPasses - earlier.compiledPasses,
                               replayedPasses - earlier.replayedPasses,
-                              seconds - earlier.seconds};
+                              seconds - earlier.seconds,
+                              criticalPathSeconds - earlier.criticalPathSeconds};
     }
 };
 

@@ -1,0 +1,104 @@
+// A call's critical path on the host executor: per kernel of the stages the slowest element's time,
+// summed over the call (ExecutorCounts::criticalPathSeconds). A device running a thread per element
+// waits for that chain, at its own thread speed, besides the call's launches: this measures the
+// part of a small call's latency that more launches in a graph cannot hide, without a device.
+// Each batch is checked three times and the least kept (a timer interrupt inside one element
+// would otherwise count whole); 20 batches first to warm up. Safe mode, uniform random states.
+// Prints a Markdown table (docs/benchmarks.md, "A call's critical path").
+//
+// usage: rastercheck_bench_critical_path [batches=80] [sizes=32,1000]
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+
+#include "BenchSupport.h"
+#include "TestSupport.h"
+#include "rastercheck/collision/StagedBackend.h"
+#include "rastercheck/io/MoveItYaml.h"
+#include "rastercheck/io/OmplAppProblem.h"
+
+using namespace rastercheck;
+
+namespace
+{
+struct SceneCase
+{
+    std::string name;
+    RobotModelConstPtr robot;
+    SceneConstPtr scene;
+};
+
+double quantile(std::vector<double> values, double q)
+{
+    std::sort(values.begin(), values.end());
+    return values[static_cast<std::size_t>(q * static_cast<double>(values.size() - 1))];
+}
+}  // namespace
+
+int main(int argc, char **argv)
+{
+    const int batches = argc > 1 ? std::atoi(argv[1]) : 80;
+    std::vector<std::size_t> sizes;
+    {
+        std::stringstream list(argc > 2 ? argv[2] : "32,1000");
+        for (std::string item; std::getline(list, item, ',');)
+            sizes.push_back(static_cast<std::size_t>(std::atol(item.c_str())));
+    }
+    if (batches < 1 || sizes.empty() || std::find(sizes.begin(), sizes.end(), 0u) != sizes.end())
+    {
+        std::fprintf(stderr, "usage: rastercheck_bench_critical_path [batches=80] [sizes=32,1000]\n");
+        return 2;
+    }
+    const std::string root = bench::sharedDataOrExit();
+    const RobotModelConstPtr panda = bench::loadMbmRobot(root, "panda");
+    std::vector<SceneCase> cases;
+    for (const char *scenario : {"table_pick", "bookshelf_tall", "cage"})
+        cases.push_back({std::string("panda ") + scenario, panda,
+                         loadMoveItScene(bench::mbmProblemPath(root, "panda", scenario, 1, "scene"))});
+    const Problem &crane = test::plant();
+    cases.push_back({"crane in the plant", crane.robot, crane.scene});
+    const OmplAppProblem meshes = loadOmplAppProblemString(bench::checkingCfg("fcl_env_rob", "rob.obj", "env.obj", {}),
+                                                           root + "/meshes/fcl", "fcl env/rob");
+    cases.push_back({"fcl env/rob", meshes.robot, meshes.scene});
+
+    constexpr int kWarmUp = 20, kRepeats = 3;
+    std::printf("safe mode, %d batches per size after %d, each the least of %d runs\n\n", batches, kWarmUp, kRepeats);
+    std::printf("| scene | states | critical path p50 / p90 / max, us | launches per call |\n");
+    std::printf("|---|---:|---:|---:|\n");
+    CollisionRequest request;
+    for (const SceneCase &c : cases)
+    {
+        const auto model = std::make_shared<const CollisionModel>(c.robot, c.scene);
+        const StagedBackend staged(model, makeHostStageRunner(model, {}, HostScratch::Reused, true));
+        const std::size_t dof = c.robot->numCoordinates();
+        for (std::size_t n : sizes)
+        {
+            const std::vector<double> q =
+                bench::uniformStates(*c.robot, n * static_cast<std::size_t>(kWarmUp + batches), 42);
+            std::vector<std::uint8_t> valid(n);
+            std::vector<double> paths;
+            double launches = 0;
+            for (int b = 0; b < kWarmUp + batches; ++b)
+            {
+                double least = 0;
+                for (int r = 0; r < kRepeats; ++r)
+                {
+                    const device::ExecutorCounts before = staged.executorCounts();
+                    staged.check(q.data() + static_cast<std::size_t>(b) * n * dof, n, valid.data(), nullptr, request,
+                                 0);
+                    const device::ExecutorCounts call = staged.executorCounts().since(before);
+                    least = r == 0 ? call.criticalPathSeconds : std::min(least, call.criticalPathSeconds);
+                    launches = static_cast<double>(call.launches);
+                }
+                if (b >= kWarmUp)
+                    paths.push_back(least * 1e6);
+            }
+            std::printf("| %s | %zu | %.1f / %.1f / %.1f | %.0f |\n", c.name.c_str(), n, quantile(paths, 0.5),
+                        quantile(paths, 0.9), quantile(paths, 1.0), launches);
+            std::fflush(stdout);
+        }
+    }
+    return 0;
+}
