@@ -15,12 +15,12 @@
 
 #include <ompl/base/spaces/RealVectorStateSpace.h>
 
+#include "BenchScenes.h"
 #include "BenchSupport.h"
 #include "Reference.h"
 #include "TestSupport.h"
 #include "rastercheck/collision/Checker.h"
 #include "rastercheck/collision/StagedBackend.h"
-#include "rastercheck/io/OmplAppProblem.h"
 #include "rastercheck/ompl/CertifiedMotionValidator.h"
 #include "rastercheck/ompl/Setup.h"
 
@@ -28,13 +28,6 @@ using namespace rastercheck;
 
 namespace
 {
-struct SceneCase
-{
-    std::string name;
-    RobotModelConstPtr robot;
-    SceneConstPtr scene;
-};
-
 /** \brief Best of \a repeats timings of deciding \a n states, in states per second. */
 double statesPerSecond(const Backend &backend, const std::vector<double> &q, std::size_t n,
                        const CollisionRequest &request, int repeats, double *allRepeats = nullptr)
@@ -117,16 +110,7 @@ int main(int argc, char **argv)
         return 2;
     }
     const std::string root = bench::sharedDataOrExit();
-    const RobotModelConstPtr panda = bench::loadMbmRobot(root, "panda");
-    std::vector<SceneCase> cases;
-    for (const char *scenario : {"table_pick", "bookshelf_tall", "cage"})
-        cases.push_back({std::string("panda ") + scenario, panda,
-                         loadMoveItScene(bench::mbmProblemPath(root, "panda", scenario, 1, "scene"))});
-    const Problem &crane = test::plant();
-    cases.push_back({"crane in the plant", crane.robot, crane.scene});
-    const OmplAppProblem meshes = loadOmplAppProblemString(bench::checkingCfg("fcl_env_rob", "rob.obj", "env.obj", {}),
-                                                           root + "/meshes/fcl", "fcl env/rob");
-    cases.push_back({"fcl env/rob", meshes.robot, meshes.scene});
+    const std::vector<bench::SceneCase> cases = bench::backendScenes(root);
 
     CollisionRequest request;
     request.mode = mode;
@@ -137,7 +121,7 @@ int main(int argc, char **argv)
     std::printf("| scene | triangles (robot / scene) | batch | FCL 1 core | CPU backend | GPU backend | GPU / FCL | "
                 "GPU / CPU | GPU per call |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|\n");
-    for (const SceneCase &c : cases)
+    for (const bench::SceneCase &c : cases)
     {
         CheckerOptions gpuOptions;
         gpuOptions.backend = stagedChoice;
@@ -206,7 +190,7 @@ int main(int argc, char **argv)
         "\n| scene | states | pairs past the box culls / state | settled apart by the stages | settled colliding by "
         "the stages | of those, decided by the exact phase in the stages | left to the host | host ceiling, states/s "
         "per core |\n|---|---|---|---|---|---|---|---|\n");
-    for (const SceneCase &c : cases)
+    for (const bench::SceneCase &c : cases)
     {
         const auto model = std::make_shared<const CollisionModel>(c.robot, c.scene);
         printHostShare(c.name, model, bench::uniformStates(*c.robot, 10000, 42), 10000, request);
@@ -215,7 +199,7 @@ int main(int argc, char **argv)
     // Motion validator: per-edge latency on random edges (OMPL's default resolution, 1 %). FCL
     // checks the same interpolated states one by one from the start, as DiscreteMotionValidator.
     std::printf("\n| scene | checker | edges | mean latency per edge | states per edge |\n|---|---|---|---|---|\n");
-    for (const SceneCase &c : cases)
+    for (const bench::SceneCase &c : cases)
         for (int choice = 0; choice < 5; ++choice)
         {
             // 0: FCL, 1: CPU backend, 2: GPU backend, 3: CPU backend with certified edges (collision-free

@@ -10,26 +10,16 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <sstream>
 #include <string>
 
+#include "BenchScenes.h"
 #include "BenchSupport.h"
-#include "TestSupport.h"
 #include "rastercheck/collision/StagedBackend.h"
-#include "rastercheck/io/MoveItYaml.h"
-#include "rastercheck/io/OmplAppProblem.h"
 
 using namespace rastercheck;
 
 namespace
 {
-struct SceneCase
-{
-    std::string name;
-    RobotModelConstPtr robot;
-    SceneConstPtr scene;
-};
-
 double quantile(std::vector<double> values, double q)
 {
     std::sort(values.begin(), values.end());
@@ -41,34 +31,21 @@ int main(int argc, char **argv)
 {
     const int batches = argc > 1 ? std::atoi(argv[1]) : 80;
     std::vector<std::size_t> sizes;
-    {
-        std::stringstream list(argc > 2 ? argv[2] : "32,1000");
-        for (std::string item; std::getline(list, item, ',');)
-            sizes.push_back(static_cast<std::size_t>(std::atol(item.c_str())));
-    }
+    for (const std::string &item : bench::splitList(argc > 2 ? argv[2] : "32,1000"))
+        sizes.push_back(static_cast<std::size_t>(std::atol(item.c_str())));
     if (batches < 1 || sizes.empty() || std::find(sizes.begin(), sizes.end(), 0u) != sizes.end())
     {
         std::fprintf(stderr, "usage: rastercheck_bench_critical_path [batches=80] [sizes=32,1000]\n");
         return 2;
     }
-    const std::string root = bench::sharedDataOrExit();
-    const RobotModelConstPtr panda = bench::loadMbmRobot(root, "panda");
-    std::vector<SceneCase> cases;
-    for (const char *scenario : {"table_pick", "bookshelf_tall", "cage"})
-        cases.push_back({std::string("panda ") + scenario, panda,
-                         loadMoveItScene(bench::mbmProblemPath(root, "panda", scenario, 1, "scene"))});
-    const Problem &crane = test::plant();
-    cases.push_back({"crane in the plant", crane.robot, crane.scene});
-    const OmplAppProblem meshes = loadOmplAppProblemString(bench::checkingCfg("fcl_env_rob", "rob.obj", "env.obj", {}),
-                                                           root + "/meshes/fcl", "fcl env/rob");
-    cases.push_back({"fcl env/rob", meshes.robot, meshes.scene});
+    const std::vector<bench::SceneCase> cases = bench::backendScenes(bench::sharedDataOrExit());
 
     constexpr int kWarmUp = 20, kRepeats = 3;
     std::printf("safe mode, %d batches per size after %d, each the least of %d runs\n\n", batches, kWarmUp, kRepeats);
     std::printf("| scene | states | critical path p50 / p90 / max, us | launches per call |\n");
     std::printf("|---|---:|---:|---:|\n");
     CollisionRequest request;
-    for (const SceneCase &c : cases)
+    for (const bench::SceneCase &c : cases)
     {
         const auto model = std::make_shared<const CollisionModel>(c.robot, c.scene);
         const StagedBackend staged(model, makeHostStageRunner(model, {}, HostScratch::Reused, true));
