@@ -74,32 +74,6 @@ RC_HD Vec3<double> shapeHalfSizes(const ConvexShape &shape)
     }
 }
 
-/** \brief May \a node (its box, mesh frame) hold a point within \a reach of \a shape (mesh frame),
-    whose box in its own frame has half sizes \a half? Separation along the six face normals of the
-    two boxes (the separating axis test without its edge axes: it may keep a pair that is apart,
-    never drop one that is not). */
-RC_HD bool nodeMayMeetShape(const TreeNode &node, const ConvexShape &shape, const Vec3<double> &half, double reach)
-{
-    const double *m = shape.pose.m;
-    const Vec3<double> shapeAxis[3] = {{m[0], m[4], m[8]}, {m[1], m[5], m[9]}, {m[2], m[6], m[10]}};
-    const Vec3<double> nodeAxis[3] = {{node.axes[0], node.axes[3], node.axes[6]},
-                                      {node.axes[1], node.axes[4], node.axes[7]},
-                                      {node.axes[2], node.axes[5], node.axes[8]}};
-    const double shapeHalf[3] = {half.x, half.y, half.z};
-    const Vec3<double> between{m[3] - node.centre[0], m[7] - node.centre[1], m[11] - node.centre[2]};
-    for (int side = 0; side < 2; ++side)
-        for (int i = 0; i < 3; ++i)
-        {
-            const Vec3<double> &u = side == 0 ? nodeAxis[i] : shapeAxis[i];
-            double extent = 0.0;
-            for (int j = 0; j < 3; ++j)
-                extent += fabs(dot(u, nodeAxis[j])) * node.halfExtents[j] + fabs(dot(u, shapeAxis[j])) * shapeHalf[j];
-            if (fabs(dot(u, between)) > extent + reach)
-                return false;
-        }
-    return true;
-}
-
 /** \brief Do the shapes of solid \a solid (placed by \a poseShapes) come within \a padding of the
     solid of \a mesh (placed by \a poseMesh; \a closed: it has an inside)? The test runs in the
     mesh's frame, so its triangles are read as stored; its tree's bounding spheres rule out the
@@ -125,6 +99,9 @@ RC_HD_CALL bool shapesMeetTree(const CurvedArrays &arrays, std::uint32_t solid, 
         const double radius = arrays.reach[k] + padding;
         // Tree nodes are in float: grow their spheres and boxes by a rounding allowance.
         const double slack = 1e-5 * (fabs(centre.x) + fabs(centre.y) + fabs(centre.z) + nodes[0].radius);
+        // The primitive's box, placed in the mesh's frame as boxesMayMeet reads a moving node.
+        const double *m = shape.pose.m;
+        const PlacedNode box{{{m[0], m[4], m[8]}, {m[1], m[5], m[9]}, {m[2], m[6], m[10]}}, centre};
         const Vec3<double> half = shapeHalfSizes(shape);
         const WalkEnd end = walkTree(
             nodes, mesh.tree.numNodes,
@@ -136,7 +113,7 @@ RC_HD_CALL bool shapesMeetTree(const CurvedArrays &arrays, std::uint32_t solid, 
                 // The ball about the shape first; then its box, which a long cylinder's ball (or a
                 // flat box's) far outgrows: the slowest pairs of a 1 000-state call's exact phase
                 // walked most of a Panda link's tree against a shelf's or a pole's ball.
-                return dot(offset, offset) <= within * within && nodeMayMeetShape(node, shape, half, padding + slack);
+                return dot(offset, offset) <= within * within && boxesMayMeet(node, box, half, offset, padding + slack);
             },
             [&](const TreeNode &leaf)
             {
