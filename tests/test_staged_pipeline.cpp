@@ -124,11 +124,14 @@ TEST(StagedPipeline, TimingEachElementKeepsTheVerdictsAndMeasuresACriticalPath)
         rc::CollisionRequest request;
         request.mode = mode;
         rc::test::expectSameDecisions(timed, cpu, *model, suite.states, request, label(suite.name, mode) + " timed");
-        rc::test::expectSameDecisions(untimed, cpu, *model, suite.states, request, label(suite.name, mode));
     }
     const rc::device::ExecutorCounts timedCounts = timed.executorCounts();
     EXPECT_GT(timedCounts.criticalPathSeconds, 0.0);
     EXPECT_LT(timedCounts.criticalPathSeconds, timedCounts.seconds);
+    // The same states untimed (the accuracy-suite test compares those verdicts): no critical path.
+    std::vector<std::uint8_t> valid(suite.numStates());
+    untimed.check(suite.states.data(), suite.numStates(), valid.data(), nullptr, rc::CollisionRequest{}, 0);
+    EXPECT_GT(untimed.executorCounts().launches, 0u);
     EXPECT_EQ(untimed.executorCounts().criticalPathSeconds, 0.0);
 }
 
