@@ -901,6 +901,76 @@ TEST(StagedPipeline, ALargerBatchRunsAgainAtMostOnceThenWaitsOnce)
     EXPECT_EQ(valid, cpuVerdicts(model, few, safe));
 }
 
+TEST(StagedPipeline, ABatchWithMorePairsPastTheCullsPerStateRunsAgainOnceThenWaitsOnce)
+{
+    // A small chunk sizes its launches past the culls by the pairs per state its executor's
+    // earlier chunks needed, half again (CountGuesses::survivorsPerState; the first chunk by every
+    // pair): a batch with more of them runs nothing past the bound and runs again, sized by what
+    // it needed. Exact mode, so that no raster count is guessed. The crane's states, split by the
+    // pairs past their culls: few, then many.
+    const rc::test::StateSuite suite = suiteNamed("crane in the plant", 96);
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    rc::CollisionRequest exact;
+    exact.mode = rc::CollisionMode::Exact;
+    const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
+    std::vector<std::pair<unsigned long long, std::size_t>> survivors;  // (pairs past the culls, state)
+    {
+        const rc::StagedBackend counting(model, poisonedStages(model));
+        counting.countStages(true);
+        std::uint8_t valid = 0;
+        for (std::size_t i = 0; i < n; ++i)
+        {
+            const unsigned long long before = counting.stageCounts().survivingPairs;
+            counting.check(suite.states.data() + i * dof, 1, &valid, nullptr, exact, 1);
+            survivors.emplace_back(counting.stageCounts().survivingPairs - before, i);
+        }
+    }
+    std::sort(survivors.begin(), survivors.end());
+    const auto batchOf = [&](std::size_t first, std::size_t count, unsigned long long &pairs)
+    {
+        rc::test::StateSuite batch = suite;
+        batch.states.clear();
+        pairs = 0;
+        for (std::size_t k = first; k < first + count; ++k)
+        {
+            pairs += survivors[k].first;
+            batch.states.insert(batch.states.end(), suite.states.begin() + survivors[k].second * dof,
+                                suite.states.begin() + (survivors[k].second + 1) * dof);
+        }
+        return batch;
+    };
+    unsigned long long fewPairs = 0, manyPairs = 0;
+    const rc::test::StateSuite few = batchOf(0, 16, fewPairs), many = batchOf(n - 16, 16, manyPairs);
+    ASSERT_GT(manyPairs, 2 * fewPairs + 16) << "the second batch must need more pairs per state than the guess";
+
+    rc::device::StageBudget budget;
+    budget.minSurvivorBound = 1;  // the bound is the guess alone
+    const rc::StagedBackend staged(model, poisonedStages(model, budget));
+    std::vector<std::uint8_t> valid;
+    EXPECT_EQ(oneCall(staged, few, exact, valid).reruns, 0u) << "the first chunk is sized by every pair";
+    EXPECT_EQ(valid, cpuVerdicts(model, few, exact));
+    const rc::device::ExecutorCounts few2 = oneCall(staged, few, exact, valid);
+    EXPECT_EQ(few2.reruns, 0u);
+    EXPECT_EQ(few2.synchronizations, 1u);
+    EXPECT_EQ(valid, cpuVerdicts(model, few, exact));
+
+    const rc::device::ExecutorCounts grown = oneCall(staged, many, exact, valid);
+    EXPECT_EQ(grown.reruns, 1u);
+    EXPECT_EQ(grown.synchronizations, 2u) << "the outgrown pass's wait, then the pass's again";
+    EXPECT_EQ(valid, cpuVerdicts(model, many, exact));
+    const rc::device::ExecutorCounts again = oneCall(staged, many, exact, valid);
+    EXPECT_EQ(again.reruns, 0u);
+    EXPECT_EQ(again.synchronizations, 1u);
+    EXPECT_EQ(again.allocations, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, many, exact));
+    // The first batch fits what the second needed.
+    const rc::device::ExecutorCounts smaller = oneCall(staged, few, exact, valid);
+    EXPECT_EQ(smaller.reruns, 0u);
+    EXPECT_EQ(smaller.synchronizations, 1u);
+    EXPECT_EQ(smaller.allocations, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, few, exact));
+}
+
 TEST(StagedPipeline, ALargeChunkWaitsForEachCount)
 {
     // Past StageBudget::waitForCountsFrom a chunk's buffers and launches take the counts' sizes:

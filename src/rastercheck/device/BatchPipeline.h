@@ -34,6 +34,7 @@
 // fragments, outcomes) stay on the executor as tallies, and the host sizes buffers and launches by
 // bounds (Extent, CountGuesses, StageBudget::waitForCountsFrom).
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -252,13 +253,18 @@ struct StageBudget
     std::size_t orderedProofsFrom = std::size_t(1) << 16;
     /** Chunks of fewer (state, pair) elements than this make one wait, for their outcomes: the counts
         only the executor knows (pairs past the culls, candidate triangles, fragments, outcomes) stay
-        there (Extent), and the host sizes their buffers and launches by bounds: every pair may
-        survive the culls; the triangles and fragments as the executor's earlier chunks needed
-        (CountGuesses: its first rasterizing chunk waits for them, and a chunk that needs more runs
-        again, waiting). Larger chunks wait for each count (five waits), so that their buffers and
+        there (Extent), and the host sizes their buffers and launches by what the executor's earlier
+        chunks needed (CountGuesses): the pairs past the culls per state (every pair in its first
+        chunk), the triangles and fragments (its first rasterizing chunk waits for them); a chunk
+        that needs more runs again. Larger chunks wait for each count (five waits), so that their buffers and
         launches have the counts' sizes; only they take the proofs in pair order (orderedProofsFrom),
         which needs the survivors' count. At 2^18, 1 000 Panda states make one wait. */
     std::size_t waitForCountsFrom = std::size_t(1) << 18;
+    /** The least bound of a small chunk's pairs past the culls, whatever CountGuesses says per
+        state: a few hundred threads cost a device no more than a few, and the fewer states a batch
+        has, the more its pairs per state vary (a planner's edge among obstacles against the random
+        samples before it). */
+    std::size_t minSurvivorBound = 256;
     /** Threads that share each open pair's exact walk in a chunk below waitForCountsFrom (at most
         kMaxWalkParts; decideOpenPairs): there the slowest pair's walk is the call's latency, and a
         few hundred pairs leave most of a device idle. Larger chunks walk each pair in one thread:
@@ -402,6 +408,11 @@ struct Extent
     launches by these, so that a batch like the last allocates nothing and waits once. */
 struct CountGuesses
 {
+    /** Pairs past the culls per state that the executor's chunks needed, half again (negative
+        before any chunk was counted): a small chunk's survivors and every buffer and launch per
+        survivor are sized by it (survivorBound). Sized by every pair, a chunk of 1 000 Panda states
+        launched 153 000 threads per survivor kernel for the 800 to 1 700 pairs past its culls. */
+    double survivorsPerState = -1.0;
     /** Whether items and fragments hold what a chunk needed, half again: a rasterizing small chunk
         waits for those counts until they do, and after a chunk that needed more (run again). */
     bool measured = false;
@@ -856,6 +867,20 @@ inline std::size_t grownGuess(std::size_t guess, std::size_t needed, std::size_t
     return guess > roomy ? guess : roomy;
 }
 
+/** \brief The bound of a small chunk's pairs past the culls: \a numStates states at the rate
+    CountGuesses::survivorsPerState says, at least StageBudget::minSurvivorBound, at most every
+    pair of every state (\a pairElements; also before any chunk was counted). */
+inline std::size_t survivorBound(const CountGuesses &guesses, const StageBudget &budget, std::uint32_t numStates,
+                                 std::size_t pairElements)
+{
+    if (guesses.survivorsPerState < 0.0)
+        return pairElements;
+    const double guess = std::ceil(guesses.survivorsPerState * static_cast<double>(numStates));
+    const double bound =
+        guess > static_cast<double>(budget.minSurvivorBound) ? guess : static_cast<double>(budget.minSurvivorBound);
+    return bound < static_cast<double>(pairElements) ? static_cast<std::size_t>(bound) : pairElements;
+}
+
 /** \brief The bound of a raster count (candidate triangles, fragments) whose \a tally a stage just
     wrote: a large chunk waits for it; a small one takes \a guess, having waited for the count to
     grow the guess first while it is not measured (CountGuesses). Past \a limit: over budget. */
@@ -904,6 +929,12 @@ ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     const unsigned long long *tally = ex.template download<unsigned long long>(BufferTallies, tallies, kNumTallies);
     const PairOutcome *host = ex.template download<PairOutcome>(BufferKeptOutcomes, kept, prefix);
     ex.wait();
+    const double survivorsPerState =
+        1.5 * static_cast<double>(tally[TallyCandidates]) / static_cast<double>(numStates > 0 ? numStates : 1);
+    guesses.survivorsPerState =
+        survivorsPerState > guesses.survivorsPerState ? survivorsPerState : guesses.survivorsPerState;
+    if (!survivors.fits())
+        return ChunkPass::Rerun;  // nothing ran past the culls; the raster's counts are not measured
     if (st.rasterize)
     {
         if (tally[TallyItems] > budget.maxItems || tally[TallyFragments] > budget.maxFragments)
@@ -1086,11 +1117,15 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                                                                     states + s * dof, padding));
                    flags[s * pairs + pair] = survives ? 1 : 0;
                });
+    // The compaction writes every survivor, however many: its output has room for every pair.
     std::uint32_t *candidates = ex.template buffer<std::uint32_t>(BufferCandidates, pairElements + 1);
     ex.selectFlagged(flags, pairElements, candidates, tallies + TallyCandidates);
-    // Per surviving pair from here on: element c < survivors.size() is candidates[c]. In a small
-    // chunk, buffers and launches are sized as if every pair survived.
-    const Extent survivors{small ? pairElements : waitFor(ex, tallies + TallyCandidates), tallies + TallyCandidates};
+    // Per surviving pair from here on: element c < survivors.size() is candidates[c]. A small
+    // chunk's buffers and launches are sized by the survivors per state its executor has seen
+    // (survivorBound); past that bound nothing runs, and the chunk runs again (finishPass).
+    const Extent survivors{
+        small ? survivorBound(guesses, budget, numStates, pairElements) : waitFor(ex, tallies + TallyCandidates),
+        tallies + TallyCandidates};
     const std::size_t survivorBound = survivors.bound;
     const std::uint32_t numSegments = static_cast<std::uint32_t>(survivorBound);
 
