@@ -869,23 +869,61 @@ TEST(StagedPipeline, ABatchSeenTwiceIsReplayedFromItsThirdCallWithTheNewStatesVe
     }
 }
 
-TEST(StagedPipeline, ALargerBatchRunsAgainAtMostOnceThenWaitsOnce)
+namespace
 {
-    // A batch that needs more candidate triangles or fragments than the executor's earlier ones
-    // (with half again to spare) outgrows its buffers: nothing runs past them, and the chunk runs
-    // again, waiting for those counts. The verdicts never change.
-    const rc::test::StateSuite few = suiteNamed("thin plate at 1e6 m", 8);
-    const rc::test::StateSuite many = suiteNamed("thin plate at 1e6 m", 240);
-    const auto model = std::make_shared<const rc::CollisionModel>(few.robot, few.scene);
-    const rc::StagedBackend staged(model, poisonedStages(model));
-    staged.countStages(true);
-    std::vector<std::uint8_t> valid;
+/** \brief \a count of \a suite's states, those from \a first on in the order of what each needs
+    of a stage count (\a what: StageCounts::survivingPairs, candidateTriangles, ...), checked one by
+    one in \a request's mode; \a total is what the batch's states needed together. */
+rc::test::StateSuite statesByStageCount(const rc::CollisionModelConstPtr &model, const rc::test::StateSuite &suite,
+                                        const rc::CollisionRequest &request,
+                                        unsigned long long rc::device::StageCounts::*what, std::size_t first,
+                                        std::size_t count, unsigned long long &total)
+{
+    const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
+    std::vector<std::pair<unsigned long long, std::size_t>> needs;  // (count, state)
+    const rc::StagedBackend counting(model, poisonedStages(model));
+    counting.countStages(true);
+    std::uint8_t valid = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+        const unsigned long long before = counting.stageCounts().*what;
+        counting.check(suite.states.data() + i * dof, 1, &valid, nullptr, request, 1);
+        needs.emplace_back(counting.stageCounts().*what - before, i);
+    }
+    std::sort(needs.begin(), needs.end());
+    rc::test::StateSuite batch = suite;
+    batch.states.clear();
+    total = 0;
+    for (std::size_t k = first; k < first + count; ++k)
+    {
+        total += needs[k].first;
+        const auto row = suite.states.begin() + static_cast<std::ptrdiff_t>(needs[k].second * dof);
+        batch.states.insert(batch.states.end(), row, row + static_cast<std::ptrdiff_t>(dof));
+    }
+    return batch;
+}
+}  // namespace
+
+TEST(StagedPipeline, ABatchThatRasterizesMorePerStateRunsAgainOnceThenWaitsOnce)
+{
+    // A small chunk sizes its candidate triangles and fragments by the most an earlier chunk needed
+    // or as many per state as the most per state one needed, half again (CountGuess): a batch
+    // whose states rasterize more outgrows them; nothing runs past them, and the chunk runs again,
+    // waiting for those counts. The verdicts never change.
+    const rc::test::StateSuite suite = suiteNamed("thin plate at 1e6 m", 96);
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
     const rc::CollisionRequest safe;
+    const auto triangles = &rc::device::StageCounts::candidateTriangles;
+    unsigned long long fewTriangles = 0, manyTriangles = 0;
+    const rc::test::StateSuite few = statesByStageCount(model, suite, safe, triangles, 0, 16, fewTriangles);
+    const rc::test::StateSuite many = statesByStageCount(model, suite, safe, triangles, 80, 16, manyTriangles);
+    ASSERT_GT(manyTriangles, 2 * fewTriangles + 16) << "the second batch must need more than the guess";
+
+    const rc::StagedBackend staged(model, poisonedStages(model));
+    std::vector<std::uint8_t> valid;
     oneCall(staged, few, safe, valid);
-    const unsigned long long fewTriangles = staged.stageCounts().candidateTriangles;
+    EXPECT_EQ(valid, cpuVerdicts(model, few, safe));
     const rc::device::ExecutorCounts grown = oneCall(staged, many, safe, valid);
-    ASSERT_GT(staged.stageCounts().candidateTriangles - fewTriangles, 2 * fewTriangles)
-        << "the larger batch must need more than the guess";
     EXPECT_EQ(grown.reruns, 1u);
     EXPECT_EQ(grown.synchronizations, 4u) << "the outgrown pass's wait, then the triangles', fragments' and outcomes'";
     EXPECT_EQ(valid, cpuVerdicts(model, many, safe));
@@ -894,53 +932,35 @@ TEST(StagedPipeline, ALargerBatchRunsAgainAtMostOnceThenWaitsOnce)
     EXPECT_EQ(again.synchronizations, 1u);
     EXPECT_EQ(again.allocations, 0u);
     EXPECT_EQ(valid, cpuVerdicts(model, many, safe));
-    // The smaller batch fits what the larger one needed.
+    // The first batch fits what the second needed, and so does a batch of both (as many per state).
     const rc::device::ExecutorCounts smaller = oneCall(staged, few, safe, valid);
     EXPECT_EQ(smaller.synchronizations, 1u);
     EXPECT_EQ(smaller.allocations, 0u);
     EXPECT_EQ(valid, cpuVerdicts(model, few, safe));
+    rc::test::StateSuite both = many;
+    both.states.insert(both.states.end(), few.states.begin(), few.states.end());
+    both.states.insert(both.states.end(), many.states.begin(), many.states.end());
+    const rc::device::ExecutorCounts larger = oneCall(staged, both, safe, valid);
+    EXPECT_EQ(larger.reruns, 0u) << "48 states that need at most twice what 16 of them needed per state";
+    EXPECT_EQ(larger.synchronizations, 1u);
+    EXPECT_EQ(valid, cpuVerdicts(model, both, safe));
 }
 
 TEST(StagedPipeline, ABatchWithMorePairsPastTheCullsPerStateRunsAgainOnceThenWaitsOnce)
 {
     // A small chunk sizes its launches past the culls by the pairs per state its executor's
-    // earlier chunks needed, half again (CountGuesses::survivorsPerState; the first chunk by every
-    // pair): a batch with more of them runs nothing past the bound and runs again, sized by what
-    // it needed. Exact mode, so that no raster count is guessed. The crane's states, split by the
-    // pairs past their culls: few, then many.
+    // earlier small chunks needed, half again (CountGuesses::survivorsPerState; the first chunk by
+    // every pair): a batch with more of them runs nothing past the bound and runs again, sized by
+    // what it needed. Exact mode, so that no raster count is guessed. The crane's states, split by
+    // the pairs past their culls: few, then many.
     const rc::test::StateSuite suite = suiteNamed("crane in the plant", 96);
     const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
     rc::CollisionRequest exact;
     exact.mode = rc::CollisionMode::Exact;
-    const std::size_t n = suite.numStates(), dof = suite.robot->numCoordinates();
-    std::vector<std::pair<unsigned long long, std::size_t>> survivors;  // (pairs past the culls, state)
-    {
-        const rc::StagedBackend counting(model, poisonedStages(model));
-        counting.countStages(true);
-        std::uint8_t valid = 0;
-        for (std::size_t i = 0; i < n; ++i)
-        {
-            const unsigned long long before = counting.stageCounts().survivingPairs;
-            counting.check(suite.states.data() + i * dof, 1, &valid, nullptr, exact, 1);
-            survivors.emplace_back(counting.stageCounts().survivingPairs - before, i);
-        }
-    }
-    std::sort(survivors.begin(), survivors.end());
-    const auto batchOf = [&](std::size_t first, std::size_t count, unsigned long long &pairs)
-    {
-        rc::test::StateSuite batch = suite;
-        batch.states.clear();
-        pairs = 0;
-        for (std::size_t k = first; k < first + count; ++k)
-        {
-            pairs += survivors[k].first;
-            batch.states.insert(batch.states.end(), suite.states.begin() + survivors[k].second * dof,
-                                suite.states.begin() + (survivors[k].second + 1) * dof);
-        }
-        return batch;
-    };
+    const auto pairs = &rc::device::StageCounts::survivingPairs;
     unsigned long long fewPairs = 0, manyPairs = 0;
-    const rc::test::StateSuite few = batchOf(0, 16, fewPairs), many = batchOf(n - 16, 16, manyPairs);
+    const rc::test::StateSuite few = statesByStageCount(model, suite, exact, pairs, 0, 16, fewPairs);
+    const rc::test::StateSuite many = statesByStageCount(model, suite, exact, pairs, 80, 16, manyPairs);
     ASSERT_GT(manyPairs, 2 * fewPairs + 16) << "the second batch must need more pairs per state than the guess";
 
     rc::device::StageBudget budget;

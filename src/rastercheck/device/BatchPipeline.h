@@ -403,21 +403,50 @@ struct Extent
     RC_HD std::size_t size() const { return fits() ? static_cast<std::size_t>(*count) : 0; }
 };
 
+/** \brief What an executor's earlier chunks needed of one count: the most, and the most per state,
+    each half again. A small chunk's bound is the larger of the two for its states, so that a
+    batch like an earlier one fits what that one needed, and a larger batch of the same kind what
+    its states need. */
+struct CountGuess
+{
+    std::size_t most = 0;
+    double perState = 0.0;
+
+    std::size_t bound(std::uint32_t numStates, std::size_t limit) const
+    {
+        const double scaled = std::ceil(perState * static_cast<double>(numStates));
+        const std::size_t byStates = scaled < static_cast<double>(limit) ? static_cast<std::size_t>(scaled) : limit;
+        return byStates > most ? byStates : most;
+    }
+
+    /** \brief Grown to hold \a needed for \a numStates states, within \a limit. */
+    void grow(std::size_t needed, std::uint32_t numStates, std::size_t limit)
+    {
+        const std::size_t roomy = needed + needed / 2 < limit ? needed + needed / 2 : limit;
+        most = most > roomy ? most : roomy;
+        const double rate = 1.5 * static_cast<double>(needed) / static_cast<double>(numStates > 0 ? numStates : 1);
+        perState = perState > rate ? perState : rate;
+    }
+};
+
 /** \brief What an executor's earlier chunks needed of the counts the host does not wait for in
     small chunks (StageBudget::waitForCountsFrom): the next small chunk sizes their buffers and
     launches by these, so that a batch like the last allocates nothing and waits once. */
 struct CountGuesses
 {
-    /** Pairs past the culls per state that the executor's chunks needed, half again (negative
-        before any chunk was counted): a small chunk's survivors and every buffer and launch per
-        survivor are sized by it (survivorBound). Sized by every pair, a chunk of 1 000 Panda states
-        launched 153 000 threads per survivor kernel for the 800 to 1 700 pairs past its culls. */
+    /** Pairs past the culls per state that the executor's small chunks needed, half again
+        (negative before one was counted): a small chunk's survivors, and so every buffer and
+        launch per survivor, are sized by it (survivorBound). Sized by every pair, a chunk of 1 000
+        Panda states launched 153 000 threads per survivor kernel for the 800 to 1 700 pairs past
+        its culls. Per state only (CountGuess also keeps the most): each state's pairs are culled
+        on their own, so the rate varies little between batches (StageBudget::minSurvivorBound
+        covers the smallest), and a bound kept from a larger chunk would size small ones by it. */
     double survivorsPerState = -1.0;
-    /** Whether items and fragments hold what a chunk needed, half again: a rasterizing small chunk
-        waits for those counts until they do, and after a chunk that needed more (run again). */
+    /** Whether items and fragments hold what a chunk needed: a rasterizing small chunk waits for
+        those counts until they do, and after a chunk that needed more (run again). */
     bool measured = false;
-    std::size_t items = 0;
-    std::size_t fragments = 0;
+    CountGuess items;
+    CountGuess fragments;
     /** Outcomes per state downloaded with the tallies in the chunk's wait (more take a second). */
     std::size_t outcomesPerState = 1;
     /** The executor ran out of scratch memory (StageMemoryExhausted): from then on its chunks wait
@@ -859,17 +888,9 @@ enum class ChunkPass
     Rerun        ///< a count outgrew its guess: run the chunk again, measuring it (CountGuesses)
 };
 
-/** \brief \a guess grown to hold \a needed, with half again for batches that vary, within \a limit
-    (the budget's, which \a needed does not pass). */
-inline std::size_t grownGuess(std::size_t guess, std::size_t needed, std::size_t limit)
-{
-    const std::size_t roomy = needed + needed / 2 < limit ? needed + needed / 2 : limit;
-    return guess > roomy ? guess : roomy;
-}
-
-/** \brief The bound of a small chunk's pairs past the culls: \a numStates states at the rate
-    CountGuesses::survivorsPerState says, at least StageBudget::minSurvivorBound, at most every
-    pair of every state (\a pairElements; also before any chunk was counted). */
+/** \brief The bound of a small chunk's pairs past the culls: what CountGuesses says for
+    \a numStates states, at least StageBudget::minSurvivorBound, at most every pair of every state
+    (\a pairElements; also before any chunk was counted). */
 inline std::size_t survivorBound(const CountGuesses &guesses, const StageBudget &budget, std::uint32_t numStates,
                                  std::size_t pairElements)
 {
@@ -882,18 +903,20 @@ inline std::size_t survivorBound(const CountGuesses &guesses, const StageBudget 
 }
 
 /** \brief The bound of a raster count (candidate triangles, fragments) whose \a tally a stage just
-    wrote: a large chunk waits for it; a small one takes \a guess, having waited for the count to
-    grow the guess first while it is not measured (CountGuesses). Past \a limit: over budget. */
+    wrote: a large chunk waits for it; a small one takes \a guess for its \a numStates states,
+    having waited for the count to grow the guess first while it is not measured (CountGuesses).
+    Past \a limit: over budget. */
 template <class Exec>
-std::size_t countBound(Exec &ex, std::size_t limit, bool small, std::size_t &guess, const unsigned long long *tally)
+std::size_t countBound(Exec &ex, std::size_t limit, bool small, CountGuess &guess, std::uint32_t numStates,
+                       const unsigned long long *tally)
 {
     if (small && ex.guesses().measured)
-        return guess;
+        return guess.bound(numStates, limit);
     const std::size_t count = waitFor(ex, tally);
     if (!small || count > limit)
         return count;
-    guess = grownGuess(guess, count, limit);
-    return guess;
+    guess.grow(count, numStates, limit);
+    return guess.bound(numStates, limit);
 }
 
 /** \brief A chunk's last stages, with or without a raster before them (\a items and \a fragments
@@ -929,10 +952,13 @@ ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     const unsigned long long *tally = ex.template download<unsigned long long>(BufferTallies, tallies, kNumTallies);
     const PairOutcome *host = ex.template download<PairOutcome>(BufferKeptOutcomes, kept, prefix);
     ex.wait();
-    const double survivorsPerState =
-        1.5 * static_cast<double>(tally[TallyCandidates]) / static_cast<double>(numStates > 0 ? numStates : 1);
-    guesses.survivorsPerState =
-        survivorsPerState > guesses.survivorsPerState ? survivorsPerState : guesses.survivorsPerState;
+    if (small)
+    {
+        const double survivorsPerState =
+            1.5 * static_cast<double>(tally[TallyCandidates]) / static_cast<double>(numStates > 0 ? numStates : 1);
+        guesses.survivorsPerState =
+            survivorsPerState > guesses.survivorsPerState ? survivorsPerState : guesses.survivorsPerState;
+    }
     if (!survivors.fits())
         return ChunkPass::Rerun;  // nothing ran past the culls; the raster's counts are not measured
     if (st.rasterize)
@@ -1241,7 +1267,8 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     }
     unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, survivorBound + 1);
     ex.exclusiveSum(triangleCount, itemStart, survivorBound + 1, tallies + TallyItems);
-    const std::size_t itemBound = countBound(ex, budget.maxItems, small, guesses.items, tallies + TallyItems);
+    const std::size_t itemBound =
+        countBound(ex, budget.maxItems, small, guesses.items, numStates, tallies + TallyItems);
     if (itemBound > budget.maxItems)
         return ChunkPass::OverBudget;
     const Extent items{itemBound, tallies + TallyItems};
@@ -1280,7 +1307,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     unsigned long long *fragmentStart = ex.template buffer<unsigned long long>(BufferFragmentStart, itemBound + 1);
     ex.exclusiveSum(fragmentCount, fragmentStart, itemBound + 1, tallies + TallyFragments);
     const std::size_t fragmentBound =
-        countBound(ex, budget.maxFragments, small, guesses.fragments, tallies + TallyFragments);
+        countBound(ex, budget.maxFragments, small, guesses.fragments, numStates, tallies + TallyFragments);
     if (fragmentBound > budget.maxFragments)
         return ChunkPass::OverBudget;
     const Extent fragmentExtent{fragmentBound, tallies + TallyFragments};
