@@ -845,7 +845,7 @@ public:
         // split between the stages' buffers by bytes per element: fragments 56 (key, value, their
         // sorted copies, the rasterized and the walk's fragment: 40; CUB's own sort scratch), (pair, triangle) items
         // 20, (state, pair) elements 8, states perState; what is left covers the surviving pairs' buffers (in a chunk
-        // below StageBudget::waitForCountsFrom sized by its (state, pair) elements, a few hundred bytes each) and CUB's
+        // below StageBudget::waitForCountsFrom sized by their bound, survivorBound, a few hundred bytes each) and CUB's
         // scratch. The scratch limit enforces the sum (StageMemoryExhausted).
         std::size_t freeBytes = 0, totalBytes = 0;
         check(cudaMemGetInfo(&freeBytes, &totalBytes), "cudaMemGetInfo");

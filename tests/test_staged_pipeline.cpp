@@ -70,9 +70,11 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
         pairOrder.waitForCountsFrom = 0;
         pairOrder.orderedProofsFrom = 0;
         const rc::StagedBackend ordered(model, poisonedStages(model, pairOrder));
-        // Small chunks whose split walks get fewer parts per pair (walkPartsPerPair), down to one.
+        // Small chunks whose split walks get fewer parts per pair (walkPartsPerPair), down to one,
+        // with the proofs in pair order (past the survivors' count, the order's slots sort last).
         rc::device::StageBudget fewWalkThreads;
         fewWalkThreads.exactWalkThreads = 64;
+        fewWalkThreads.orderedProofsFrom = 0;
         const rc::StagedBackend fewParts(model, poisonedStages(model, fewWalkThreads));
         for (rc::CollisionMode mode : kModes)
         {
@@ -1011,6 +1013,35 @@ TEST(StagedPipeline, ALargeChunkWaitsForEachCount)
     EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
     EXPECT_EQ(oneCall(staged, suite, exact, valid).synchronizations, 3u) << "no raster: no triangles or fragments";
     EXPECT_EQ(valid, cpuVerdicts(model, suite, exact));
+}
+
+TEST(StagedPipeline, ABatchOfManyPairsWaitsOnceOnceItsPairsPastTheCullsWereCounted)
+{
+    // Whether a chunk waits once is decided by the bound of its pairs past the culls: every (state,
+    // pair) element before its executor has counted them, then what the executor's chunks needed
+    // per state (StageBudget::waitForCountsFrom). A batch of more elements than that waits for each
+    // count the first time only.
+    const rc::test::StateSuite suite = suiteNamed("crane in the plant", 32);  // 935 pairs a state
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    rc::device::StageBudget budget;
+    budget.waitForCountsFrom = suite.numStates() * model->numPairs();
+    budget.minSurvivorBound = 1;
+    const rc::StagedBackend staged(model, poisonedStages(model, budget));
+    staged.countStages(true);
+    std::vector<std::uint8_t> valid;
+    const rc::CollisionRequest safe;
+    EXPECT_EQ(oneCall(staged, suite, safe, valid).synchronizations, 5u) << "every count, as a large chunk";
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
+    ASSERT_LT(2 * staged.stageCounts().survivingPairs, budget.waitForCountsFrom)
+        << "the pairs past the culls, half again, must be fewer than the batch's elements";
+    EXPECT_EQ(oneCall(staged, suite, safe, valid).synchronizations, 3u)
+        << "the raster's counts, measured by small chunks only, and the outcomes";
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
+    const rc::device::ExecutorCounts again = oneCall(staged, suite, safe, valid);
+    EXPECT_EQ(again.synchronizations, 1u);
+    EXPECT_EQ(again.reruns, 0u);
+    EXPECT_EQ(again.allocations, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
 }
 
 TEST(StagedPipeline, ConcurrentCallsEachTakeAnExecutorOfTheirOwn)

@@ -244,21 +244,24 @@ struct StageBudget
         pass it, or whose allocator refuses, frees its scratch and throws StageMemoryExhausted,
         and the chunk is split. */
     std::size_t maxScratchBytes = 0;
-    /** Chunks that wait for their counts (waitForCountsFrom) with at least this many pairs past the
-        box culls take the proofs in pair order (stage 3). Measured on an H200 (2026-11-26,
-        docs/benchmarks.md "GPU"): the order made the proof stage 1.8-3.2x faster and a batch of
-        10^6 Panda states 1.3-1.4x, 10^5 states 1.0-1.2x, but batches of 10^3-10^4 states (2 000 to
-        20 000 pairs, less than one wave of the device) a third slower; there the unordered stage
-        stays. */
+    /** Chunks with at least this many pairs past the box culls (their bound, survivorBound) take the
+        proofs in pair order (stage 3). Measured on an H200 (2026-11-26, docs/benchmarks.md "GPU"):
+        the order made the proof stage 1.8-3.2x faster and a batch of 10^6 Panda states 1.3-1.4x,
+        10^5 states 1.0-1.2x, but batches of 10^3-10^4 states (2 000 to 20 000 pairs, less than one
+        wave of the device) a third slower; there the unordered stage stays. */
     std::size_t orderedProofsFrom = std::size_t(1) << 16;
-    /** Chunks of fewer (state, pair) elements than this make one wait, for their outcomes: the counts
-        only the executor knows (pairs past the culls, candidate triangles, fragments, outcomes) stay
-        there (Extent), and the host sizes their buffers and launches by what the executor's earlier
-        chunks needed (CountGuesses): the pairs past the culls per state (every pair in its first
-        chunk), the triangles and fragments (its first rasterizing chunk waits for them); a chunk
-        that needs more runs again. Larger chunks wait for each count (five waits), so that their buffers and
-        launches have the counts' sizes; only they take the proofs in pair order (orderedProofsFrom),
-        which needs the survivors' count. At 2^18, 1 000 Panda states make one wait. */
+    /** Chunks whose pairs past the culls are bounded below this (survivorBound: every (state, pair)
+        element until the executor has counted a chunk's survivors, then as many per state as its
+        chunks needed) make one wait, for their outcomes: the counts only the executor knows (pairs
+        past the culls, candidate triangles, fragments, outcomes) stay there (Extent), and the host
+        sizes their buffers and launches by those bounds and by what the executor's earlier small
+        chunks needed of the raster (CountGuesses: its first rasterizing chunk waits for them); a
+        chunk that needs more runs again. Other chunks wait for each count (five waits), so that
+        their buffers and launches have the counts' sizes: an executor's first batch of more (state,
+        pair) elements than this, and chunks bounded past it (with 1.7 pairs a state past the culls,
+        half again, more Panda states than a chunk holds, StageBudget::maxStates). At 2^18, 1 000
+        Panda states make one wait from the first call on, and once counted, 10^4 Panda states or
+        1 000 of the crane (935 pairs a state) too. */
     std::size_t waitForCountsFrom = std::size_t(1) << 18;
     /** The least bound of a small chunk's pairs past the culls, whatever CountGuesses says per
         state: a few hundred threads cost a device no more than a few, and the fewer states a batch
@@ -434,13 +437,13 @@ struct CountGuess
     launches by these, so that a batch like the last allocates nothing and waits once. */
 struct CountGuesses
 {
-    /** Pairs past the culls per state that the executor's small chunks needed, half again
-        (negative before one was counted): a small chunk's survivors, and so every buffer and
-        launch per survivor, are sized by it (survivorBound). Sized by every pair, a chunk of 1 000
-        Panda states launched 153 000 threads per survivor kernel for the 800 to 1 700 pairs past
-        its culls. Per state only (CountGuess also keeps the most): each state's pairs are culled
-        on their own, so the rate varies little between batches (StageBudget::minSurvivorBound
-        covers the smallest), and a bound kept from a larger chunk would size small ones by it. */
+    /** Pairs past the culls per state that the executor's chunks needed, half again (negative
+        before one was counted): a small chunk's survivors, and so every buffer and launch per
+        survivor, are sized by it (survivorBound). Sized by every pair, a chunk of 1 000 Panda
+        states launched 153 000 threads per survivor kernel for the 800 to 1 700 pairs past its
+        culls. Per state only (CountGuess also keeps the most): each state's pairs are culled on
+        their own, so the rate varies little between batches (StageBudget::minSurvivorBound covers
+        the smallest), and a bound kept from a larger chunk would size small ones by it. */
     double survivorsPerState = -1.0;
     /** Whether items and fragments hold what a chunk needed: a rasterizing small chunk waits for
         those counts until they do, and after a chunk that needed more (run again). */
@@ -952,13 +955,10 @@ ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     const unsigned long long *tally = ex.template download<unsigned long long>(BufferTallies, tallies, kNumTallies);
     const PairOutcome *host = ex.template download<PairOutcome>(BufferKeptOutcomes, kept, prefix);
     ex.wait();
-    if (small)
-    {
-        const double survivorsPerState =
-            1.5 * static_cast<double>(tally[TallyCandidates]) / static_cast<double>(numStates > 0 ? numStates : 1);
-        guesses.survivorsPerState =
-            survivorsPerState > guesses.survivorsPerState ? survivorsPerState : guesses.survivorsPerState;
-    }
+    const double survivorsPerState =
+        1.5 * static_cast<double>(tally[TallyCandidates]) / static_cast<double>(numStates > 0 ? numStates : 1);
+    guesses.survivorsPerState =
+        survivorsPerState > guesses.survivorsPerState ? survivorsPerState : guesses.survivorsPerState;
     if (!survivors.fits())
         return ChunkPass::Rerun;  // nothing ran past the culls; the raster's counts are not measured
     if (st.rasterize)
@@ -1010,7 +1010,8 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     // A small chunk waits once, at its end (but to measure its raster's counts, CountGuesses); a
     // large one for each count.
     CountGuesses &guesses = ex.guesses();
-    const bool small = pairElements < budget.waitForCountsFrom && !guesses.outOfMemory;
+    const bool small =
+        survivorBound(guesses, budget, numStates, pairElements) < budget.waitForCountsFrom && !guesses.outOfMemory;
     // A small chunk whose counts are all guessed issues everything before its one wait without
     // reading anything back: the executor may record it, and replay a pass it has seen before as
     // one graph (PassRecorder).
@@ -1161,15 +1162,16 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     // passes over hundreds of vertices): the threads diverge (an H200, 2026-11-26: this stage was
     // 2/3 of a safe-mode batch's kernel time, at 6 % occupancy). Taken in pair order, a warp runs
     // one pair's proof for 32 states: the same hull data and trip counts (budget.orderedProofsFrom
-    // says when that pays).
-    const bool pairOrdered = !small && survivorBound >= budget.orderedProofsFrom;
+    // says when that pays). Slots past the survivors' count (a small chunk's bound) sort last.
+    const bool pairOrdered = survivorBound >= budget.orderedProofsFrom;
     std::uint32_t *proofOrder = nullptr;
     if (pairOrdered)
     {
         std::uint32_t *candidatePairs = ex.template buffer<std::uint32_t>(BufferCandidatePairs, survivorBound + 1);
         proofOrder = ex.template buffer<std::uint32_t>(BufferProofOrder, survivorBound + 1);
-        ex.forEach(survivorBound, [=] RC_LAMBDA(std::size_t c) { candidatePairs[c] = candidates[c] % pairs; });
-        ex.orderByKey(candidatePairs, survivorBound, pairs, proofOrder);
+        ex.forEach(survivorBound, [=] RC_LAMBDA(std::size_t c)
+                   { candidatePairs[c] = c < survivors.size() ? candidates[c] % pairs : pairs; });
+        ex.orderByKey(candidatePairs, survivorBound, pairs + 1, proofOrder);
     }
     RasterGrid *grids = ex.template buffer<RasterGrid>(BufferGrids, survivorBound + 1);
     float *margins = ex.template buffer<float>(BufferMargins, survivorBound + 1);
