@@ -6,8 +6,10 @@
 // BatchRRTConnect, OMPL's PathSimplifier (SimpleSetup::simplifySolution) for the others, 1 s each.
 // Prints per robot: solved, colliding, median and p95 solve time (unsolved runs count at the
 // limit), the same with simplification, median path length raw and simplified, states checked,
-// and how many runs have a start or goal that the exact checker puts in collision (MotionBenchMaker
-// made its problems with other collision models; no exact planner can solve those).
+// how many runs have a start or goal that the exact checker puts in collision (MotionBenchMaker
+// made its problems with other collision models; no exact planner can solve those), and on the
+// staged backends (cuda, host-stages) the checker's calls, chunks, chunks run again, waits and
+// launches.
 //
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
@@ -44,6 +46,7 @@
 
 #include "BenchSupport.h"
 #include "FclValidity.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/core/Statistics.h"
 #include "rastercheck/io/Problem.h"
 #include "rastercheck/ompl/PathCheck.h"
@@ -178,6 +181,7 @@ int main(int argc, char **argv)
         std::map<std::string, Tally> tallies;
         int problemsRun = 0, invalidEnds = 0;  // runs, and those whose start or goal collides
         std::vector<double> setupSeconds;      // building each problem's setup (its checker)
+        rastercheck::device::ExecutorCounts stagePasses;  // the staged backend's (cuda, host-stages), all runs
         // One problem: both setups, the three planners with one seed.
         auto benchProblem = [&](const Problem &problem, const std::function<void(og::SimpleSetup &)> &setStartAndGoal,
                                 std::uint_fast32_t runSeed)
@@ -245,6 +249,8 @@ int main(int argc, char **argv)
                 run(*ours, batchRrtConnect(true), true, timeLimit, *oracle, runSeed, labels[2], tallies[labels[2]]);
             if (runs("eager"))
                 run(*ours, batchRrtConnect(false), true, timeLimit, *oracle, runSeed, labels[3], tallies[labels[3]]);
+            if (const auto *staged = dynamic_cast<const StagedBackend *>(&oracle->getCheckerPtr()->backend()))
+                stagePasses += staged->executorCounts();
         };
 
         if (robotName == "crane")
@@ -346,6 +352,15 @@ int main(int argc, char **argv)
                 setupSeconds.size(), 1e3 * setupSeconds.front(), later.empty() ? 0.0 : 1e3 * quantile(later, 0.5),
                 later.empty() ? 0.0 : 1e3 * *std::max_element(later.begin(), later.end()));
         }
+        // What the batches cost a device in fixed costs: a chunk run again (a count outgrew what
+        // the executor's earlier chunks needed) is a second pass and more waits.
+        if (stagePasses.calls > 0)
+            std::printf(
+                "Staged backend, every run's checker: %llu calls, %llu chunks, %llu run again, %.2f waits and %.1f "
+                "launches a call.\n\n",
+                stagePasses.calls, stagePasses.chunks, stagePasses.reruns,
+                static_cast<double>(stagePasses.synchronizations) / static_cast<double>(stagePasses.calls),
+                static_cast<double>(stagePasses.launches) / static_cast<double>(stagePasses.calls));
     }
     return 0;
 }
