@@ -1360,9 +1360,10 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                });
     ex.sortByKey(keys, values, fragmentBound, keyBits);  // may move them to other buffers
 
-    // 5. Sort_Search_Pair on each pixel's run; the first hit pixel of each pair.
+    // 5. Sort_Search_Pair on each pixel's run; the first hit pixel of each pair. The thread of a
+    // run's first fragment gathers the run in key order (runs of one fragment hit nothing and are
+    // never read), sorts it by depth and walks it.
     Fragment *fragments = ex.template buffer<Fragment>(BufferFragments, fragmentBound + 1);
-    ex.forEach(fragmentExtent, [=] RC_LAMBDA(std::size_t f) { fragments[f] = rasterFragments[values[f]]; });
     ex.forEach(fragmentExtent,
                [=] RC_LAMBDA(std::size_t f)
                {
@@ -1376,6 +1377,8 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
                    const int count = static_cast<int>(end - f);
                    if (count < 2)
                        return;
+                   for (std::size_t g = f; g < end; ++g)
+                       fragments[g] = rasterFragments[values[g]];
                    sortFragments(fragments + f, count);
                    const std::uint32_t c = pairOfKey(key, pixelBits);
                    const std::size_t s = candidates[c] / pairs;
