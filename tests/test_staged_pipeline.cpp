@@ -8,8 +8,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <condition_variable>
 #include <mutex>
+#include <set>
 #include <stdexcept>
 #include <thread>
 
@@ -905,6 +907,31 @@ rc::test::StateSuite statesByStageCount(const rc::CollisionModelConstPtr &model,
     return batch;
 }
 }  // namespace
+
+TEST(StagedPipeline, GuessedBoundsRoundUpByAtMostAQuarterToFiveValuesPerPowerOfTwo)
+{
+    // A guess that creeps up from batch to batch must change a small chunk's bounds (its buffers,
+    // its pass's signature) only now and then: bounds round up by at most a quarter, to multiples
+    // of a quarter of their power of two (five values from 2^k to 2^(k+1)), and never pass their
+    // limit.
+    for (int k = 3; k < 20; ++k)
+    {
+        std::set<std::size_t> values;
+        for (std::size_t n = std::size_t(1) << k; n < std::size_t(2) << k; ++n)
+        {
+            const std::size_t bound = rc::device::coarseBound(static_cast<double>(n), std::size_t(1) << 30);
+            ASSERT_GE(bound, n);
+            ASSERT_LE(4 * bound, 5 * n) << n;
+            values.insert(bound);
+        }
+        EXPECT_LE(values.size(), 5u) << "between 2^" << k << " and 2^" << k + 1 << " (2^" << k + 1 << " included)";
+    }
+    for (std::size_t n = 0; n < 8; ++n)
+        EXPECT_EQ(rc::device::coarseBound(static_cast<double>(n), 100), n);
+    EXPECT_EQ(rc::device::coarseBound(7.2, 100), 8u);
+    EXPECT_EQ(rc::device::coarseBound(1000.0, 900), 900u);
+    EXPECT_EQ(rc::device::coarseBound(std::nan(""), 900), 900u);
+}
 
 TEST(StagedPipeline, ABatchThatRasterizesMorePerStateRunsAgainOnceThenWaitsOnce)
 {

@@ -406,6 +406,21 @@ struct Extent
     RC_HD std::size_t size() const { return fits() ? static_cast<std::size_t>(*count) : 0; }
 };
 
+/** \brief \a n rounded up to a step of a quarter of its power of two (at most a quarter more), at
+    most \a limit. A guess that creeps up from batch to batch changes a bound, and with it the
+    buffers (an allocation) and a pass's signature (a CUDA graph captured again), only past a step. */
+inline std::size_t coarseBound(double n, std::size_t limit)
+{
+    if (!(n < static_cast<double>(limit)))
+        return limit;
+    const std::size_t value = n > 0.0 ? static_cast<std::size_t>(std::ceil(n)) : 0;
+    std::size_t step = 1;
+    while (step * 8 <= value)
+        step *= 2;
+    const std::size_t rounded = (value + step - 1) / step * step;
+    return rounded < limit ? rounded : limit;
+}
+
 /** \brief What an executor's earlier chunks needed of one count: the most, and the most per state,
     each half again. A small chunk's bound is the larger of the two for its states, so that a
     batch like an earlier one fits what that one needed, and a larger batch of the same kind what
@@ -417,9 +432,8 @@ struct CountGuess
 
     std::size_t bound(std::uint32_t numStates, std::size_t limit) const
     {
-        const double scaled = std::ceil(perState * static_cast<double>(numStates));
-        const std::size_t byStates = scaled < static_cast<double>(limit) ? static_cast<std::size_t>(scaled) : limit;
-        return byStates > most ? byStates : most;
+        const double byStates = perState * static_cast<double>(numStates);
+        return coarseBound(byStates > static_cast<double>(most) ? byStates : static_cast<double>(most), limit);
     }
 
     /** \brief Grown to hold \a needed for \a numStates states, within \a limit. */
@@ -899,10 +913,9 @@ inline std::size_t survivorBound(const CountGuesses &guesses, const StageBudget 
 {
     if (guesses.survivorsPerState < 0.0)
         return pairElements;
-    const double guess = std::ceil(guesses.survivorsPerState * static_cast<double>(numStates));
-    const double bound =
-        guess > static_cast<double>(budget.minSurvivorBound) ? guess : static_cast<double>(budget.minSurvivorBound);
-    return bound < static_cast<double>(pairElements) ? static_cast<std::size_t>(bound) : pairElements;
+    const double guess = guesses.survivorsPerState * static_cast<double>(numStates);
+    const double least = static_cast<double>(budget.minSurvivorBound);
+    return coarseBound(guess > least ? guess : least, pairElements);
 }
 
 /** \brief The bound of a raster count (candidate triangles, fragments) whose \a tally a stage just
