@@ -409,7 +409,8 @@ TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
         const rc::MeshBvh bvh(mesh);
         const rc::Aabb bounds = mesh.bounds();
         const Vec size = bounds.max - bounds.min;
-        std::size_t kept = 0, walked = 0, windows = 0, walkedSmall = 0, smallWindows = 0, insideNodes = 0;
+        std::size_t kept = 0, walked = 0, windows = 0, walkedSmall = 0, smallWindows = 0, insideNodes = 0,
+                    splitWalks = 0;
         for (int trial = 0; trial < 400; ++trial)
         {
             // Half the trials place the mesh as a component, half as an object far from its origin.
@@ -483,6 +484,22 @@ TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
                     return true;
                 });
             ASSERT_EQ(order, everyNode) << "trial " << trial;
+            // Split into 2^depth parts (each finds its start on its own), one after the other: the
+            // same triangles in the same order, spread over the parts.
+            for (std::uint32_t depth = 1; depth <= 4; ++depth)
+            {
+                std::vector<std::uint32_t> parts;
+                int nonEmpty = 0;
+                for (std::uint32_t part = 0; part < (1u << depth); ++part)
+                {
+                    const std::size_t before = parts.size();
+                    rc::device::forEachTriangleNearImage(
+                        bvh.view(), placement, grid, margin, [&](std::uint32_t t) { parts.push_back(t); }, part, depth);
+                    nonEmpty += parts.size() > before;
+                }
+                ASSERT_EQ(parts, order) << "trial " << trial << ", " << (1u << depth) << " parts";
+                splitWalks += depth == 2 && nonEmpty >= 2;
+            }
             for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
             {
                 const rc::Mesh::Triangle &tri = mesh.triangles[t];
@@ -504,6 +521,7 @@ TEST(MeshBvh, TheNodeCullKeepsEveryTriangleAScanOfTheImageKeeps)
         // The walk reads about what the scan keeps, not the whole mesh.
         EXPECT_LT(walked, 2 * kept + windows * 16) << mesh.triangles.size() << " triangles";
         EXPECT_GT(insideNodes, windows) << "no subtree was taken at once";
+        EXPECT_GT(splitWalks, 300u) << "walks in four parts must spread over at least two of them";
         EXPECT_LT(walkedSmall, smallWindows * mesh.triangles.size() / 4);
     }
 }

@@ -232,6 +232,11 @@ struct PairOutcome
     double position[3];  ///< world frame
 };
 
+/** \brief In a small chunk, each tree's image walk for a rasterized pair's candidate triangles runs in
+    2^kImageWalkDepth parts, a thread each (forEachTriangleNearImage's parts): there the slowest
+    pair's walks are the call's latency. Larger chunks walk each tree in one thread. */
+constexpr std::uint32_t kImageWalkDepth = 2;
+
 /** \brief Limits of one pass; a chunk that would exceed them is split (verdicts do not change). */
 struct StageBudget
 {
@@ -1189,7 +1194,14 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     RasterGrid *grids = ex.template buffer<RasterGrid>(BufferGrids, survivorBound + 1);
     float *margins = ex.template buffer<float>(BufferMargins, survivorBound + 1);
     std::int32_t *status = ex.template buffer<std::int32_t>(BufferStatus, survivorBound + 1);
-    unsigned long long *triangleCount = ex.template buffer<unsigned long long>(BufferTriangleCount, survivorBound + 1);
+    const std::uint32_t imageWalkDepth = small ? kImageWalkDepth : 0;
+    const std::uint32_t partsPerTree = 1u << imageWalkDepth;
+    const std::uint32_t imageParts = 2 * partsPerTree;  // a pair's image walks' parts, A's then B's
+    const std::size_t imagePartBound = survivorBound * imageParts;
+    if (imagePartBound >= (std::size_t(1) << 32))
+        return ChunkPass::OverBudget;  // the parts are numbered in 32 bits (findSegment)
+    const std::uint32_t numImageParts = static_cast<std::uint32_t>(imagePartBound);
+    unsigned long long *triangleCount = ex.template buffer<unsigned long long>(BufferTriangleCount, imagePartBound + 1);
     std::uint8_t *rasterized = ex.template buffer<std::uint8_t>(BufferRasterized, survivorBound + 1);
     // The proof in two kernels: the whole hulls for every pair (relateWholeHulls: GJK and the
     // simplex's own overlap proofs), then relateSolids (scans, shells, patches) for the pairs that
@@ -1242,32 +1254,48 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
         if (status[c] == PairOverlaps)
             noteFoundOverlap(md, st, firstOverlap, s, c, pair);
     });
-    // The open pairs' images: grid, margin, and how many triangles to rasterize.
-    ex.forEach(survivorBound + 1, [=] RC_LAMBDA(std::size_t k) {
-        const std::size_t c = pairOrdered && k < survivorBound ? proofOrder[k] : k;
-        triangleCount[c] = 0;
-        rasterized[c] = 0;
-        if (c >= survivors.size() || status[c] != PairOpen || !st.rasterize)
-            return;  // past the survivors: zeros for the scan, whose last output is then the total
-        const std::size_t s = candidates[c] / pairs;
-        const std::uint32_t pair = candidates[c] % pairs;
-        if (pastFirstOverlap(st, firstOverlap, s, c))
-            return;
-        StageSolid a, b;
-        pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
-        const double padding = pairPadding(md, st, s, pair);
-        const Box window = pairWindow(a.bounds, b.bounds, floatPadding(padding));
-        if (!rasterUsable(a.slice.closed, b.slice.closed, window, st.pixel))
-            return;  // the exact phase decides
-        grids[c] = makeGrid(window, st.pixel, st.maxImageSide);
-        margins[c] = pairMargin(window, grids[c], floatPadding(padding));
-        rasterized[c] = 1;
-        // Candidate triangles from the node culls: the leaves of both trees near the image.
-        unsigned long long count = 0;
-        forEachTriangleNearImage(a.tree, a.treePlacement, grids[c], margins[c], [&](std::uint32_t) { ++count; });
-        forEachTriangleNearImage(b.tree, b.treePlacement, grids[c], margins[c], [&](std::uint32_t) { ++count; });
-        triangleCount[c] = count;
-    });
+    // The open pairs' images: grid, margin, and how many triangles to rasterize. Each tree's walk
+    // for its candidate triangles (the node culls: the leaves near the image) is split into
+    // parts in a small chunk, a thread each, which find their own starts (forEachTriangleNearImage):
+    // one thread walking both trees of a pair twice (to count, then to write) was a fifth to a third
+    // of a 1 000-state Panda call's critical path (docs/benchmarks.md). Slot c * imageParts + j
+    // counts part j of pair c: A's parts, then B's, so that the scan's order is the pairs' walks'.
+    ex.forEach(imagePartBound + 1,
+               [=] RC_LAMBDA(std::size_t e)
+               {
+                   const std::size_t k = e / imageParts;
+                   const std::uint32_t j = static_cast<std::uint32_t>(e % imageParts);
+                   const std::size_t c = pairOrdered && k < survivorBound ? proofOrder[k] : k;
+                   triangleCount[c * imageParts + j] = 0;
+                   if (j == 0)
+                       rasterized[c] = 0;
+                   if (c >= survivors.size() || status[c] != PairOpen || !st.rasterize)
+                       return;  // past the survivors: zeros for the scan, whose last output is then the total
+                   const std::size_t s = candidates[c] / pairs;
+                   const std::uint32_t pair = candidates[c] % pairs;
+                   if (pastFirstOverlap(st, firstOverlap, s, c))
+                       return;
+                   StageSolid a, b;
+                   pairSolids(md, pair, poses + s * m, bounds + s * m, a, b);
+                   const double padding = pairPadding(md, st, s, pair);
+                   const Box window = pairWindow(a.bounds, b.bounds, floatPadding(padding));
+                   if (!rasterUsable(a.slice.closed, b.slice.closed, window, st.pixel))
+                       return;  // the exact phase decides
+                   const RasterGrid grid = makeGrid(window, st.pixel, st.maxImageSide);
+                   const float margin = pairMargin(window, grid, floatPadding(padding));
+                   if (j == 0)
+                   {
+                       grids[c] = grid;
+                       margins[c] = margin;
+                       rasterized[c] = 1;
+                   }
+                   unsigned long long count = 0;
+                   const StageSolid &solid = j < partsPerTree ? a : b;
+                   forEachTriangleNearImage(
+                       solid.tree, solid.treePlacement, grid, margin, [&](std::uint32_t) { ++count; }, j % partsPerTree,
+                       imageWalkDepth);
+                   triangleCount[c * imageParts + j] = count;
+               });
     PairOutcome *decided = ex.template buffer<PairOutcome>(BufferOutcomes, survivorBound + 1);
     if (!st.rasterize)
     {
@@ -1280,29 +1308,35 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
         return finishPass(ex, md, st, budget, links, numStates, small, survivors, none, none, proofOrder, decided,
                           firstOverlap, tallies, rasterized, outcomes, numOutcomes, counts);
     }
-    unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, survivorBound + 1);
-    ex.exclusiveSum(triangleCount, itemStart, survivorBound + 1, tallies + TallyItems);
+    unsigned long long *itemStart = ex.template buffer<unsigned long long>(BufferItemStart, imagePartBound + 1);
+    ex.exclusiveSum(triangleCount, itemStart, imagePartBound + 1, tallies + TallyItems);
     const std::size_t itemBound =
         countBound(ex, budget.maxItems, small, guesses.items, numStates, tallies + TallyItems);
     if (itemBound > budget.maxItems)
         return ChunkPass::OverBudget;
     const Extent items{itemBound, tallies + TallyItems};
-    // The candidates themselves, the same walk again: item i of pair c is triangle itemTriangles[i]
+    // The candidates themselves, the same walks again: item i of pair c is triangle itemTriangles[i]
     // of the pair (A's numbers first, then B's after A's count, as rasterizePairTriangle reads them).
     std::uint32_t *itemTriangles = ex.template buffer<std::uint32_t>(BufferItemTriangles, itemBound + 1);
-    ex.forEach(survivors, [=] RC_LAMBDA(std::size_t c) {
-        if (triangleCount[c] == 0 || !items.fits())
-            return;
-        const std::size_t s = candidates[c] / pairs;
-        StageSolid a, b;
-        pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
-        unsigned long long slot = itemStart[c];
-        forEachTriangleNearImage(a.tree, a.treePlacement, grids[c], margins[c],
-                                 [&](std::uint32_t t) { itemTriangles[slot++] = t; });
-        const std::uint32_t partyB = a.slice.numTriangles;
-        forEachTriangleNearImage(b.tree, b.treePlacement, grids[c], margins[c],
-                                 [&](std::uint32_t t) { itemTriangles[slot++] = partyB + t; });
-    });
+    ex.forEach(imagePartBound,
+               [=] RC_LAMBDA(std::size_t e)
+               {
+                   const std::size_t c = e / imageParts;
+                   const std::uint32_t j = static_cast<std::uint32_t>(e % imageParts);
+                   if (c >= survivors.size() || triangleCount[e] == 0 || !items.fits())
+                       return;
+                   const std::size_t s = candidates[c] / pairs;
+                   StageSolid a, b;
+                   pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
+                   const bool partOfA = j < partsPerTree;
+                   const StageSolid &solid = partOfA ? a : b;
+                   const std::uint32_t firstTriangle = partOfA ? 0 : a.slice.numTriangles;
+                   unsigned long long slot = itemStart[e];
+                   forEachTriangleNearImage(
+                       solid.tree, solid.treePlacement, grids[c], margins[c],
+                       [&](std::uint32_t t) { itemTriangles[slot++] = firstTriangle + t; }, j % partsPerTree,
+                       imageWalkDepth);
+               });
 
     // Pre-rasterization count per (pair, triangle): the per-triangle cull, then the pixels covered.
     unsigned long long *fragmentCount = ex.template buffer<unsigned long long>(BufferFragmentCount, itemBound + 1);
@@ -1312,7 +1346,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
             fragmentCount[i] = 0;  // the scan's trailing zeros
             return;
         }
-        const std::uint32_t c = findSegment(itemStart, numSegments, static_cast<unsigned long long>(i));
+        const std::uint32_t c = findSegment(itemStart, numImageParts, static_cast<unsigned long long>(i)) / imageParts;
         const std::size_t s = candidates[c] / pairs;
         StageSolid a, b;
         pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);
@@ -1341,7 +1375,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     ex.forEach(items, [=] RC_LAMBDA(std::size_t i) {
         if (!fragmentExtent.fits())
             return;
-        const std::uint32_t c = findSegment(itemStart, numSegments, static_cast<unsigned long long>(i));
+        const std::uint32_t c = findSegment(itemStart, numImageParts, static_cast<unsigned long long>(i)) / imageParts;
         const std::size_t s = candidates[c] / pairs;
         StageSolid a, b;
         pairSolids(md, candidates[c] % pairs, poses + s * m, bounds + s * m, a, b);

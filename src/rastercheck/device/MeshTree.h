@@ -104,16 +104,27 @@ RC_HD void subtreeSlots(const TreeNode *nodes, const TreeNode &node, std::uint32
     the nodes below it (the same triangles: every one of those nodes meets the image): a pair's
     image often holds most of a component, whose whole tree the walk tested node by node (at 1 000
     Panda states, the raster's two walks per open pair were the largest terms of a call's
-    critical path; docs/benchmarks.md). */
+    critical path; docs/benchmarks.md).
+
+    Part \a partIndex of 2^\a partDepth (treePartStart): the parts in index order give the whole
+    walk's triangles in its order, so that a pair's walks may run in as many threads. */
 template <class Visit>
 RC_HD void forEachTriangleNearImage(const TreeView &tree, const Pose<float> &placement, const RasterGrid &grid,
-                                    float margin, Visit &&visit)
+                                    float margin, Visit &&visit, std::uint32_t partIndex = 0,
+                                    std::uint32_t partDepth = 0)
 {
     const auto visitSlots = [&](std::uint32_t begin, std::uint32_t end)
     {
         for (std::uint32_t slot = begin; slot < end; ++slot)
             visit(tree.triangleOrder[slot]);
     };
+    std::uint32_t start = 0;
+    if (partDepth > 0 &&
+        !treePartStart(
+            tree.nodes, tree.numNodes,
+            [&](const TreeNode &node) { return nodeAgainstImage(node, placement, grid, margin) != ImageSide::Outside; },
+            partIndex, partDepth, start))
+        return;
     walkTree(
         tree.nodes, tree.numNodes,
         [&](const TreeNode &node)
@@ -130,6 +141,7 @@ RC_HD void forEachTriangleNearImage(const TreeView &tree, const Pose<float> &pla
         {
             visitSlots(leaf.firstSlot(), leaf.firstSlot() + leaf.count);
             return true;
-        });
+        },
+        start);
 }
 }  // namespace rastercheck::device

@@ -155,30 +155,56 @@ RC_HD bool walkPartStart(const NodeA *nodesA, const NodeB *nodesB, Visitor &visi
     return true;
 }
 
+/** \brief The pair walk's interface over one tree, the second tree being one leaf (walkTree). */
+template <class Node, class NodeTest, class LeafVisit>
+struct OneTreeVisitor
+{
+    const Node *nodes;
+    NodeTest &nodeTest;
+    LeafVisit &leafVisit;
+    RC_HD bool test(NodePair pair) { return nodeTest(nodes[pair.a]); }
+    RC_HD bool leaves(NodePair pair) { return leafVisit(nodes[pair.a]); }
+    RC_HD bool splitA(NodePair) { return true; }
+    RC_HD bool secondFirst(NodePair, NodePair) { return false; }
+};
+
+/** \brief The one leaf a tree is walked against (walkTree). */
+struct OneLeaf
+{
+    std::int32_t first = -1;
+};
+
 /** \brief Depth-first walk of one tree (\a numNodes nodes, root first): \a visit(leaf) for every leaf
     whose node and ancestors all pass \a test(node), first children first; stops when \a visit
-    returns false. The pair walk against a tree of one leaf, as FCL walks a mesh against a shape. */
+    returns false. The pair walk against a tree of one leaf, as FCL walks a mesh against a shape.
+    From node \a start: the walk of its subtree (a part of the walk, treePartStart). */
 template <class Node, class NodeTest, class LeafVisit>
-RC_HD WalkEnd walkTree(const Node *nodes, std::uint32_t numNodes, NodeTest &&test, LeafVisit &&visit)
+RC_HD WalkEnd walkTree(const Node *nodes, std::uint32_t numNodes, NodeTest &&test, LeafVisit &&visit,
+                       std::uint32_t start = 0)
 {
     if (numNodes == 0)
         return WalkEnd::Finished;
-    struct OneLeaf
-    {
-        std::int32_t first;
-    };
-    const OneLeaf single{-1};
-    // The pair walk's interface over the first tree; the second is the one leaf.
-    struct Adapter
-    {
-        const Node *nodes;
-        NodeTest &nodeTest;
-        LeafVisit &leafVisit;
-        RC_HD bool test(NodePair pair) { return nodeTest(nodes[pair.a]); }
-        RC_HD bool leaves(NodePair pair) { return leafVisit(nodes[pair.a]); }
-        RC_HD bool splitA(NodePair) { return true; }
-        RC_HD bool secondFirst(NodePair, NodePair) { return false; }
-    } adapter{nodes, test, visit};
-    return walkPairs(nodes, &single, adapter);
+    const OneLeaf single;
+    OneTreeVisitor<Node, NodeTest, LeafVisit> visitor{nodes, test, visit};
+    return walkPairs(nodes, &single, visitor, NodePair{static_cast<std::int32_t>(start), 0});
+}
+
+/** \brief Where part \a index of walkTree's walk split into up to 2^\a depth parts starts (walkTree's
+    \a start; false: the part is empty): walkPartStart on one tree. \a test must have no side
+    effect (the parts' paths test the nodes on them, each part its own). */
+template <class Node, class NodeTest>
+RC_HD bool treePartStart(const Node *nodes, std::uint32_t numNodes, NodeTest &&test, std::uint32_t index,
+                         std::uint32_t depth, std::uint32_t &start)
+{
+    if (numNodes == 0)
+        return false;
+    const OneLeaf single;
+    const auto noVisit = [](const Node &) { return true; };
+    OneTreeVisitor<Node, NodeTest, const decltype(noVisit)> visitor{nodes, test, noVisit};
+    NodePair pair{0, 0};
+    if (!walkPartStart(nodes, &single, visitor, index, depth, pair))
+        return false;
+    start = static_cast<std::uint32_t>(pair.a);
+    return true;
 }
 }  // namespace rastercheck::device
