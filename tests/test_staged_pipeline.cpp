@@ -906,6 +906,37 @@ rc::test::StateSuite statesByStageCount(const rc::CollisionModelConstPtr &model,
     }
     return batch;
 }
+
+/** \brief A call of \a suite that the executor's earlier calls sized: one wait, nothing run again or
+    allocated, the CPU backend's verdicts. */
+void expectOneWaitAndTheCpuVerdicts(const rc::StagedBackend &staged, const rc::CollisionModelConstPtr &model,
+                                    const rc::test::StateSuite &suite, const rc::CollisionRequest &request)
+{
+    std::vector<std::uint8_t> valid;
+    const rc::device::ExecutorCounts counts = oneCall(staged, suite, request, valid);
+    EXPECT_EQ(counts.reruns, 0u);
+    EXPECT_EQ(counts.synchronizations, 1u);
+    EXPECT_EQ(counts.allocations, 0u);
+    EXPECT_EQ(valid, cpuVerdicts(model, suite, request));
+}
+
+/** \brief \a few, then \a many, which needs more than \a few did: \a many runs again once, with
+    \a grownWaits waits and the CPU backend's verdicts, then waits once and allocates nothing, and
+    \a few fits what \a many needed. */
+void expectTheLargerNeedRunsAgainOnce(const rc::StagedBackend &staged, const rc::CollisionModelConstPtr &model,
+                                      const rc::test::StateSuite &few, const rc::test::StateSuite &many,
+                                      const rc::CollisionRequest &request, unsigned long long grownWaits)
+{
+    std::vector<std::uint8_t> valid;
+    EXPECT_EQ(oneCall(staged, few, request, valid).reruns, 0u) << "the first chunk waits for what it needs";
+    EXPECT_EQ(valid, cpuVerdicts(model, few, request));
+    const rc::device::ExecutorCounts grown = oneCall(staged, many, request, valid);
+    EXPECT_EQ(grown.reruns, 1u);
+    EXPECT_EQ(grown.synchronizations, grownWaits);
+    EXPECT_EQ(valid, cpuVerdicts(model, many, request));
+    expectOneWaitAndTheCpuVerdicts(staged, model, many, request);
+    expectOneWaitAndTheCpuVerdicts(staged, model, few, request);
+}
 }  // namespace
 
 TEST(StagedPipeline, GuessedBoundsRoundUpByAtMostAQuarterToFiveValuesPerPowerOfTwo)
@@ -949,23 +980,10 @@ TEST(StagedPipeline, ABatchThatRasterizesMorePerStateRunsAgainOnceThenWaitsOnce)
     ASSERT_GT(manyTriangles, 2 * fewTriangles + 16) << "the second batch must need more than the guess";
 
     const rc::StagedBackend staged(model, poisonedStages(model));
+    // The outgrown pass's wait, then the triangles', fragments' and outcomes'.
+    expectTheLargerNeedRunsAgainOnce(staged, model, few, many, safe, 4);
+    // A batch of both fits: as many per state.
     std::vector<std::uint8_t> valid;
-    oneCall(staged, few, safe, valid);
-    EXPECT_EQ(valid, cpuVerdicts(model, few, safe));
-    const rc::device::ExecutorCounts grown = oneCall(staged, many, safe, valid);
-    EXPECT_EQ(grown.reruns, 1u);
-    EXPECT_EQ(grown.synchronizations, 4u) << "the outgrown pass's wait, then the triangles', fragments' and outcomes'";
-    EXPECT_EQ(valid, cpuVerdicts(model, many, safe));
-    const rc::device::ExecutorCounts again = oneCall(staged, many, safe, valid);
-    EXPECT_EQ(again.reruns, 0u);
-    EXPECT_EQ(again.synchronizations, 1u);
-    EXPECT_EQ(again.allocations, 0u);
-    EXPECT_EQ(valid, cpuVerdicts(model, many, safe));
-    // The first batch fits what the second needed, and so does a batch of both (as many per state).
-    const rc::device::ExecutorCounts smaller = oneCall(staged, few, safe, valid);
-    EXPECT_EQ(smaller.synchronizations, 1u);
-    EXPECT_EQ(smaller.allocations, 0u);
-    EXPECT_EQ(valid, cpuVerdicts(model, few, safe));
     rc::test::StateSuite both = many;
     both.states.insert(both.states.end(), few.states.begin(), few.states.end());
     both.states.insert(both.states.end(), many.states.begin(), many.states.end());
@@ -995,29 +1013,8 @@ TEST(StagedPipeline, ABatchWithMorePairsPastTheCullsPerStateRunsAgainOnceThenWai
     rc::device::StageBudget budget;
     budget.minSurvivorBound = 1;  // the bound is the guess alone
     const rc::StagedBackend staged(model, poisonedStages(model, budget));
-    std::vector<std::uint8_t> valid;
-    EXPECT_EQ(oneCall(staged, few, exact, valid).reruns, 0u) << "the first chunk is sized by every pair";
-    EXPECT_EQ(valid, cpuVerdicts(model, few, exact));
-    const rc::device::ExecutorCounts few2 = oneCall(staged, few, exact, valid);
-    EXPECT_EQ(few2.reruns, 0u);
-    EXPECT_EQ(few2.synchronizations, 1u);
-    EXPECT_EQ(valid, cpuVerdicts(model, few, exact));
-
-    const rc::device::ExecutorCounts grown = oneCall(staged, many, exact, valid);
-    EXPECT_EQ(grown.reruns, 1u);
-    EXPECT_EQ(grown.synchronizations, 2u) << "the outgrown pass's wait, then the pass's again";
-    EXPECT_EQ(valid, cpuVerdicts(model, many, exact));
-    const rc::device::ExecutorCounts again = oneCall(staged, many, exact, valid);
-    EXPECT_EQ(again.reruns, 0u);
-    EXPECT_EQ(again.synchronizations, 1u);
-    EXPECT_EQ(again.allocations, 0u);
-    EXPECT_EQ(valid, cpuVerdicts(model, many, exact));
-    // The first batch fits what the second needed.
-    const rc::device::ExecutorCounts smaller = oneCall(staged, few, exact, valid);
-    EXPECT_EQ(smaller.reruns, 0u);
-    EXPECT_EQ(smaller.synchronizations, 1u);
-    EXPECT_EQ(smaller.allocations, 0u);
-    EXPECT_EQ(valid, cpuVerdicts(model, few, exact));
+    // The first chunk is sized by every pair; the outgrown pass's wait, then the pass's again.
+    expectTheLargerNeedRunsAgainOnce(staged, model, few, many, exact, 2);
 }
 
 TEST(StagedPipeline, ALargeChunkWaitsForEachCount)
@@ -1064,11 +1061,7 @@ TEST(StagedPipeline, ABatchOfManyPairsWaitsOnceOnceItsPairsPastTheCullsWereCount
     EXPECT_EQ(oneCall(staged, suite, safe, valid).synchronizations, 3u)
         << "the raster's counts, measured by small chunks only, and the outcomes";
     EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
-    const rc::device::ExecutorCounts again = oneCall(staged, suite, safe, valid);
-    EXPECT_EQ(again.synchronizations, 1u);
-    EXPECT_EQ(again.reruns, 0u);
-    EXPECT_EQ(again.allocations, 0u);
-    EXPECT_EQ(valid, cpuVerdicts(model, suite, safe));
+    expectOneWaitAndTheCpuVerdicts(staged, model, suite, safe);
 }
 
 TEST(StagedPipeline, ConcurrentCallsEachTakeAnExecutorOfTheirOwn)
