@@ -263,11 +263,13 @@ struct StageBudget
         chunks needed of the raster (CountGuesses: its first rasterizing chunk waits for them); a
         chunk that needs more runs again. Other chunks wait for each count (five waits), so that
         their buffers and launches have the counts' sizes: an executor's first batch of more (state,
-        pair) elements than this, and chunks bounded past it (with 1.7 pairs a state past the culls,
-        half again, more Panda states than a chunk holds, StageBudget::maxStates). At 2^18, 1 000
-        Panda states make one wait from the first call on, and once counted, 10^4 Panda states or
-        1 000 of the crane (935 pairs a state) too. */
-    std::size_t waitForCountsFrom = std::size_t(1) << 18;
+        pair) elements than this, and chunks bounded past it. At 2^16, as orderedProofsFrom, the
+        chunks that fill a device (25 000 Panda states and more at 1.7 pairs a state past the culls,
+        half again) size their sorts and launches by the counts and take the proofs in pair order,
+        and smaller ones, once counted (1 000 to 10^4 Panda states, 1 000 of the crane's with its
+        935 pairs a state), wait once; before, every chunk under 2^18 (state, pair) elements waited
+        once (1 000 Panda states from the first call on), and no larger one. */
+    std::size_t waitForCountsFrom = std::size_t(1) << 16;
     /** The least bound of a small chunk's pairs past the culls, whatever CountGuesses says per
         state: a few hundred threads cost a device no more than a few, and the fewer states a batch
         has, the more its pairs per state vary (a planner's edge among obstacles against the random
