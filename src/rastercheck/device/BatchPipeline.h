@@ -428,6 +428,13 @@ inline std::size_t coarseBound(double n, std::size_t limit)
     return rounded < limit ? rounded : limit;
 }
 
+/** \brief \a rate (per state) grown to hold \a needed for \a numStates states, half again. */
+inline double grownRate(double rate, std::size_t needed, std::uint32_t numStates)
+{
+    const double roomy = 1.5 * static_cast<double>(needed) / static_cast<double>(numStates > 0 ? numStates : 1);
+    return rate > roomy ? rate : roomy;
+}
+
 /** \brief What an executor's earlier chunks needed of one count: the most, and the most per state,
     each half again. A small chunk's bound is the larger of the two for its states, so that a
     batch like an earlier one fits what that one needed, and a larger batch of the same kind what
@@ -448,8 +455,7 @@ struct CountGuess
     {
         const std::size_t roomy = needed + needed / 2 < limit ? needed + needed / 2 : limit;
         most = most > roomy ? most : roomy;
-        const double rate = 1.5 * static_cast<double>(needed) / static_cast<double>(numStates > 0 ? numStates : 1);
-        perState = perState > rate ? perState : rate;
+        perState = grownRate(perState, needed, numStates);
     }
 };
 
@@ -975,10 +981,8 @@ ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     const unsigned long long *tally = ex.template download<unsigned long long>(BufferTallies, tallies, kNumTallies);
     const PairOutcome *host = ex.template download<PairOutcome>(BufferKeptOutcomes, kept, prefix);
     ex.wait();
-    const double survivorsPerState =
-        1.5 * static_cast<double>(tally[TallyCandidates]) / static_cast<double>(numStates > 0 ? numStates : 1);
     guesses.survivorsPerState =
-        survivorsPerState > guesses.survivorsPerState ? survivorsPerState : guesses.survivorsPerState;
+        grownRate(guesses.survivorsPerState, static_cast<std::size_t>(tally[TallyCandidates]), numStates);
     if (!survivors.fits())
         return ChunkPass::Rerun;  // nothing ran past the culls; the raster's counts are not measured
     if (st.rasterize)
