@@ -598,13 +598,15 @@ TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
 {
     // The stages share one pair's walk among threads (WalkPart, walkPartStart): walked one after the
     // other, the parts must decide as the whole walk does, and the first part that finds a contact
-    // must find the whole walk's first contact (the CPU backend's), whatever the number of parts.
+    // must find the whole walk's first contact (the CPU backend's), whatever the number of parts;
+    // a part stops for an earlier part's contact, and for a later one's only where any contact
+    // decides.
     std::mt19937_64 rng(5);
     for (const Scenario &s : scenarios())
     {
         const rc::MeshBvh a(s.a), b(s.b);
         const rc::device::ExactTree ta = a.exactTree(), tb = b.exactTree();
-        int split = 0, touching = 0, stoppedByAnEarlierPart = 0;
+        int split = 0, touching = 0, stoppedByAnEarlierPart = 0, stoppedByALaterPart = 0;
         for (int trial = 0; trial < 60; ++trial)
         {
             const rc::device::Pose<double> poseA = rc::toDevicePose(randomPose(rng, s.reach)),
@@ -638,6 +640,21 @@ TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
                                 << s.name << " trial " << trial;
                             ++stoppedByAnEarlierPart;
                         }
+                        if (partFinds && j + 1 < numParts)
+                        {
+                            // A later part's contact stops it only where any contact decides
+                            // (WalkPart::anyContact: no contact is read).
+                            const unsigned long long later = j + 1;
+                            rc::device::WalkPart anyContact{j, depth, &later};
+                            anyContact.anyContact = true;
+                            EXPECT_TRUE(rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, nullptr, nullptr,
+                                                                   rc::device::WalkPart{j, depth, &later}))
+                                << s.name << " trial " << trial;
+                            EXPECT_FALSE(
+                                rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, nullptr, nullptr, anyContact))
+                                << s.name << " trial " << trial;
+                            ++stoppedByALaterPart;
+                        }
                         if (partFinds && !found)
                         {
                             EXPECT_EQ(contact.triangleA, whole.triangleA) << s.name << " trial " << trial;
@@ -655,6 +672,7 @@ TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
         EXPECT_GT(split, 0) << s.name << ": no walk's contacts were ever in two parts";
         EXPECT_GT(touching, 0) << s.name;
         EXPECT_GT(stoppedByAnEarlierPart, 0) << s.name << ": no contact was found past the first part";
+        EXPECT_GT(stoppedByALaterPart, 0) << s.name << ": no contact was found before the last part";
     }
 }
 

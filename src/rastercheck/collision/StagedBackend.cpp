@@ -114,6 +114,7 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
     settings.unprovenCollides = rules.unprovenCollides;
     settings.clearanceTables = rules.clearanceTables;
     settings.confirmCurvedOverlaps = request.mode == CollisionMode::Safe || request.mode == CollisionMode::Exact;
+    settings.firstContacts = contactsAsked;
     return settings;
 }
 

@@ -194,6 +194,10 @@ struct StageSettings
     /** \brief Only the outcomes the per-state reduction reads come back (reduceOutcomes): per state,
         the pairs up to its first settled overlap, none settled apart. */
     bool onlyDecisive;
+    /** \brief The caller reads each colliding pair's first contact (the CPU backend's): a pair's
+        split walk ends at its first contact in walk order. Else any part's contact decides the
+        pair, and every part of it stops at the first found (WalkPart::anyContact). */
+    bool firstContacts;
 };
 
 /** \brief The padding of \a pair for state \a s of a chunk: the request's, plus the pair's extra
@@ -813,10 +817,15 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         bool closedA = false, closedB = false;
         exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
                     closedB);
-        // The walk stops once an earlier part of the pair, or an earlier pair of the state, has
-        // found a contact (the latter only where pastFirstOverlap would skip the pair).
-        const WalkPart part{j, walkPartDepth(perPair), &firstPart[c],
-                            st.onlyDecisive ? firstOverlap + out.state : nullptr, c};
+        // The walk stops once an earlier part of the pair (any part, where no contact is read), or
+        // an earlier pair of the state, has found a contact (the latter only where
+        // pastFirstOverlap would skip the pair).
+        const WalkPart part{j,
+                            walkPartDepth(perPair),
+                            &firstPart[c],
+                            !st.firstContacts,
+                            st.onlyDecisive ? firstOverlap + out.state : nullptr,
+                            c};
         if (surfacesWithin(a, poseA, b, poseB, pairPadding(md, st, out.state, out.pair),
                            &partContacts[c * perPair + j], nullptr, part))
         {

@@ -288,6 +288,12 @@ struct WalkPart
     std::uint32_t index = 0;
     std::uint32_t depth = 0;
     const unsigned long long *earliestFound = nullptr;
+    /** \brief Stop once any part has found a contact, not only an earlier one: for a caller that
+        reads whether the surfaces meet and not where (StageSettings::firstContacts false). The
+        walk's first contact is then in no part's hands, but the parts, which a device runs at once,
+        end with the first contact found anywhere instead of waiting for the earlier parts' walks
+        (docs/benchmarks.md "Any part's contact decides a pair"). */
+    bool anyContact = false;
     /** \brief Where the stages note the lowest pair element of the walk's state that overlaps
         (noteOverlap; null: not read), and the walk's own: the walk stops once an earlier pair of
         the state overlaps, as the CPU backend stops at a state's first colliding pair. */
@@ -355,7 +361,7 @@ struct SurfaceQuery
         // A part stops once an earlier part has found a contact: the walk's first contact is not
         // in this one; or once an earlier pair of its state overlaps: the pair is not read. Its
         // pairs still on the stack are dropped unread.
-        if (part.earliestFound && atomicLoad(part.earliestFound) < part.index)
+        if (part.earliestFound && atomicLoad(part.earliestFound) < (part.anyContact ? 1ull << part.depth : part.index))
             return false;
         if (part.stateFirstOverlap && atomicLoad(part.stateFirstOverlap) < part.pairElement)
             return false;
