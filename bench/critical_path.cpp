@@ -48,7 +48,7 @@ int main(int argc, char **argv)
     for (const bench::SceneCase &c : cases)
     {
         const auto model = std::make_shared<const CollisionModel>(c.robot, c.scene);
-        const StagedBackend staged(model, makeHostStageRunner(model, {}, HostScratch::Reused, true));
+        const StagedBackend staged(model, makeHostStageRunner(model, {}, HostScratch::Reused, HostLoop::Timed));
         const std::size_t dof = c.robot->numCoordinates();
         for (std::size_t n : sizes)
         {

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <mutex>
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <thread>
@@ -43,9 +44,10 @@ std::size_t sanitizerScaled(int states)
 
 /** \brief The stages on the host with poisoned scratch, as uninitialised device memory may be. */
 std::unique_ptr<rc::StageRunner> poisonedStages(const rc::CollisionModelConstPtr &model,
-                                                const rc::device::StageBudget &budget = {})
+                                                const rc::device::StageBudget &budget = {},
+                                                rc::HostLoop loop = rc::HostLoop::Parallel)
 {
-    return rc::makeHostStageRunner(model, budget, rc::HostScratch::Poisoned);
+    return rc::makeHostStageRunner(model, budget, rc::HostScratch::Poisoned, loop);
 }
 
 /** \brief 1 per state of \a suite within \a model's bounds (what StagedBackend hands the stages). */
@@ -121,7 +123,8 @@ TEST(StagedPipeline, TimingEachElementKeepsTheVerdictsAndMeasuresACriticalPath)
     const rc::test::StateSuite &suite = suites.front();
     const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
     const rc::CpuBackend cpu(model);
-    const rc::StagedBackend timed(model, rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned, true));
+    const rc::StagedBackend timed(model,
+                                  rc::makeHostStageRunner(model, {}, rc::HostScratch::Poisoned, rc::HostLoop::Timed));
     const rc::StagedBackend untimed(model, poisonedStages(model));
     for (rc::CollisionMode mode : kModes)
     {
@@ -519,7 +522,13 @@ TEST(StagedPipeline, OnlyAStatesPairsUpToItsFirstOverlapAreDecided)
     // (none settled apart), with the same statuses and first contacts, and the exact phase must
     // decide fewer pairs (the crane in the plant: a state's pairs with the plant often reach it
     // together).
-    unsigned long long exactAll = 0, exactDecisive = 0;
+    // The same with each kernel's elements run from the last to the first (HostLoop::Reversed): a
+    // device keeps no order among its threads. Where no contact is read (StageSettings::
+    // firstContacts false) any overlap settles a state: a colliding state's one outcome is an
+    // overlap of one of its pairs that overlap, the others' outcomes are the same, and, run
+    // backwards, the exact phase decides fewer pairs (a later pair's overlap stops the earlier
+    // ones, as on a device where they run at once).
+    unsigned long long exactAll = 0, exactDecisive = 0, exactReversed = 0, exactAnyContact = 0;
     for (const rc::test::StateSuite &suite : rc::test::accuracySuites(sanitizerScaled(100)))
     {
         const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
@@ -530,10 +539,12 @@ TEST(StagedPipeline, OnlyAStatesPairsUpToItsFirstOverlapAreDecided)
             rc::CollisionRequest request;
             request.mode = mode;
             rc::device::StageSettings settings = rc::stageSettings(*model, request, true);
-            const auto run = [&](bool onlyDecisive, unsigned long long &exactPairs)
+            const auto run = [&](bool onlyDecisive, unsigned long long &exactPairs, bool firstContacts = true,
+                                 rc::HostLoop loop = rc::HostLoop::Parallel)
             {
                 settings.onlyDecisive = onlyDecisive;
-                const std::unique_ptr<rc::StageRunner> runner = poisonedStages(model);
+                settings.firstContacts = firstContacts;
+                const std::unique_ptr<rc::StageRunner> runner = poisonedStages(model, {}, loop);
                 runner->countStages(true);
                 std::vector<rc::device::PairOutcome> outcomes;
                 runner->run(suite.states.data(), admissible.data(), n, settings, outcomes);
@@ -552,20 +563,66 @@ TEST(StagedPipeline, OnlyAStatesPairsUpToItsFirstOverlapAreDecided)
                 if (o.status == rc::device::PairOverlaps)
                     settledState = o.state;
             }
-            ASSERT_EQ(decisive.size(), expected.size()) << label(suite.name, mode);
-            for (std::size_t i = 0; i < expected.size(); ++i)
+            const std::vector<rc::device::PairOutcome> reversed =
+                run(true, exactReversed, true, rc::HostLoop::Reversed);
+            for (const std::vector<rc::device::PairOutcome> *outcomes : {&decisive, &reversed})
             {
-                const rc::device::PairOutcome &a = decisive[i], &b = expected[i];
-                EXPECT_TRUE(a.state == b.state && a.pair == b.pair && a.status == b.status &&
-                            a.triangle == b.triangle && a.position[0] == b.position[0] &&
-                            a.position[1] == b.position[1] && a.position[2] == b.position[2])
-                    << label(suite.name, mode) << ": outcome " << i << ", state " << b.state << ", pair " << b.pair;
+                const std::string how = outcomes == &decisive ? "" : ", reversed";
+                ASSERT_EQ(outcomes->size(), expected.size()) << label(suite.name, mode) << how;
+                for (std::size_t i = 0; i < expected.size(); ++i)
+                {
+                    const rc::device::PairOutcome &a = (*outcomes)[i], &b = expected[i];
+                    EXPECT_TRUE(a.state == b.state && a.pair == b.pair && a.status == b.status &&
+                                a.triangle == b.triangle && a.position[0] == b.position[0] &&
+                                a.position[1] == b.position[1] && a.position[2] == b.position[2])
+                        << label(suite.name, mode) << how << ": outcome " << i << ", state " << b.state << ", pair "
+                        << b.pair;
+                }
             }
+
+            const std::vector<rc::device::PairOutcome> anyContact =
+                run(true, exactAnyContact, false, rc::HostLoop::Reversed);
+            std::map<std::uint32_t, std::vector<const rc::device::PairOutcome *>> byState;
+            for (const rc::device::PairOutcome &o : anyContact)
+                byState[o.state].push_back(&o);
+            std::map<std::uint32_t, std::set<std::uint32_t>> overlapping;  // per state, of every pair decided
+            for (const rc::device::PairOutcome &o : all)
+                if (o.status == rc::device::PairOverlaps)
+                    overlapping[o.state].insert(o.pair);
+            std::size_t others = 0;  // outcomes of states without an overlap, in order
+            for (const rc::device::PairOutcome &o : expected)
+            {
+                const auto found = overlapping.find(o.state);
+                if (found == overlapping.end())
+                {
+                    const std::vector<const rc::device::PairOutcome *> &own = byState[o.state];
+                    EXPECT_TRUE(std::any_of(own.begin(), own.end(),
+                                            [&](const rc::device::PairOutcome *a)
+                                            { return a->pair == o.pair && a->status == o.status; }))
+                        << label(suite.name, mode) << ": state " << o.state << ", pair " << o.pair;
+                    ++others;
+                    continue;
+                }
+                if (o.status != rc::device::PairOverlaps)
+                    continue;  // a pair before the state's first overlap: need not come back
+                const std::vector<const rc::device::PairOutcome *> &own = byState[o.state];
+                ASSERT_EQ(own.size(), 1u) << label(suite.name, mode) << ": state " << o.state;
+                EXPECT_EQ(own[0]->status, rc::device::PairOverlaps) << label(suite.name, mode);
+                EXPECT_EQ(found->second.count(own[0]->pair), 1u)
+                    << label(suite.name, mode) << ": state " << o.state << ", pair " << own[0]->pair;
+            }
+            std::size_t statesWithoutOverlap = 0;
+            for (const auto &[state, own] : byState)
+                statesWithoutOverlap += overlapping.count(state) == 0 ? own.size() : 0;
+            EXPECT_EQ(statesWithoutOverlap, others) << label(suite.name, mode);
         }
     }
-    std::printf("the exact phase decided %llu pairs, %llu with only the pairs up to a state's first overlap\n",
-                exactAll, exactDecisive);
+    std::printf(
+        "the exact phase decided %llu pairs, %llu with only the pairs up to a state's first overlap (%llu "
+        "run backwards, %llu where any overlap decides)\n",
+        exactAll, exactDecisive, exactReversed, exactAnyContact);
     EXPECT_LT(exactDecisive, exactAll);
+    EXPECT_LT(exactAnyContact, exactReversed);
 }
 
 TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)

@@ -131,8 +131,8 @@ struct NoGraph
 class HostExecutor
 {
 public:
-    HostExecutor(HostScratch scratch, std::size_t maxScratchBytes, bool timeElements)
-        : scratch_(scratch), maxScratchBytes_(maxScratchBytes), timeElements_(timeElements)
+    HostExecutor(HostScratch scratch, std::size_t maxScratchBytes, HostLoop loop)
+        : scratch_(scratch), maxScratchBytes_(maxScratchBytes), loop_(loop)
     {
     }
 
@@ -334,7 +334,13 @@ private:
     template <class F>
     void loop(std::size_t n, const F &f)
     {
-        if (timeElements_)
+        if (loop_ == HostLoop::Reversed)
+        {
+            for (std::size_t i = n; i-- > 0;)
+                f(i);
+            return;
+        }
+        if (loop_ == HostLoop::Timed)
         {
             // An element over a microsecond runs again and the lower time counts: a timer interrupt
             // inside one would otherwise count whole (a call timed element by element lasts
@@ -380,7 +386,7 @@ private:
 
     HostScratch scratch_;
     std::size_t maxScratchBytes_;
-    bool timeElements_;
+    HostLoop loop_;
     device::ExecutorCounts counts_;
     device::CountGuesses guesses_;
     std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
@@ -392,10 +398,9 @@ private:
 class HostStageRunner : public PooledStageRunner<HostExecutor>
 {
 public:
-    HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch,
-                    bool timeElements)
-        : PooledStageRunner([scratch, budget, timeElements]
-                            { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes, timeElements); }),
+    HostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget, HostScratch scratch, HostLoop loop)
+        : PooledStageRunner([scratch, budget, loop]
+                            { return std::make_unique<HostExecutor>(scratch, budget.maxScratchBytes, loop); }),
           model_(std::move(model))
     {
         arrays_ = hostModelArrays(*model_);
@@ -410,9 +415,9 @@ private:
 }  // namespace
 
 std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget,
-                                                 HostScratch scratch, bool timeElements)
+                                                 HostScratch scratch, HostLoop loop)
 {
-    return std::make_unique<HostStageRunner>(std::move(model), budget, scratch, timeElements);
+    return std::make_unique<HostStageRunner>(std::move(model), budget, scratch, loop);
 }
 
 /** \brief What one check() keeps on the host besides the executor's buffers: the states' bounds

@@ -27,13 +27,25 @@ enum class HostScratch
               ///< a stage that reads a slot nobody wrote then shows up in the CPU tests
 };
 
-/** \brief The stages on the host, through the same driver as the GPU (plain loops for kernels).
-    \a timeElements: run each kernel's elements one after the other on the calling thread, each
-    timed (one over a microsecond twice, the lower time kept), and count per kernel the slowest
-    (ExecutorCounts::criticalPathSeconds): what one call would wait for on a device besides its
-    launches, measured without one (benches; the verdicts are the same). */
+/** \brief How the host executor runs a kernel's elements. */
+enum class HostLoop
+{
+    Parallel,  ///< on OpenMP's threads, as in production
+    /** One after the other on the calling thread, each timed (one over a microsecond twice, the
+        lower time kept), and per kernel the slowest counted (ExecutorCounts::criticalPathSeconds):
+        what one call would wait for on a device besides its launches, measured without one
+        (benches; the verdicts are the same). */
+    Timed,
+    /** One after the other from the last to the first: a device keeps no order among a kernel's
+        threads, and a stage that relies on the host's (an earlier element's atomic note seen by a
+        later one) answers differently here (tests). */
+    Reversed
+};
+
+/** \brief The stages on the host, through the same driver as the GPU (plain loops for kernels). */
 std::unique_ptr<StageRunner> makeHostStageRunner(CollisionModelConstPtr model, const device::StageBudget &budget = {},
-                                                 HostScratch scratch = HostScratch::Reused, bool timeElements = false);
+                                                 HostScratch scratch = HostScratch::Reused,
+                                                 HostLoop loop = HostLoop::Parallel);
 
 /** \brief A batch backend: the stages decide every pair they can for the whole batch in one pass,
     then the host reduces per state to the first colliding pair, deciding exactly (the CPU

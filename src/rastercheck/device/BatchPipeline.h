@@ -194,9 +194,11 @@ struct StageSettings
     /** \brief Only the outcomes the per-state reduction reads come back (reduceOutcomes): per state,
         the pairs up to its first settled overlap, none settled apart. */
     bool onlyDecisive;
-    /** \brief The caller reads each colliding pair's first contact (the CPU backend's): a pair's
-        split walk ends at its first contact in walk order. Else any part's contact decides the
-        pair, and every part of it stops at the first found (WalkPart::anyContact). */
+    /** \brief The caller reads each colliding state's first contact (the CPU backend's): a pair's
+        split walk ends at its first contact in walk order, a state's pairs at its first overlap in
+        pair order. Else any contact decides: a pair's parts stop at the first any of them finds,
+        a state's pairs at the first overlap any of them finds, and only that overlap comes back
+        (stoppedByFound, WalkPart::anyContact, pastFirstOverlap, reduceOutcomes). */
     bool firstContacts;
 };
 
@@ -735,14 +737,16 @@ RC_HD void noteFoundOverlap(const ModelArrays &md, const StageSettings &st, unsi
 
 /** \brief Whether element \a c of state \a s need not be decided: only the outcomes the reduction
     reads come back (StageSettings::onlyDecisive), which end at the state's first overlap, and an
-    earlier pair of the state already overlaps. The CPU backend stops at a state's first colliding
-    pair; the stages decide a state's pairs side by side, and skip those behind an overlap found
-    in an earlier kernel, or while they run (their walks stop). Such a pair is left as it stands,
-    and never read. */
+    earlier pair of the state already overlaps (any other, where no contact is read:
+    StageSettings::firstContacts). The CPU backend stops at a state's first colliding pair; the
+    stages decide a state's pairs side by side, and skip those behind an overlap found in an
+    earlier kernel, or while they run (their walks stop). Such a pair is left as it stands, and
+    never read. */
 RC_HD bool pastFirstOverlap(const StageSettings &st, const unsigned long long *firstOverlap, std::size_t s,
                             std::size_t c)
 {
-    return st.onlyDecisive && atomicLoad(firstOverlap + s) < static_cast<unsigned long long>(c);
+    return st.onlyDecisive &&
+           stoppedByFound(atomicLoad(firstOverlap + s), static_cast<unsigned long long>(c), !st.firstContacts);
 }
 
 /** \brief The exact phase in the stages: every pair still open after the raster (or without one) is
@@ -783,7 +787,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     ex.forEach(bound, [=] RC_LAMBDA(std::size_t k) {
         const std::size_t c = order ? order[k] : k;
         exactFlags[c] = 0;
-        firstPart[c] = parts;  // no part found a contact
+        firstPart[c] = kNoneFound;  // no part found a contact
         if (c >= survivors.size() || !items.fits() || !fragments.fits())
             return;
         const PairOutcome &out = decided[c];
@@ -851,7 +855,7 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
                     closedB);
         ExactContact contact;
-        const bool surfacesMeet = firstPart[c] < parts;
+        const bool surfacesMeet = firstPart[c] != kNoneFound;
         if (surfacesMeet)
             contact = partContacts[c * walkPartsPerPair(survivors.size(), parts, walkThreads) + firstPart[c]];
         if (!surfacesMeet && !solidsContain(a, poseA, closedA, b, poseB, closedB, &contact))
@@ -895,14 +899,18 @@ const PairOutcome *reduceOutcomes(Exec &ex, const StageSettings &st, bool small,
                                   std::size_t &download, unsigned long long *numKept)
 {
     const std::size_t bound = survivors.bound;
-    const bool onlyDecisive = st.onlyDecisive;
+    const bool onlyDecisive = st.onlyDecisive, firstContacts = st.firstContacts;
     std::uint8_t *keep = ex.template buffer<std::uint8_t>(BufferKeep, bound + 1);
-    ex.forEach(bound, [=] RC_LAMBDA(std::size_t c) {
-        keep[c] = c < survivors.size() && (!onlyDecisive || (decided[c].status != PairApart &&
-                                                             c <= firstOverlap[decided[c].state]))
-                      ? 1
-                      : 0;
-    });
+    ex.forEach(bound,
+               [=] RC_LAMBDA(std::size_t c)
+               {
+                   // Past the first overlap nothing is read; before it, only where the first contact is (a
+                   // colliding state's other pairs may be undecided: pastFirstOverlap).
+                   const unsigned long long first = c < survivors.size() ? firstOverlap[decided[c].state] : kNoneFound;
+                   const bool read = first == kNoneFound || c == first || (firstContacts && c < first);
+                   keep[c] =
+                       c < survivors.size() && (!onlyDecisive || (decided[c].status != PairApart && read)) ? 1 : 0;
+               });
     std::uint32_t *kept = ex.template buffer<std::uint32_t>(BufferKept, bound + 1);
     ex.selectFlagged(keep, bound, kept, numKept);
     if (!small)
@@ -1093,7 +1101,7 @@ ChunkPass runStagePass(Exec &ex, const ModelArrays &model, const StageSettings &
     ex.forEach(numStates,
                [=] RC_LAMBDA(std::size_t s)
                {
-                   firstOverlap[s] = ~0ull;  // none found yet (noteOverlap)
+                   firstOverlap[s] = kNoneFound;  // none found yet (noteOverlap)
                    if (admissible[s])
                        placeLinks(md.joints, numJoints, jointPoses + s * static_cast<std::size_t>(numJoints),
                                   links + s * numLinks);

@@ -280,6 +280,19 @@ RC_HD_CALL bool boxesMayMeet(const TreeNode &nf, const PlacedNode &pm, const Vec
     return true;
 }
 
+/** \brief Nothing found yet: the value the lowest index that found a contact or an overlap starts
+    from (WalkPart::earliestFound, the stages' per-state first overlap). */
+constexpr unsigned long long kNoneFound = ~0ull;
+
+/** \brief Whether what others found stops \a own (a walk's part, a state's pair): \a found, the
+    lowest index (walk or pair order) that found a contact or an overlap, stops it when earlier, so
+    the first in order is still found; with \a anyFound (the caller reads no contact, any decides)
+    when it is any other. */
+RC_HD bool stoppedByFound(unsigned long long found, unsigned long long own, bool anyFound)
+{
+    return anyFound ? found != kNoneFound && found != own : found < own;
+}
+
 /** \brief One part of a walk split among threads (walkPartStart): its index of 2^depth parts, in
     walk order, and where the parts lower the index of the earliest part that found a contact
     (atomicMinimum; null: the part runs to its end). The whole walk by default. */
@@ -288,15 +301,17 @@ struct WalkPart
     std::uint32_t index = 0;
     std::uint32_t depth = 0;
     const unsigned long long *earliestFound = nullptr;
-    /** \brief Stop once any part has found a contact, not only an earlier one: for a caller that
-        reads whether the surfaces meet and not where (StageSettings::firstContacts false). The
-        walk's first contact is then in no part's hands, but the parts, which a device runs at once,
-        end with the first contact found anywhere instead of waiting for the earlier parts' walks
-        (docs/benchmarks.md "Any part's contact decides a pair"). */
+    /** \brief Stop once any part, or any other pair of the state, has found a contact, not only an
+        earlier one (stoppedByFound): for a caller that reads whether a state collides and not
+        where (StageSettings::firstContacts false). The first contact is then in no part's hands,
+        but the parts and pairs, which a device runs at once, end with the first contact found
+        anywhere instead of waiting for the earlier ones' walks (docs/benchmarks.md "Any contact
+        decides where none is read"). */
     bool anyContact = false;
     /** \brief Where the stages note the lowest pair element of the walk's state that overlaps
         (noteOverlap; null: not read), and the walk's own: the walk stops once an earlier pair of
-        the state overlaps, as the CPU backend stops at a state's first colliding pair. */
+        the state overlaps (any other, with anyContact), as the CPU backend stops at a state's first
+        colliding pair. */
     const unsigned long long *stateFirstOverlap = nullptr;
     unsigned long long pairElement = 0;
 };
@@ -361,9 +376,10 @@ struct SurfaceQuery
         // A part stops once an earlier part has found a contact: the walk's first contact is not
         // in this one; or once an earlier pair of its state overlaps: the pair is not read. Its
         // pairs still on the stack are dropped unread.
-        if (part.earliestFound && atomicLoad(part.earliestFound) < (part.anyContact ? 1ull << part.depth : part.index))
+        if (part.earliestFound && stoppedByFound(atomicLoad(part.earliestFound), part.index, part.anyContact))
             return false;
-        if (part.stateFirstOverlap && atomicLoad(part.stateFirstOverlap) < part.pairElement)
+        if (part.stateFirstOverlap &&
+            stoppedByFound(atomicLoad(part.stateFirstOverlap), part.pairElement, part.anyContact))
             return false;
         const TreeNode &nf = fixed.tree.nodes[pair.a], &nm = moving.tree.nodes[pair.b];
         const PlacedNode &pm = placed(pair.b);
