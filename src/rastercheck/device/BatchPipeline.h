@@ -289,9 +289,9 @@ struct StageBudget
     /** Threads the split walks of a chunk below waitForCountsFrom may take together: each open pair
         gets as many parts as keep the pairs past the culls within them (walkPartsPerPair), so a
         chunk with pairs enough to fill the device walks each pair in one thread. There, parts only
-        add work: a part walks its subtree to the end unless an earlier one has found a contact
-        already. Measured on an H100 (2026-11-27, docs/benchmarks.md "GPU"): splitting every pair of
-        FCL's env/rob at 10^5 states made the batch half as fast. 2^16: a heavy kernel's resident
+        add work: a part walks its subtree to the end unless another has found a contact already
+        (an earlier one, where the first contact is read). Measured on an H100 (2026-11-27, docs/benchmarks.md "GPU"):
+       splitting every pair of FCL's env/rob at 10^5 states made the batch half as fast. 2^16: a heavy kernel's resident
         threads on an H100 (132 SMs, 25 % occupancy). */
     std::size_t exactWalkThreads = std::size_t(1) << 16;
 };
@@ -763,9 +763,9 @@ RC_HD bool pastFirstOverlap(const StageSettings &st, const unsigned long long *f
     part finds its start in its own thread), one thread each, as many as keep the pairs past the
     culls within \a walkThreads threads (walkPartsPerPair); the first part in walk order that finds
     a contact gives the pair's first contact, the one the whole walk finds, and the parts after it
-    stop. Then one thread per pair ends it: the contact, or the containment test (solidsContain),
-    and curved shapes. Three kernels; with \a walkParts 1, the pair's whole walk in one thread, as
-    a large batch takes it. */
+    stop (all parts, where no contact is read: StageSettings::firstContacts). Then one thread per pair ends it: the
+   contact, or the containment test (solidsContain), and curved shapes. Three kernels; with \a walkParts 1, the pair's
+   whole walk in one thread, as a large batch takes it. */
 template <class Exec>
 void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
                      Extent survivors, Extent items, Extent fragments, const std::uint32_t *order,
