@@ -24,11 +24,12 @@ constexpr int kMaxTreeDepth = 60;
 constexpr int kPairStackSize = 2 * kMaxTreeDepth + 2;
 
 /** \brief Most parts one walk is split into for as many threads (walkPartStart; the stages' exact
-    phase, StageBudget::exactWalkParts): a power of two, a part per path of up to 7 bits. 128, not
+    phase, StageBudget::exactWalkParts): a power of two, a part per path of up to 6 bits. 64, not
     32, since any part's contact ends a pair's walk where no contact is read: what is left of the
-    slowest walks is then walks that find nothing, whose heaviest part more parts split again
-    (docs/benchmarks.md "Any contact decides where none is read"). */
-constexpr std::uint32_t kMaxWalkParts = 128;
+    slowest walks is then walks that find nothing, whose heaviest part more parts split again; 128
+    gained no more and asked twice the work of small calls (each part tests the pairs on its path;
+    docs/benchmarks.md "Any contact decides where none is read"). */
+constexpr std::uint32_t kMaxWalkParts = 64;
 static_assert((kMaxWalkParts & (kMaxWalkParts - 1)) == 0, "parts are paths of bits");
 
 /** \brief How a walk ended. */
