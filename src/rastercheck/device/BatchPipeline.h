@@ -290,9 +290,10 @@ struct StageBudget
         gets as many parts as keep the pairs past the culls within them (walkPartsPerPair), so a
         chunk with pairs enough to fill the device walks each pair in one thread. There, parts only
         add work: a part walks its subtree to the end unless another has found a contact already
-        (an earlier one, where the first contact is read). Measured on an H100 (2026-11-27, docs/benchmarks.md "GPU"):
-       splitting every pair of FCL's env/rob at 10^5 states made the batch half as fast. 2^16: a heavy kernel's resident
-        threads on an H100 (132 SMs, 25 % occupancy). */
+        (an earlier one, where the first contact is read). Measured on an H100 (2026-11-27,
+        docs/benchmarks.md "GPU"): splitting every pair of FCL's env/rob at 10^5 states made the
+        batch half as fast. 2^16: a heavy kernel's resident threads on an H100 (132 SMs, 25 %
+        occupancy). */
     std::size_t exactWalkThreads = std::size_t(1) << 16;
 };
 
@@ -763,9 +764,9 @@ RC_HD bool pastFirstOverlap(const StageSettings &st, const unsigned long long *f
     part finds its start in its own thread), one thread each, as many as keep the pairs past the
     culls within \a walkThreads threads (walkPartsPerPair); the first part in walk order that finds
     a contact gives the pair's first contact, the one the whole walk finds, and the parts after it
-    stop (all parts, where no contact is read: StageSettings::firstContacts). Then one thread per pair ends it: the
-   contact, or the containment test (solidsContain), and curved shapes. Three kernels; with \a walkParts 1, the pair's
-   whole walk in one thread, as a large batch takes it. */
+    stop (all parts, where no contact is read: StageSettings::firstContacts). Then one thread per
+    pair ends it: the contact, or the containment test (solidsContain), and curved shapes. Three
+    kernels; with \a walkParts 1, the pair's whole walk in one thread, as a large batch takes it. */
 template <class Exec>
 void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, const Pose<double> *links,
                      Extent survivors, Extent items, Extent fragments, const std::uint32_t *order,
@@ -821,9 +822,9 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
         bool closedA = false, closedB = false;
         exactSolids(md, out.pair, links + static_cast<std::size_t>(out.state) * numLinks, a, poseA, closedA, b, poseB,
                     closedB);
-        // The walk stops once an earlier part of the pair (any part, where no contact is read), or
-        // an earlier pair of the state, has found a contact (the latter only where
-        // pastFirstOverlap would skip the pair).
+        // The walk stops once an earlier part of the pair, or an earlier pair of the state, has
+        // found a contact (the latter only where pastFirstOverlap would skip the pair); any other,
+        // where no contact is read.
         const WalkPart part{j,
                             walkPartDepth(perPair),
                             &firstPart[c],
@@ -887,9 +888,10 @@ void decideOpenPairs(Exec &ex, const ModelArrays &md, const StageSettings &st, c
 /** \brief The outcomes that come back, compacted in (state, pair) order, their number in
     \a numKept (a tally). With StageSettings::onlyDecisive, the per-state reduction's part: of each
     state's outcomes (in pair order) only those the host reads: the first overlap, which settles the
-    state, and the pairs before it the host must still decide; no pair settled apart. Every other outcome stays on the
-    executor, so a batch's download is about one outcome per colliding state. \a firstOverlap:
-    each state's first overlap, which the stages noted as they found it (noteOverlap). \a download: the
+    state, and, where the first contact is read (StageSettings::firstContacts), the pairs before it
+    the host must still decide; no pair settled apart. Every other outcome stays on the executor,
+    so a batch's download is about one outcome per colliding state. \a firstOverlap: each state's
+    first overlap, which the stages noted as they found it (noteOverlap). \a download: the
     outcomes to download. A \a small chunk downloads as many as it guessed before it knows the
     count, so those slots are written whatever the count (zeros past it); a large one waits for the
     count, which sizes the buffer and the download. */

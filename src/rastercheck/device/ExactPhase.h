@@ -374,8 +374,8 @@ struct SurfaceQuery
     RC_HD bool test(NodePair pair)
     {
         // A part stops once an earlier part has found a contact: the walk's first contact is not
-        // in this one; or once an earlier pair of its state overlaps: the pair is not read. Its
-        // pairs still on the stack are dropped unread.
+        // in this one; or once an earlier pair of its state overlaps: the pair is not read (any
+        // other part or pair, with anyContact). Its pairs still on the stack are dropped unread.
         if (part.earliestFound && stoppedByFound(atomicLoad(part.earliestFound), part.index, part.anyContact))
             return false;
         if (part.stateFirstOverlap &&
