@@ -906,12 +906,14 @@ const PairOutcome *reduceOutcomes(Exec &ex, const StageSettings &st, bool small,
     ex.forEach(bound,
                [=] RC_LAMBDA(std::size_t c)
                {
-                   // Past the first overlap nothing is read; before it, only where the first contact is (a
-                   // colliding state's other pairs may be undecided: pastFirstOverlap).
-                   const unsigned long long first = c < survivors.size() ? firstOverlap[decided[c].state] : kNoneFound;
+                   keep[c] = 0;
+                   if (c >= survivors.size())
+                       return;
+                   // Past the first overlap nothing is read; before it, only where the first contact
+                   // is (a colliding state's other pairs may be undecided: pastFirstOverlap).
+                   const unsigned long long first = firstOverlap[decided[c].state];
                    const bool read = first == kNoneFound || c == first || (firstContacts && c < first);
-                   keep[c] =
-                       c < survivors.size() && (!onlyDecisive || (decided[c].status != PairApart && read)) ? 1 : 0;
+                   keep[c] = !onlyDecisive || (decided[c].status != PairApart && read) ? 1 : 0;
                });
     std::uint32_t *kept = ex.template buffer<std::uint32_t>(BufferKept, bound + 1);
     ex.selectFlagged(keep, bound, kept, numKept);
