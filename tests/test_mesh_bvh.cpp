@@ -594,15 +594,6 @@ TEST(SurfacesWithin, MatchesBruteForceOverAllTrianglePairs)
     }
 }
 
-/** \brief The depth of the finest split the stages make of a walk (kMaxWalkParts = 2^depth). */
-std::uint32_t deepestWalkSplit()
-{
-    std::uint32_t depth = 0;
-    while ((1u << depth) < rc::device::kMaxWalkParts)
-        ++depth;
-    return depth;
-}
-
 TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
 {
     // The stages share one pair's walk among threads (WalkPart, walkPartStart): walked one after the
@@ -625,7 +616,7 @@ TEST(SurfacesWithin, AWalkSplitIntoPartsFindsTheWholeWalksFirstContact)
                 rc::device::ExactContact whole;
                 const bool meet = rc::device::surfacesWithin(ta, poseA, tb, poseB, padding, &whole);
                 touching += meet;
-                for (std::uint32_t depth : {1u, 2u, 3u, 5u, deepestWalkSplit()})
+                for (std::uint32_t depth : {1u, 2u, 3u, 5u, rc::device::walkPartDepth(rc::device::kMaxWalkParts)})
                 {
                     const std::uint32_t numParts = 1u << depth;
                     bool found = false;
@@ -1250,7 +1241,7 @@ TEST(Traversal, TheWalksPartsOneAfterTheOtherVisitTheWholeWalksLeafPairsInItsOrd
         const double reach = 0.5 + u(rng) / 20.0;
         Within whole{lines, reach, {}};
         ASSERT_EQ(rc::device::walkPairs(treeA.data(), treeB.data(), whole), rc::device::WalkEnd::Finished);
-        for (std::uint32_t depth = 0; depth <= deepestWalkSplit(); ++depth)
+        for (std::uint32_t depth = 0; depth <= rc::device::walkPartDepth(rc::device::kMaxWalkParts); ++depth)
         {
             Within parts{lines, reach, {}};
             int partsVisiting = 0;

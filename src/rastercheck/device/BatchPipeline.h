@@ -309,15 +309,6 @@ RC_HD std::uint32_t walkPartsPerPair(std::size_t pairs, std::uint32_t parts, std
     return perPair;
 }
 
-/** \brief The bits of a part's path for \a perPair parts (a power of two). */
-RC_HD std::uint32_t walkPartDepth(std::uint32_t perPair)
-{
-    std::uint32_t depth = 0;
-    while ((2u << depth) <= perPair)
-        ++depth;
-    return depth;
-}
-
 /** \brief What the stages did, summed over the chunks of a runner's passes: how much work the
     culls left (benchmarks, tuning). */
 struct StageCounts

@@ -32,6 +32,15 @@ constexpr int kPairStackSize = 2 * kMaxTreeDepth + 2;
 constexpr std::uint32_t kMaxWalkParts = 64;
 static_assert((kMaxWalkParts & (kMaxWalkParts - 1)) == 0, "parts are paths of bits");
 
+/** \brief The bits of a part's path for \a perPair parts (a power of two; walkPartStart's depth). */
+RC_HD std::uint32_t walkPartDepth(std::uint32_t perPair)
+{
+    std::uint32_t depth = 0;
+    while ((2u << depth) <= perPair)
+        ++depth;
+    return depth;
+}
+
 /** \brief How a walk ended. */
 enum class WalkEnd : std::uint8_t
 {
