@@ -14,6 +14,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <cub/block/block_scan.cuh>
@@ -404,7 +405,7 @@ public:
         if (n == 0)
             return;
         ++counts_.launches;
-        recorder_.issue([this, n, f] { launch(&forEachKernel<F>, blocksFor(n, threads_), threads_, n, f); },
+        recorder_.issue([this, n, f] { launchOver(&forEachKernel<F>, n, n, f); },
                         reinterpret_cast<const void *>(&forEachKernel<F>), n, f);
     }
 
@@ -428,8 +429,7 @@ public:
         if (extent.bound == 0)
             return;
         ++counts_.launches;
-        recorder_.issue([this, extent, f]
-                        { launch(&forEachCountedKernel<F>, blocksFor(extent.bound, threads_), threads_, extent, f); },
+        recorder_.issue([this, extent, f] { launchOver(&forEachCountedKernel<F>, extent.bound, extent, f); },
                         reinterpret_cast<const void *>(&forEachCountedKernel<F>), extent, f);
     }
 
@@ -508,7 +508,14 @@ public:
         total, copied to *total (device memory, not waited for). */
     void exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n, unsigned long long *total)
     {
-        ++counts_.launches;
+        ++counts_.launches;  // as the host executor counts, whose scan of nothing writes a total of 0
+        if (n == 0)
+        {
+            recorder_.issue([this, total]
+                            { check(cudaMemsetAsync(total, 0, sizeof(*total), stream_), "cudaMemsetAsync (total)"); },
+                            kZeroCount, total);
+            return;
+        }
         if (n <= kOneBlockMost)
         {
             recorder_.issue([=] { launch(&oneBlockExclusiveSumKernel, 1, kOneBlockThreads, in, out, n, total); },
@@ -587,14 +594,39 @@ private:
         cudaError_t status = cudaLaunchKernelEx(&config, kernel, args...);
         if (status != cudaSuccess && config.numAttrs > 0)
         {
-            // A driver that refuses the attribute: this executor launches as before from now on.
+            // A driver that refuses the attribute: this executor launches as before from now on
+            // (where the launch fails without it too, the attribute was not the cause).
             cudaGetLastError();
-            programmaticLaunch_ = false;
             config.attrs = nullptr;
             config.numAttrs = 0;
             status = cudaLaunchKernelEx(&config, kernel, args...);
+            programmaticLaunch_ = status != cudaSuccess;
         }
         check(status, "kernel launch");
+    }
+
+    /** \brief \a kernel over \a n elements in blocks of threads_, or of as many as its registers
+        allow where that is fewer (RASTERCHECK_CUDA_BLOCK_THREADS past what the light proof's registers
+        leave room for: a block's threads share an SM's 64 K registers). */
+    template <class... Params, class... Args>
+    void launchOver(void (*kernel)(Params...), std::size_t n, Args... args)
+    {
+        const unsigned threads = std::min(threads_, mostThreads(reinterpret_cast<const void *>(kernel)));
+        launch(kernel, blocksFor(n, threads), threads, args...);
+    }
+
+    /** \brief The most threads a block of \a kernel may have (cudaFuncGetAttributes, once per kernel),
+        in whole warps. */
+    unsigned mostThreads(const void *kernel)
+    {
+        const auto known = mostThreads_.find(kernel);
+        if (known != mostThreads_.end())
+            return known->second;
+        cudaFuncAttributes attributes{};
+        check(cudaFuncGetAttributes(&attributes, kernel), "cudaFuncGetAttributes");
+        const unsigned most = std::max(32u, static_cast<unsigned>(attributes.maxThreadsPerBlock) / 32u * 32u);
+        mostThreads_.emplace(kernel, most);
+        return most;
     }
 
     using Recorder = PassRecorder<GraphExec>;
@@ -745,6 +777,7 @@ private:
     /// refuses the attribute at a launch or in a graph (launch, compile)
     bool programmaticLaunch_;
     unsigned threads_;  ///< per block, forEach and forEachCounted (blockThreads())
+    std::unordered_map<const void *, unsigned> mostThreads_;  ///< per kernel (mostThreads())
     Recorder recorder_;
 };
 
@@ -761,6 +794,31 @@ const T *uploadOnce(std::vector<DeviceAllocation> &keep, const T *source, std::s
         check(cudaMemcpy(p, source, count * sizeof(T), cudaMemcpyHostToDevice), "cudaMemcpy (model)");
     return static_cast<const T *>(p);
 }
+
+/** \brief Makes \a device the calling thread's current one for the scope's life, then restores the
+    thread's own (each host thread has a current device; a caller's may not be the model's). */
+class DeviceScope
+{
+public:
+    explicit DeviceScope(int device)
+    {
+        check(cudaGetDevice(&previous_), "cudaGetDevice");
+        if (previous_ != device)
+            check(cudaSetDevice(device), "cudaSetDevice");
+        device_ = device;
+    }
+    ~DeviceScope()
+    {
+        if (previous_ != device_)
+            cudaSetDevice(previous_);
+    }
+    DeviceScope(const DeviceScope &) = delete;
+    DeviceScope &operator=(const DeviceScope &) = delete;
+
+private:
+    int previous_ = 0;
+    int device_ = 0;
+};
 
 /** \brief The stages on the device: the model uploaded once; each concurrent pass has its own
     stream and scratch within budget_ (PooledStageRunner), and a pass that finds the device full
@@ -779,6 +837,7 @@ public:
           deviceName_(std::move(deviceName)),
           blockThreads_(blockThreads())
     {
+        check(cudaGetDevice(&device_), "cudaGetDevice");
         const std::size_t m = static_cast<std::size_t>(host.numComponents);
         const std::size_t o = static_cast<std::size_t>(host.numObjects);
         arrays_ = host;
@@ -865,7 +924,17 @@ public:
 
     std::string name() const override { return "cuda (" + deviceName_ + ")"; }
 
+    /** \brief A pass on the model's device, whichever device the calling thread has current (its
+        executor, made on first use, lives there too). */
+    void run(const double *q, const std::uint8_t *admissible, std::size_t n, const device::StageSettings &settings,
+             std::vector<device::PairOutcome> &outcomes) override
+    {
+        const DeviceScope scope(device_);
+        PooledStageRunner::run(q, admissible, n, settings, outcomes);
+    }
+
 private:
+    int device_ = 0;  ///< the device current when the model was uploaded
     std::string deviceName_;
     unsigned blockThreads_;  ///< threads per block of the executors' light kernels (blockThreads())
     std::vector<DeviceAllocation> model_memory_;  // what arrays_ point into

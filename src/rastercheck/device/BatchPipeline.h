@@ -405,10 +405,12 @@ enum Tally : int
 struct Extent
 {
     std::size_t bound;
-    const unsigned long long *count;
+    const unsigned long long *count;  ///< executor memory: a GPU's on the CUDA executor
 
-    RC_HD bool fits() const { return *count <= bound; }
-    RC_HD std::size_t size() const { return fits() ? static_cast<std::size_t>(*count) : 0; }
+    // Device code alone may read the count (RC_DEVICE: the host reads a tally from the chunk's
+    // download); executor memory is the host's on the host executor, a GPU's on the CUDA one.
+    RC_DEVICE bool fits() const { return *count <= bound; }
+    RC_DEVICE std::size_t size() const { return fits() ? static_cast<std::size_t>(*count) : 0; }
 };
 
 /** \brief \a n rounded up to a step of a quarter of its power of two (at most a quarter more), at
@@ -995,7 +997,7 @@ ChunkPass finishPass(Exec &ex, const ModelArrays &md, const StageSettings &st, c
     ex.wait();
     guesses.survivorsPerState =
         grownRate(guesses.survivorsPerState, static_cast<std::size_t>(tally[TallyCandidates]), numStates);
-    if (!survivors.fits())
+    if (tally[TallyCandidates] > survivors.bound)
         return ChunkPass::Rerun;  // nothing ran past the culls; the raster's counts are not measured
     if (st.rasterize)
     {

@@ -9,12 +9,18 @@
 // would copy them into every caller (the kernel with the exact phase took nvcc over half an hour
 // to compile fully inlined) and give each copy its own registers. On the host they are inline as
 // usual, which leaves the choice to the compiler.
+//
+// RC_DEVICE marks what only device code may call where nvcc compiles it (a read of executor
+// memory, which on a GPU the host cannot dereference), so that a host-side call fails to compile
+// in the CUDA build even though the host executor, compiled by g++, runs the same code.
 #if defined(__CUDACC__)
 #define RC_HD __host__ __device__ __forceinline__
 #define RC_HD_CALL __host__ __device__ __noinline__
+#define RC_DEVICE __device__ __forceinline__
 #else
 #define RC_HD inline
 #define RC_HD_CALL inline
+#define RC_DEVICE inline
 #endif
 
 // RC_ROLLED_LOOP before a loop keeps nvcc from unrolling it (on the host, nothing): an unrolled
