@@ -8,21 +8,22 @@
 // limit), the same with simplification, median path length raw and simplified, states checked,
 // how many runs have a start or goal that the exact checker puts in collision (MotionBenchMaker
 // made its problems with other collision models; no exact planner can solve those), and on the
-// staged backends (cuda, host-stages) the checker's calls, chunks, chunks run again, waits and
-// launches.
+// staged backends (cuda, host-stages) the checker's calls per solve on them (median, p95, max) and
+// over all runs its calls, chunks, chunks run again, waits and launches.
 //
 // usage: rastercheck_bench_planners [robots=panda,ur5,fetch] [problems_per_scenario=5]
 //                                   [time_limit_s=2] [batch_size=8] [first_problem=1]
 //                                   [planners=fcl,rrtconnect,batch,eager] [lazy_samples=2]
 //                                   [range_fraction=0] [lazy_limit=300] [backend=cpu] [threads=1]
 //                                   [edge_sizing=bisection|clearance|hullbound] [margin=0]
-//                                   [device_batch=32]
+//                                   [device_batch=32] [decide_together=-1]
 // (backend and threads: the rastercheck checker's, CheckerOptions; threads 0 = every core; FCL
 // always runs on one core)
 // (margin: CertifiedMotionOptions::margin, scene units; 0: its default, a tenth of the robot's size)
 // (batch_size 0: BatchRRTConnect's default, by the backend; device_batch: CheckerOptions::minDeviceBatch
 // with backend cuda or host-stages, 32 = every batch the device can take, 0 = the library's automatic
 // threshold)
+// (decide_together: BatchRRTConnect's, -1 by the backend, 0 one candidate at a time, 1 a round's together)
 // (range_fraction > 0: every planner's range is that fraction of the space's maximum extent;
 // 0: each planner's default, OMPL's fifth of the extent)
 // (a subset of planners: for profiling one of them; the others' rows stay empty; "eager" is
@@ -68,6 +69,9 @@ struct Tally
     std::vector<double> simplifiedTimes;  ///< solve + simplification (s), unsolved at the limit
     std::vector<double> lengths, simplifiedLengths;
     std::vector<double> states;  ///< states the rastercheck checker decided per run
+    /// per run, the checker's calls on the staged backend (cuda, host-stages) during the solve: each
+    /// at least a device's fixed cost of a call, and the calls of a solve follow one another
+    std::vector<double> stagedCalls;
 };
 
 bool collisionFree(const og::PathGeometric &path, const rastercheck::ompl::StateValidityChecker &oracle)
@@ -93,10 +97,14 @@ void run(og::SimpleSetup &setup, const ob::PlannerPtr &planner, bool batchShortc
     setup.clear();
     rastercheck::ompl::resetCheckedStates(setup);
     setup.setPlanner(planner);
+    const auto *staged = dynamic_cast<const StagedBackend *>(&oracle.getCheckerPtr()->backend());
+    const std::uint64_t callsBefore = staged ? staged->executorCounts().calls : 0;
     const auto begin = std::chrono::steady_clock::now();
     const ob::PlannerStatus status = rastercheck::ompl::solveWithin(setup, timeLimit);
     const bool solved = status == ob::PlannerStatus::EXACT_SOLUTION;
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+    if (staged && setup.getStateValidityChecker().get() == &oracle)  // the planner ran on the oracle's checker
+        tally.stagedCalls.push_back(static_cast<double>(staged->executorCounts().calls - callsBefore));
     ++tally.attempts;
     tally.states.push_back(static_cast<double>(rastercheck::ompl::checkedStates(setup)));
     if (!solved || !collisionFree(setup.getSolutionPath(), oracle))
@@ -156,6 +164,7 @@ int main(int argc, char **argv)
     const int checkerThreads = argc > 11 ? std::atoi(argv[11]) : 1;
     const double margin = argc > 13 ? std::atof(argv[13]) : 0.0;
     const std::size_t deviceBatch = argc > 14 ? static_cast<std::size_t>(std::atol(argv[14])) : 32u;
+    const int decideTogether = argc > 15 ? std::atoi(argv[15]) : -1;
     auto runs = [&](const std::string &name) { return std::find(chosen.begin(), chosen.end(), name) != chosen.end(); };
     ::ompl::msg::setLogLevel(::ompl::msg::LOG_ERROR);
     const std::string root = bench::sharedDataOrExit();
@@ -238,6 +247,7 @@ int main(int argc, char **argv)
                 planner->setLazy(lazy);
                 planner->setLazySamples(lazySamples);
                 planner->setLazyLimit(lazyLimit);
+                planner->setDecideTogether(decideTogether);
                 planner->setRange(range);
                 return planner;
             };
@@ -351,6 +361,16 @@ int main(int argc, char **argv)
                 "max %.1f ms.\n\n",
                 setupSeconds.size(), 1e3 * setupSeconds.front(), later.empty() ? 0.0 : 1e3 * quantile(later, 0.5),
                 later.empty() ? 0.0 : 1e3 * *std::max_element(later.begin(), later.end()));
+        }
+        // A solve's calls on the stages come one after another: on a device each costs at least a
+        // call's fixed latency, whatever its size.
+        for (const std::string &label : labels)
+        {
+            const std::vector<double> &calls = tallies[label].stagedCalls;
+            if (!calls.empty())
+                std::printf("%s: calls on the staged backend per solve: median %.0f, p95 %.0f, max %.0f.\n\n",
+                            label.c_str(), quantile(calls, 0.5), quantile(calls, 0.95),
+                            *std::max_element(calls.begin(), calls.end()));
         }
         // What the batches cost a device in fixed costs: a chunk run again (a count outgrew what
         // the executor's earlier chunks needed) is a second pass and more waits.

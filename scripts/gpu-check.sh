@@ -111,17 +111,16 @@ run() {
                 step bench-safe-nopdl 200 env RASTERCHECK_CUDA_PDL=0 .gpu/bin/rastercheck_bench_backends 1000 safe ;;
             plan)
                 # BatchRRTConnect on Panda problems 1-10 of every scenario, certified edges, 1 s: the
-                # checker on the GPU (batches of 8 and 256 samples, every batch of 32 states or more
-                # on the device; and the library's defaults: samples by the backend, the automatic
-                # device threshold, which on 16 threads keeps rounds of 8 on the CPU) and on every
-                # CPU core, and on one.
-                step plan-cuda-8 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cuda 0
+                # checker on the GPU, rounds of 256 samples, every batch of 32 states or more on the
+                # device, a round's candidates decided together (the default there: fewer, larger
+                # calls) and one at a time (their small rakes on the CPU), and together with every
+                # call on the device; the library's defaults (samples by the backend, the automatic
+                # device threshold, which on 16 threads keeps rounds of 8 on the CPU); every CPU core.
                 step plan-cuda-256 100 .gpu/bin/rastercheck_bench_planners panda 10 1 256 1 batch 2 0 300 cuda 0
+                step plan-cuda-256-one 100 .gpu/bin/rastercheck_bench_planners panda 10 1 256 1 batch 2 0 300 cuda 0 bisection 0 32 0
+                step plan-cuda-256-every 100 .gpu/bin/rastercheck_bench_planners panda 10 1 256 1 batch 2 0 300 cuda 0 bisection 0 1
                 step plan-cuda-auto 100 .gpu/bin/rastercheck_bench_planners panda 10 1 0 1 batch 2 0 300 cuda 0 bisection 0 0
-                step plan-cpu 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 0
-                # The same on one CPU thread: whether the parallel regions of a planner's small
-                # batches cost more than they give on many cores.
-                step plan-cpu-1 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 1 ;;
+                step plan-cpu 100 .gpu/bin/rastercheck_bench_planners panda 10 1 8 1 batch 2 0 300 cpu 0 ;;
             profile)
                 # Registers per thread and occupancy of every kernel of a few small and large Panda batches.
                 step profile 200 ncu --clock-control none --section SpeedOfLight --section LaunchStats --section Occupancy --launch-count 120 \

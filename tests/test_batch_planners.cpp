@@ -290,21 +290,26 @@ TEST(BatchRRTConnect, SizesItsBatchesByTheBackend)
         setAcrossTheWall(*setup);
         return setup;
     };
+    // A connection round's candidates are decided together where the iterations' states reach the
+    // device, and one at a time where they run on the CPU.
     struct Case
     {
         rc::BackendChoice backend;
         std::size_t deviceBatch;
         bool lazy;
         unsigned int batchSize, expected;
+        bool together;
     };
-    for (const Case &c : {Case{rc::BackendChoice::Cpu, 0, true, 0, 8}, Case{rc::BackendChoice::Cpu, 0, true, 16, 16},
-                          Case{rc::BackendChoice::HostStages, 64, true, 0, 256},
-                          Case{rc::BackendChoice::HostStages, 2000, true, 0, 1000},
-                          Case{rc::BackendChoice::HostStages, 2000, false, 0, 2000},
-                          Case{rc::BackendChoice::HostStages, 0, true, 0, 2048},  // 4096 per CPU thread
-                          Case{rc::BackendChoice::HostStages, 8192, true, 0, 4096},
-                          Case{rc::BackendChoice::HostStages, 8194, true, 0, 8},  // 4097 would be needed
-                          Case{rc::BackendChoice::HostStages, 64, true, 16, 16}})
+    for (const Case &c :
+         {Case{rc::BackendChoice::Cpu, 0, true, 0, 8, false}, Case{rc::BackendChoice::Cpu, 0, true, 16, 16, false},
+          Case{rc::BackendChoice::HostStages, 64, true, 0, 256, true},
+          Case{rc::BackendChoice::HostStages, 2000, true, 0, 1000, true},
+          Case{rc::BackendChoice::HostStages, 2000, false, 0, 2000, true},
+          Case{rc::BackendChoice::HostStages, 0, true, 0, 2048, true},  // 4096 per CPU thread
+          Case{rc::BackendChoice::HostStages, 8192, true, 0, 4096, true},
+          Case{rc::BackendChoice::HostStages, 8194, true, 0, 8, false},  // 4097 would be needed
+          Case{rc::BackendChoice::HostStages, 64, true, 16, 16, false},  // 32 states a round
+          Case{rc::BackendChoice::HostStages, 64, true, 32, 32, true}})
     {
         og::SimpleSetupPtr setup = planWith(c.backend, c.deviceBatch);
         rcp::BatchRRTConnect planner(setup->getSpaceInformation());
@@ -314,6 +319,13 @@ TEST(BatchRRTConnect, SizesItsBatchesByTheBackend)
         planner.setup();
         EXPECT_EQ(planner.samplesPerBatch(), c.expected)
             << "device batch " << c.deviceBatch << (c.lazy ? ", lazy" : ", eager") << ", batch_size " << c.batchSize;
+        EXPECT_EQ(planner.decidesCandidatesTogether(), c.together)
+            << "device batch " << c.deviceBatch << (c.lazy ? ", lazy" : ", eager") << ", batch_size " << c.batchSize;
+        for (const int choice : {0, 1})  // an explicit choice stands
+        {
+            planner.setDecideTogether(choice);
+            EXPECT_EQ(planner.decidesCandidatesTogether(), choice == 1);
+        }
     }
     // A solve on the stages: its batches run there, and its path is collision-free.
     og::SimpleSetupPtr setup = planWith(rc::BackendChoice::HostStages, 64);
@@ -324,6 +336,45 @@ TEST(BatchRRTConnect, SizesItsBatchesByTheBackend)
     const og::PathGeometric path = solveAndCheck(*setup, 60.0);
     EXPECT_GE(path.getStateCount(), 2u);
     EXPECT_GT(stages->executorCounts().calls, 0u);
+}
+
+TEST(BatchRRTConnect, DecidingARoundsCandidatesTogetherMakesFewerCalls)
+{
+    // Every call on the stages (minDeviceBatch 1), 256 samples an iteration: the same seeded solves
+    // with each round's candidates decided one at a time and together. Together, each level of one
+    // rake decides them all, where one at a time each candidate takes a rake of its own.
+    RASTERCHECK_REQUIRE_DATA(root);
+    for (const char *scenario : {"bookshelf_small", "box"})
+    {
+        std::size_t calls[2] = {0, 0};
+        unsigned int rejected[2] = {0, 0};
+        for (const int together : {0, 1})
+        {
+            rco::SetupOptions options;
+            options.checker.backend = rc::BackendChoice::HostStages;
+            options.checker.threads = 1;
+            options.checker.minDeviceBatch = 1;
+            og::SimpleSetupPtr setup = rco::makeSimpleSetup(rc::test::pandaProblem(root, scenario), options);
+            rco::setStartAndGoal(
+                *setup, rc::loadMoveItRequest(root + "/mbm/panda/problems/" + scenario + "_panda/request0001.yaml"));
+            const auto *stages =
+                dynamic_cast<const rc::StagedBackend *>(&rco::getStateValidityChecker(*setup)->getChecker().backend());
+            ASSERT_NE(stages, nullptr);
+            auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
+            planner->setBatchSize(256);
+            planner->setDecideTogether(together);
+            setup->setPlanner(planner);
+            rc::test::seedOmpl(11);
+            ASSERT_EQ(setup->solve(60.0), ob::PlannerStatus::EXACT_SOLUTION) << scenario;
+            calls[together] = stages->executorCounts().calls;
+            rejected[together] = planner->getRejectedCandidateCount();
+            EXPECT_TRUE(collisionFree(*setup, setup->getSolutionPath())) << scenario;
+            EXPECT_EQ(planner->decidesCandidatesTogether(), together == 1);
+        }
+        EXPECT_GT(rejected[0], 2u) << scenario << ": too easy a problem to compare";
+        EXPECT_LT(2 * calls[1], calls[0])
+            << scenario << ": " << calls[1] << " calls together, " << calls[0] << " one at a time";
+    }
 }
 
 TEST(BatchRRTConnect, SeededRunsRepeat)
@@ -424,9 +475,14 @@ TEST(BatchRRTConnect, ParametersAndRegistry)
                                          {"shortcut", "1"},
                                          {"lazy", "0"},
                                          {"lazy_samples", "3"},
-                                         {"lazy_limit", "50"}});
+                                         {"lazy_limit", "50"},
+                                         {"decide_together", "1"}});
     auto batch = std::static_pointer_cast<rcp::BatchRRTConnect>(planner);
     EXPECT_FALSE(batch->getLazy());
+    EXPECT_EQ(batch->getDecideTogether(), 1);
+    EXPECT_TRUE(batch->decidesCandidatesTogether());  // on the CPU backend, as asked
+    EXPECT_THROW(rco::setPlannerParameters(*planner, {{"decide_together", "2"}}), rc::ConfigurationError);
+    EXPECT_EQ(batch->getDecideTogether(), 1);
     EXPECT_EQ(batch->getLazySamples(), 3u);
     EXPECT_EQ(batch->getLazyLimit(), 50u);
     EXPECT_THROW(rco::setPlannerParameters(*planner, {{"lazy_samples", "0"}}), rc::ConfigurationError);
@@ -612,7 +668,7 @@ TEST(BatchShortcutter, TakesALineThatPassesTheRakeOnlyWhenTheEdgeCheckerAcceptsI
     const auto from = at(-0.5, 0.9), to = at(0.5, 0.9);  // 1 m, through the wall's upper block
     std::vector<unsigned int> levels{0};
     std::vector<std::uint8_t> valid;
-    EXPECT_EQ(shortcutter.edgeChecker().rake({{from->get(), to->get()}}, levels, valid, false), 0u);
+    EXPECT_EQ(shortcutter.edgeChecker().rake({{from->get(), to->get()}}, levels, valid, nullptr), 0u);
     EXPECT_EQ(valid, std::vector<std::uint8_t>{1});
     shortcutter.edgeChecker().check({{from->get(), to->get()}}, valid);
     EXPECT_EQ(valid, std::vector<std::uint8_t>{0});
@@ -621,6 +677,68 @@ TEST(BatchShortcutter, TakesALineThatPassesTheRakeOnlyWhenTheEdgeCheckerAcceptsI
     shortcutter.shortcut(path, ob::timedPlannerTerminationCondition(30.0));
     EXPECT_TRUE(collisionFree(*setup, path));
     EXPECT_GE(path.getStateCount(), 3u);  // still through the gap
+}
+
+TEST(EdgeChecker, RakesCandidatePathsUntilEachHasARejectedEdge)
+{
+    // Five edges by the wall (its gap is |y| < 0.3, the robot a 0.2 m cube): e2 crosses the upper
+    // block at its midpoint, the others are free. Path {e0, e2} is rejected at the first level;
+    // e0 lies on {e0, e1, e3} too and is raked to the end, as alone; e4 lies only on {e2, e4},
+    // whose rejection at the first level leaves it at one level and one state.
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    options.longestValidSegmentFraction = 0.01;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    const ob::SpaceInformationPtr si = setup->getSpaceInformation();
+    si->setup();
+    const rco::StateMapping &mapping = rco::getStateValidityChecker(*setup)->getStateMapping();
+    std::vector<std::shared_ptr<ob::ScopedState<>>> kept;
+    auto at = [&](double x, double y)
+    {
+        std::vector<double> q = mapping.baseConfiguration();
+        q[0] = x;
+        q[1] = y;
+        kept.push_back(std::make_shared<ob::ScopedState<>>(si));
+        mapping.fromConfiguration(q, kept.back()->get());
+        return kept.back()->get();
+    };
+    const std::vector<rco::Edge> edges{{at(-1.0, 0.0), at(-0.4, 0.0)},
+                                       {at(-0.4, 0.0), at(0.4, 0.0)},
+                                       {at(-0.4, 0.0), at(0.4, 1.0)},
+                                       {at(0.4, 0.0), at(1.0, 0.0)},
+                                       {at(0.4, 1.0), at(1.0, 1.0)}};
+    const rcp::EdgeChecker checker(si);
+    // Each edge raked alone: the levels and states it takes.
+    std::vector<unsigned int> alone(edges.size());
+    std::vector<std::size_t> statesAlone(edges.size());
+    std::vector<std::uint8_t> valid;
+    for (std::size_t e = 0; e < edges.size(); ++e)
+    {
+        std::vector<unsigned int> levels{0};
+        statesAlone[e] = checker.rake({edges[e]}, levels, valid, nullptr);
+        alone[e] = levels[0];
+        EXPECT_EQ(valid[0], e == 2 ? 0 : 1) << "edge " << e;
+    }
+    ASSERT_EQ(statesAlone[2], 1u);  // its midpoint
+    ASSERT_GE(alone[4], 3u);
+
+    const std::vector<std::vector<std::size_t>> paths{{0, 2}, {0, 1, 3}, {2, 4}};
+    std::vector<unsigned int> levels(edges.size(), 0);
+    const std::size_t states = checker.rake(edges, levels, valid, &paths);
+    EXPECT_EQ(valid, (std::vector<std::uint8_t>{1, 1, 0, 1, 1}));
+    EXPECT_EQ(levels, (std::vector<unsigned int>{alone[0], alone[1], 0, alone[3], 1}));
+    EXPECT_EQ(states, statesAlone[0] + statesAlone[1] + 1 + statesAlone[3] + 1);
+
+    // Without paths every edge goes on alone: the same as one by one.
+    levels.assign(edges.size(), 0);
+    EXPECT_EQ(checker.rake(edges, levels, valid, nullptr),
+              statesAlone[0] + statesAlone[1] + 1 + statesAlone[3] + statesAlone[4]);
+    EXPECT_EQ(levels, (std::vector<unsigned int>{alone[0], alone[1], 0, alone[3], alone[4]}));
+    // Every path rejected: the rake ends after the level that rejected the last.
+    const std::vector<std::vector<std::size_t>> blocked{{0, 2}, {2, 4}};
+    levels.assign(edges.size(), 0);
+    EXPECT_EQ(checker.rake(edges, levels, valid, &blocked), 3u);
+    EXPECT_EQ(levels, (std::vector<unsigned int>{1, 0, 0, 0, 1}));
 }
 
 TEST(EdgeChecker, UsesTheSetupsBatchValidatorElseItsOwnCertifiedOne)

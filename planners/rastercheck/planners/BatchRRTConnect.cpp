@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <map>
 
 #include <ompl/base/goals/GoalSampleableRegion.h>
 #include <ompl/geometric/PathGeometric.h>
@@ -29,6 +30,16 @@ BatchRRTConnect::BatchRRTConnect(const ob::SpaceInformationPtr &si) : ob::Planne
                                "1:1:1000000");
     declareParam<unsigned int>("lazy_samples", this, &BatchRRTConnect::setLazySamples, &BatchRRTConnect::getLazySamples,
                                "1:1:64");
+    declareParam<int>("decide_together", this, &BatchRRTConnect::setDecideTogether, &BatchRRTConnect::getDecideTogether,
+                      "-1:1:1");
+}
+
+void BatchRRTConnect::setDecideTogether(int choice)
+{
+    if (choice < -1 || choice > 1)
+        throw ConfigurationError(getName() + ": decide_together must be -1 (by the backend), 0 or 1, got " +
+                                 std::to_string(choice));
+    decideTogether_ = choice;
 }
 
 void BatchRRTConnect::setLazySamples(unsigned int samples)
@@ -230,56 +241,111 @@ BatchRRTConnect::Motion *BatchRRTConnect::nearest(const Tree &tree, const Motion
     return motion;
 }
 
-bool BatchRRTConnect::decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided)
+bool BatchRRTConnect::decidesCandidatesTogether() const
 {
-    // The undecided edges of both branches (parent to child, as they were grown) and the bridge.
+    if (decideTogether_ >= 0)
+        return decideTogether_ == 1;
+    const std::size_t deviceBatch = edges_ ? edges_->deviceBatch() : 0;
+    return deviceBatch > 0 && samplesPerBatch() * std::size_t{lazy_ ? lazySamples_ : 1u} >= deviceBatch;
+}
+
+std::size_t BatchRRTConnect::decideCandidates(const std::vector<Candidate> &candidates)
+{
+    // The undecided edges of every candidate's branches (parent to child, as they were grown; each
+    // once, as candidates share their trees' edges) and the bridges: paths[c] lists candidate c's.
     std::vector<ompl::Edge> edges;
-    std::vector<Motion *> below;  ///< the motion under each tree edge; null for the bridge
-    for (Motion *end : {startEnd, goalEnd})
-        for (Motion *m = end; m->parent; m = m->parent)
-            if (!m->edgeDecided)
-            {
-                edges.push_back({m->parent->state, m->state});
-                below.push_back(m);
-            }
-    if (!bridgeDecided)
+    std::vector<Motion *> below;  ///< the motion under each tree edge; null for a bridge
+    std::vector<std::vector<std::size_t>> paths(candidates.size());
+    std::map<const Motion *, std::size_t> edgeOf;
+    for (std::size_t c = 0; c < candidates.size(); ++c)
     {
-        edges.push_back(bridge);
-        below.push_back(nullptr);
+        const Candidate &candidate = candidates[c];
+        for (Motion *end : {candidate.startEnd, candidate.goalEnd})
+            for (Motion *m = end; m->parent; m = m->parent)
+                if (!m->edgeDecided)
+                {
+                    const auto [at, added] = edgeOf.emplace(m, edges.size());
+                    if (added)
+                    {
+                        edges.push_back({m->parent->state, m->state});
+                        below.push_back(m);
+                    }
+                    paths[c].push_back(at->second);
+                }
+        if (!candidate.bridgeDecided)
+        {
+            paths[c].push_back(edges.size());
+            edges.push_back(candidate.bridge);
+            below.push_back(nullptr);
+        }
+        if (paths[c].empty())
+            return c;  // eager mode: every edge was decided when it was grown
     }
-    if (edges.empty())
-        return true;  // eager mode: every edge was decided when it was grown
-    ++candidates_;
+
     // Most candidates cross an obstacle that the few states of their edges missed: states at
     // rising density find that for a fraction of a certification's cost. Only a candidate that
     // passes them at the space's resolution is certified.
     std::vector<std::uint8_t> valid;
     std::vector<unsigned int> levels;
     for (const Motion *m : below)
-        levels.push_back(m ? m->rakedLevels : lazyRakedLevels());  // the bridge was a lazy step
-    rakedStates_ += edges_->rake(edges, levels, valid, true);
-    const bool certify = std::all_of(valid.begin(), valid.end(), [](std::uint8_t v) { return v != 0; });
+        levels.push_back(m ? m->rakedLevels : lazyRakedLevels());  // a bridge was a lazy step
+    rakedStates_ += edges_->rake(edges, levels, valid, &paths);
     for (std::size_t e = 0; e < edges.size(); ++e)
         if (below[e])
             below[e]->rakedLevels = levels[e];
-    if (certify)
-        edges_->check(edges, valid);
-    bool accepted = true;
-    for (std::size_t e = 0; e < edges.size(); ++e)
+    // The survivors in order, each certified (its edges not certified yet) until one is accepted.
+    auto accepted = [&](std::size_t c)
+    { return std::all_of(paths[c].begin(), paths[c].end(), [&](std::size_t e) { return valid[e] != 0; }); };
+    std::vector<std::uint8_t> certified(edges.size(), 0);
+    std::size_t found = candidates.size();
+    for (std::size_t c = 0; c < candidates.size() && found == candidates.size(); ++c)
     {
-        accepted = accepted && valid[e];
-        // An edge the rake did not reject is still undecided: only the EdgeChecker decides.
-        if (certify && below[e] && valid[e])
-            below[e]->edgeDecided = true;
+        if (!accepted(c))
+            continue;
+        std::vector<std::size_t> open;
+        std::vector<ompl::Edge> openEdges;
+        for (std::size_t e : paths[c])
+            if (!certified[e])
+            {
+                open.push_back(e);
+                openEdges.push_back(edges[e]);
+            }
+        std::vector<std::uint8_t> openValid;
+        edges_->check(openEdges, openValid);
+        for (std::size_t k = 0; k < open.size(); ++k)
+        {
+            const std::size_t e = open[k];
+            valid[e] = openValid[k];
+            certified[e] = openValid[k];
+            // An edge the rake did not reject is still undecided: only the EdgeChecker decides.
+            if (below[e] && openValid[k])
+                below[e]->edgeDecided = true;
+        }
+        if (accepted(c))
+            found = c;
     }
-    // Cut after the loop: a rejected edge's subtree may hold another rejected edge of the branch.
+    // Cut after deciding: a rejected edge's subtree may hold another rejected edge of a branch.
     for (std::size_t e = 0; e < edges.size(); ++e)
         if (below[e] && !valid[e] && !below[e]->cut)
             cutSubtree(below[e]);
-    rejectedCandidates_ += accepted ? 0 : 1;
-    if (!accepted && lazyNow_ && rejectedCandidates_ >= lazyLimit_)
+    // Candidates and rejections count as deciding them one at a time would count them (lazy_limit's
+    // measure): a candidate on an edge rejected on an earlier counted one is not counted, since
+    // one at a time that edge's cut would have ended its line first.
+    std::vector<std::uint8_t> counted(edges.size(), 0);
+    for (std::size_t c = 0; c < candidates.size(); ++c)
+    {
+        const std::vector<std::size_t> &path = paths[c];
+        if (accepted(c) || std::any_of(path.begin(), path.end(), [&](std::size_t e) { return counted[e] != 0; }))
+            continue;
+        ++candidates_;
+        ++rejectedCandidates_;
+        for (std::size_t e : path)
+            counted[e] = !valid[e];
+    }
+    candidates_ += found < candidates.size() ? 1 : 0;
+    if (found == candidates.size() && lazyNow_ && rejectedCandidates_ >= lazyLimit_)
         abandonLaziness();
-    return accepted;
+    return found;
 }
 
 std::vector<const ob::State *> BatchRRTConnect::branch(const Motion *motion)
@@ -328,11 +394,31 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
     std::vector<std::uint8_t> endIsTarget;  ///< the step ends at its line's target, a tree state
     std::vector<std::uint8_t> valid;
     bool joined = false;
+    auto addSolution = [&](const Candidate &candidate)
+    {
+        connection_ = {candidate.startEnd, candidate.goalEnd};
+        std::vector<const ob::State *> states = branch(connection_.first);
+        const std::vector<const ob::State *> back = branch(connection_.second);
+        states.insert(states.end(), back.rbegin(), back.rend());
+        auto path = std::make_shared<og::PathGeometric>(si_);
+        for (const ob::State *state : states)
+            path->append(state);
+        if (shortcut_)
+            BatchShortcutter(si_, edges_).shortcut(*path, ptc);
+        pdef_->addSolutionPath(path, false, 0.0, getName());
+        joined = true;
+    };
+    // The lines that reached their targets this round; on the CPU each is decided at once, in turn.
+    const bool together = decidesCandidatesTogether();
+    std::vector<Candidate> joins;
+    std::vector<std::size_t> joinLines;
     for (bool live = !lines.empty(); live && !ptc && !joined;)
     {
         edges.clear();
         owner.clear();
         endIsTarget.clear();
+        joins.clear();
+        joinLines.clear();
         for (std::size_t l = 0; l < lines.size(); ++l)
         {
             Line &line = lines[l];
@@ -372,25 +458,28 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             }
             // Joined: root of the start tree ... last state of one tree, first of the other ... goal.
             const bool fromStart = line.other == &goalTree_;
-            Motion *startEnd = fromStart ? line.target : line.last;
-            Motion *goalEnd = fromStart ? line.last : line.target;
-            if (!decideCandidate(startEnd, goalEnd, edges[e], !lazyRound))
-            {
-                line.alive = false;
+            joins.push_back(
+                {fromStart ? line.target : line.last, fromStart ? line.last : line.target, edges[e], !lazyRound});
+            joinLines.push_back(owner[e]);
+            if (together)
                 continue;
+            if (decideCandidates(joins) == 0)
+            {
+                addSolution(joins[0]);
+                break;
             }
-            connection_ = {startEnd, goalEnd};
-            std::vector<const ob::State *> states = branch(connection_.first);
-            const std::vector<const ob::State *> back = branch(connection_.second);
-            states.insert(states.end(), back.rbegin(), back.rend());
-            auto path = std::make_shared<og::PathGeometric>(si_);
-            for (const ob::State *state : states)
-                path->append(state);
-            if (shortcut_)
-                BatchShortcutter(si_, edges_).shortcut(*path, ptc);
-            pdef_->addSolutionPath(path, false, 0.0, getName());
-            joined = true;
-            break;
+            line.alive = false;
+            joins.clear();
+            joinLines.clear();
+        }
+        if (together && !joins.empty())
+        {
+            const std::size_t c = decideCandidates(joins);
+            if (c < joins.size())
+                addSolution(joins[c]);
+            else
+                for (std::size_t l : joinLines)
+                    lines[l].alive = false;
         }
         for (ob::State *point : points)
             si_->freeState(point);

@@ -50,7 +50,8 @@ namespace rastercheck::planners
     "batch_size" (samples per iteration; 0, the default: by the checker's backend, see
     samplesPerBatch()), "shortcut" (0 or 1: shorten the solution with
     BatchShortcutter before returning it), "lazy" (0 or 1), "lazy_samples" (states per new edge
-    in lazy mode, >= 1) and "lazy_limit" (rejected candidates before a solve turns eager). Seeded
+    in lazy mode, >= 1), "lazy_limit" (rejected candidates before a solve turns eager) and
+    "decide_together" (-1, 0 or 1: setDecideTogether()). Seeded
     through OMPL's RNG like every OMPL planner: a run with the same seed and verdicts grows the
     same trees. Honours the termination
     condition between batches; goal regions must be sampleable (GoalSampleableRegion). */
@@ -78,6 +79,19 @@ public:
         kDeviceSamplesPerBatch[1] (the automatic threshold on many CPU threads: 4 096 states per
         thread), the iterations run on the CPU and take kCpuSamplesPerBatch. */
     unsigned int samplesPerBatch() const;
+    /** \brief Whether a connection round's candidate solutions are decided together, one rake for
+        all of them (each level of it one call), or one at a time, the first accepted ending the
+        round: decide_together 1 or 0; -1 (the default) by the backend: together where an
+        iteration's states reach the GPU (samplesPerBatch() samples, lazy_samples states each in
+        lazy mode, at least Checker::deviceBatch()), whose calls cost far more than their states.
+        Together, a solve makes fewer, larger calls and checks more states (Panda MotionBenchMaker
+        problems: 2.4x fewer calls, 2.2x the states; docs/benchmarks.md "A connection round's
+        candidates decided together"). (After setup().) */
+    bool decidesCandidatesTogether() const;
+    /** \brief 1: decide a round's candidates together; 0: one at a time; -1 (the default): by the
+        backend (decidesCandidatesTogether()). Throws ConfigurationError for another value. */
+    void setDecideTogether(int choice);
+    int getDecideTogether() const { return decideTogether_; }
     /** \brief Samples per iteration by default on the CPU (2, 4 and 8 were even on the Panda's
         MotionBenchMaker problems: docs/benchmarks.md "Tuning: why the defaults"). */
     static constexpr unsigned int kCpuSamplesPerBatch = 8;
@@ -131,11 +145,23 @@ private:
         (the end left out where \a endInTree says it is a tree's state, checked when it was added). */
     void checkNewEdges(const std::vector<ompl::Edge> &edges, std::vector<std::uint8_t> &valid,
                        const std::vector<std::uint8_t> *endInTree = nullptr);
-    /** \brief Decides the edges from both trees' roots to \a startEnd and \a goalEnd that are not
-        decided yet, and the \a bridge between them unless \a bridgeDecided, in one batch (after a
-        rake that rejects most failing candidates for less); cuts the subtree below each rejected
-        tree edge. True when every edge is accepted (at once when none needed deciding). */
-    bool decideCandidate(Motion *startEnd, Motion *goalEnd, const ompl::Edge &bridge, bool bridgeDecided);
+    /** \brief A candidate solution: a connection step (\a bridge) joined the start tree's \a startEnd
+        and the goal tree's \a goalEnd; \a bridgeDecided when the step was decided as it was grown
+        (eager mode). */
+    struct Candidate
+    {
+        Motion *startEnd = nullptr;
+        Motion *goalEnd = nullptr;
+        ompl::Edge bridge;
+        bool bridgeDecided = false;
+    };
+    /** \brief Decides \a candidates together: the edges from both trees' roots to their ends that
+        are not decided yet, and their bridges, each edge once, first by a rake of all of them (which
+        rejects most failing candidates for less), then the survivors' edges by the EdgeChecker, the
+        first survivor's first; cuts the subtree below each rejected tree edge. Returns the first
+        candidate (in order) whose every edge is accepted (at once when none needed deciding), else
+        candidates.size(). */
+    std::size_t decideCandidates(const std::vector<Candidate> &candidates);
     /** \brief The levels of EdgeChecker::rake that a lazy edge's own states (checkNewEdges) have
         checked already: as many as 2 divides lazy_samples. */
     unsigned int lazyRakedLevels() const;
@@ -167,6 +193,7 @@ private:
     bool lazyNow_ = true;  ///< lazy_, until this solve abandons laziness
     unsigned int lazyLimit_ = 300;
     unsigned int lazySamples_ = 2;
+    int decideTogether_ = -1;
     std::pair<const Motion *, const Motion *> connection_{nullptr, nullptr};  ///< (start tree, goal tree)
     unsigned int candidates_ = 0, rejectedCandidates_ = 0, cutMotions_ = 0;   ///< lazy mode, this solve
     std::uint64_t lazyStates_ = 0, rakedStates_ = 0;                          ///< lazy mode, this solve

@@ -118,7 +118,7 @@ bool BatchShortcutter::shortcut(og::PathGeometric &path, const ob::PlannerTermin
         if (edges_->certifies())
         {
             levels.assign(lines.size(), 0);
-            edges_->rake(lines, levels, valid, false);
+            edges_->rake(lines, levels, valid, nullptr);
         }
         else
             edges_->check(lines, valid);

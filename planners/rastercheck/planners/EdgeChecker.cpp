@@ -101,25 +101,41 @@ std::size_t EdgeChecker::checkAlong(const std::vector<ompl::Edge> &edges,
 }
 
 std::size_t EdgeChecker::rake(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
-                              std::vector<std::uint8_t> &valid, bool allMustPass) const
+                              std::vector<std::uint8_t> &valid,
+                              const std::vector<std::vector<std::size_t>> *paths) const
 {
     valid.assign(edges.size(), 1);
     const double segment = si_->getStateSpace()->getLongestValidSegmentLength();
     std::vector<double> length(edges.size());
     for (std::size_t e = 0; e < edges.size(); ++e)
         length[e] = si_->distance(edges[e].from, edges[e].to);
+    std::vector<std::uint8_t> live;  // the edge lies on a path not rejected yet
+    auto findLive = [&]
+    {
+        if (!paths)
+        {
+            live = valid;
+            return;
+        }
+        live.assign(edges.size(), 0);
+        for (const std::vector<std::size_t> &path : *paths)
+            if (std::all_of(path.begin(), path.end(), [&](std::size_t e) { return valid[e] != 0; }))
+                for (std::size_t e : path)
+                    live[e] = 1;
+    };
     std::vector<std::pair<std::size_t, double>> points;
     std::size_t checked = 0;
-    // Level L checks the odd multiples of 2^-L of every edge still longer than 2^-L times the
-    // segment length, not yet clean at that level and not yet rejected.
+    // Level L checks the odd multiples of 2^-L of every live edge still longer than 2^-L times the
+    // segment length and not yet clean at that level.
     for (unsigned int level = 1;; ++level)
     {
+        findLive();
         const double parts = std::ldexp(1.0, static_cast<int>(level));
         points.clear();
         bool deeper = false;  // some edge still needs this level
         for (std::size_t e = 0; e < edges.size(); ++e)
         {
-            if (!valid[e] || length[e] * 2.0 / parts <= segment)
+            if (!live[e] || length[e] * 2.0 / parts <= segment)
                 continue;
             deeper = true;
             if (level <= levels[e])
@@ -131,10 +147,8 @@ std::size_t EdgeChecker::rake(const std::vector<ompl::Edge> &edges, std::vector<
             break;
         checked += checkAlong(edges, points, valid);
         for (std::size_t e = 0; e < edges.size(); ++e)
-            if (valid[e] && levels[e] + 1 == level)
+            if (live[e] && valid[e] && levels[e] + 1 == level)
                 levels[e] = level;
-        if (allMustPass && !std::all_of(valid.begin(), valid.end(), [](std::uint8_t v) { return v != 0; }))
-            break;
     }
     return checked;
 }

@@ -43,12 +43,14 @@ public:
         down to the space's longest valid segment, one batch per level: most edges that cross an
         obstacle are rejected at a few states, for a fraction of what check() costs. valid[e] = 0
         for the edges where a state was rejected, 1 for the others. levels[e]: the levels edge e
-        passed before (skipped), and on return the levels it has passed now. With \a allMustPass
-        (the edges are one candidate path) the rake stops after the first level that rejects a
-        state; else it goes on with the edges not yet rejected. A state check, not a decision: an
-        edge the rake passes is decided only by check(). Returns the number of states checked. */
+        passed before (skipped), and on return the levels it has passed now. \a paths (candidate
+        paths, each the indices of its edges; an edge may lie on several): a path is rejected with
+        its first rejected edge, the rake goes on only with the edges of paths not rejected, and it
+        stops after the level that leaves none; null: every edge is a path of its own. A state check,
+        not a decision: an edge the rake passes is decided only by check(). Returns the number of
+        states checked. */
     std::size_t rake(const std::vector<ompl::Edge> &edges, std::vector<unsigned int> &levels,
-                     std::vector<std::uint8_t> &valid, bool allMustPass) const;
+                     std::vector<std::uint8_t> &valid, const std::vector<std::vector<std::size_t>> *paths) const;
 
     /** \brief The smallest batch of states that runs on the validity checker's GPU backend (or its
         host stages): Checker::deviceBatch(); 0 when its batches run on the CPU, or the validity
