@@ -198,7 +198,11 @@ int main(int argc, char **argv)
 
     // Motion validator: per-edge latency on random edges (OMPL's default resolution, 1 %). FCL
     // checks the same interpolated states one by one from the start, as DiscreteMotionValidator.
-    std::printf("\n| scene | checker | edges | mean latency per edge | states per edge |\n|---|---|---|---|---|\n");
+    // The staged backend takes every call (minDeviceBatch 1: an edge's few states would otherwise
+    // stay on the CPU), and its calls per edge are what a device's latency multiplies.
+    std::printf(
+        "\n| scene | checker | edges | mean latency per edge | states per edge | calls per edge |\n"
+        "|---|---|---|---|---|---|\n");
     for (const bench::SceneCase &c : cases)
         for (int choice = 0; choice < 5; ++choice)
         {
@@ -206,7 +210,9 @@ int main(int argc, char **argv)
             // at every point, not only at the states a resolution apart: more states per edge), 4: GPU
             // backend with certified edges (their midpoints' pair paddings ride with the batch).
             rastercheck::ompl::SetupOptions options;
-            options.checker.backend = choice == 2 || choice == 4 ? BackendChoice::Cuda : BackendChoice::Cpu;
+            const bool onStages = choice == 2 || choice == 4;
+            options.checker.backend = onStages ? stagedChoice : BackendChoice::Cpu;
+            options.checker.minDeviceBatch = onStages ? 1 : 0;
             options.request = request;
             if (choice >= 3)
             {
@@ -218,8 +224,10 @@ int main(int argc, char **argv)
             ::ompl::geometric::SimpleSetupPtr setup = rastercheck::ompl::makeSimpleSetup(problem, options);
             const rastercheck::ompl::StateValidityCheckerPtr checker =
                 rastercheck::ompl::getStateValidityChecker(*setup);
-            if ((choice == 2 || choice == 4) && checker->getChecker().backendName() == "cpu")
+            if (onStages && checker->getChecker().backendName() == "cpu")
                 continue;
+            const auto *staged = dynamic_cast<const StagedBackend *>(&checker->getChecker().backend());
+            const std::uint64_t callsBefore = staged ? staged->executorCounts().calls : 0;
             const ::ompl::base::SpaceInformationPtr &si = setup->getSpaceInformation();
             si->setup();
             auto sampler = si->allocStateSampler();
@@ -267,8 +275,12 @@ int main(int argc, char **argv)
             const std::string name = choice == 0 ? "FCL, 1 core"
                                      : checker->getChecker().backendName() + " backend" +
                                            (choice >= 3 ? ", certified edges" : "");
-            std::printf("| %s | %s | %d | %.1f us | %.1f |\n", c.name.c_str(), name.c_str(), edges,
-                        1e6 * elapsed / edges, static_cast<double>(states) / edges);
+            char calls[32] = "-";
+            if (staged)
+                std::snprintf(calls, sizeof calls, "%.2f",
+                              static_cast<double>(staged->executorCounts().calls - callsBefore) / edges);
+            std::printf("| %s | %s | %d | %.1f us | %.1f | %s |\n", c.name.c_str(), name.c_str(), edges,
+                        1e6 * elapsed / edges, static_cast<double>(states) / edges, calls);
             for (int e = 0; e < edges; ++e)
             {
                 si->freeState(from[e]);

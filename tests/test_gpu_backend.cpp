@@ -313,8 +313,9 @@ TEST(GpuBackend, TheCheckerSaysWhichDeviceItUses)
 TEST(GpuBackend, TheLightKernelsBlockSizeIsSetByTheEnvironmentAndABadOneIsNamed)
 {
     // RASTERCHECK_CUDA_BLOCK_THREADS sets the threads per block of the light kernels (64 unless
-    // set): another size gives the same verdicts; a size the device cannot take is a warning that
-    // names the variable, and the checker runs on the CPU.
+    // set): another size gives the same verdicts, 1024 too (a kernel whose registers cannot fill
+    // such a block takes as many threads as they allow); a malformed size is a warning that names
+    // the variable, and the checker runs on the CPU.
     const rc::test::StateSuite suite = rc::test::accuracySuites(200)[0];
     const std::unique_ptr<rc::Checker> gpu = gpuChecker(suite);
     REQUIRE_GPU(gpu);
@@ -328,6 +329,11 @@ TEST(GpuBackend, TheLightKernelsBlockSizeIsSetByTheEnvironmentAndABadOneIsNamed)
     const rc::CpuBackend cpu(sameModel(*wide));
     rc::test::expectSameDecisions(wide->backend(), cpu, wide->collisionModel(), suite.states, {},
                                   suite.name + " (256 threads a block)");
+    setenv("RASTERCHECK_CUDA_BLOCK_THREADS", "1024", 1);
+    const std::unique_ptr<rc::Checker> widest = gpuChecker(suite);
+    ASSERT_TRUE(widest) << "1024 threads a block should run on the device";
+    rc::test::expectSameDecisions(widest->backend(), cpu, widest->collisionModel(), suite.states, {},
+                                  suite.name + " (1024 threads a block, fewer where registers say so)");
     for (const char *bad : {"100", "2048", "0", "64x"})
     {
         setenv("RASTERCHECK_CUDA_BLOCK_THREADS", bad, 1);

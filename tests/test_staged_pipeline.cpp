@@ -19,6 +19,7 @@
 #include "BackendSuites.h"
 #include "BlindSpots.h"
 #include "TestSupport.h"
+#include "rastercheck/collision/Checker.h"
 #include "rastercheck/collision/PassRecorder.h"
 #include "rastercheck/collision/StageChunks.h"
 #include "rastercheck/collision/StagedBackend.h"
@@ -663,6 +664,64 @@ TEST(StagedPipeline, PerStatePairPaddingsMatchTheCpuBackend)
     {
         EXPECT_GT(pandaValid, 0u) << "every Panda state was invalid with its paddings: nothing free was compared";
     }
+}
+
+TEST(StagedPipeline, TwoPaddingsInOnePassGiveTheCpuBackendsVerdicts)
+{
+    // Certified midpoints' check at two paddings (Checker::checkTwoPaddings): the stages decide each
+    // state at the wider paddings and again at the request's in one pass of twice the states, with
+    // the verdicts of the CPU backend's one pass, every mode, with and without the request's own
+    // pair paddings per state; a batch above kTwoPaddingsInOnePassMost is left to the Checker.
+    const std::size_t states = sanitizerScaled(24);
+    std::size_t kinds[3] = {0, 0, 0};
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(states))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::CpuBackend cpu(model);
+        const rc::StagedBackend staged(model, poisonedStages(model));
+        const std::size_t n = suite.numStates();
+        const std::shared_ptr<rc::PairPadding> wider = rc::test::randomPairPaddings(*model, n, 5);
+        for (rc::CollisionMode mode : kModes)
+            for (const bool ownPairPaddings : {false, true})
+            {
+                rc::CollisionRequest request;
+                request.mode = mode;
+                request.padding = 0.002;
+                if (ownPairPaddings)
+                    request.pairPadding = rc::test::randomPairPaddings(*model, n, 9);
+                std::vector<std::uint8_t> onStages(n), expected(n);
+                if (!cpu.checkTwoPaddings(suite.states.data(), n, expected.data(), request, *wider, 1))
+                {
+                    // Raster mode on the CPU: what the Checker's two checks say.
+                    const rc::Checker checker(suite.robot, suite.scene, rc::CheckerOptions{rc::BackendChoice::Cpu, 1});
+                    checker.checkTwoPaddings(suite.states.data(), n, expected.data(), request, *wider);
+                }
+                const rc::device::ExecutorCounts before = staged.executorCounts();
+                ASSERT_TRUE(staged.checkTwoPaddings(suite.states.data(), n, onStages.data(), request, *wider, 1));
+                EXPECT_EQ(staged.executorCounts().since(before).calls, 1u) << label(suite.name, mode);
+                for (std::size_t i = 0; i < n; ++i)
+                {
+                    EXPECT_EQ(onStages[i], expected[i])
+                        << label(suite.name, mode) << (ownPairPaddings ? ", own pair paddings" : "") << ", state " << i;
+                    ++kinds[onStages[i] < 3 ? onStages[i] : 0];
+                }
+            }
+    }
+    // Every verdict occurs, or the comparison above proves little.
+    EXPECT_GT(kinds[0], 50u);
+    EXPECT_GT(kinds[1], 50u);
+    EXPECT_GT(kinds[2], 50u);
+
+    const rc::test::StateSuite suite = rc::test::accuracySuites(1).front();
+    const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+    const rc::StagedBackend staged(model, poisonedStages(model));
+    const std::size_t n = rc::StagedBackend::kTwoPaddingsInOnePassMost + 1;
+    const std::vector<double> q(n * suite.robot->numCoordinates(), 0.0);
+    std::vector<std::uint8_t> verdicts(n);
+    rc::PairPadding wider;
+    wider.environment.assign(model->numComponents(), 0.01);
+    wider.self.assign(model->selfPairs.size(), 0.01);
+    EXPECT_FALSE(staged.checkTwoPaddings(q.data(), n, verdicts.data(), {}, wider, 1));
 }
 
 namespace

@@ -165,17 +165,7 @@ void Checker::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *ver
     const std::size_t components = model_->numComponents(), selfPairs = model_->selfPairs.size();
     const PairPadding *own = request.pairPadding.get();
     auto outer = std::make_shared<PairPadding>();
-    outer->rows = wider.rows > 1 || (own && own->rows > 1) ? n : 1;
-    outer->environment.resize(outer->rows * components);
-    outer->self.resize(outer->rows * selfPairs);
-    for (std::size_t r = 0; r < outer->rows; ++r)
-    {
-        const PairPaddings sum(*model_, 0.0, own, r, &wider);
-        for (std::size_t c = 0; c < components; ++c)
-            outer->environment[r * components + c] = sum.component(c);
-        for (std::size_t p = 0; p < selfPairs; ++p)
-            outer->self[r * selfPairs + p] = sum.self(p);
-    }
+    appendPaddingRows(*model_, own, &wider, wider.rows > 1 || (own && own->rows > 1) ? n : 1, *outer);
     CollisionRequest wide = request;
     wide.pairPadding = std::move(outer);
     check(q, n, verdicts, wide);

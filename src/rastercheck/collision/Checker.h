@@ -84,7 +84,8 @@ public:
         request's). The same verdicts as check() at the wider paddings and then at the request's for
         the states that missed them, in about one check's time on the CPU backend: a pair nearer
         than its wider padding is tried at its own at once, and the pairs after it only at theirs
-        (in raster mode, and on the GPU stages today, it is those two checks). Certified edges ask
+        (in raster mode it is those two checks; on the GPU stages one pass of twice the states, up to
+        StagedBackend::kTwoPaddingsInOnePassMost). Certified edges ask
         it of every midpoint: clear by its interval's sweep, or at least valid. Throws as check(),
         and for a \a wider that does not fit the model or the batch. */
     void checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *verdicts, const CollisionRequest &request,

@@ -751,4 +751,22 @@ void CollisionModel::nameParties(std::uint32_t pair, Contact &contact) const
     contact.otherComponent = self.second;
     contact.object = -1;
 }
+void appendPaddingRows(const CollisionModel &model, const PairPadding *own, const PairPadding *wider, std::size_t rows,
+                       PairPadding &out)
+{
+    const std::size_t components = model.numComponents(), selfPairs = model.selfPairs.size();
+    const std::size_t before = out.environment.empty() && out.self.empty() ? 0 : out.rows;
+    out.environment.reserve(out.environment.size() + rows * components);
+    out.self.reserve(out.self.size() + rows * selfPairs);
+    for (std::size_t r = 0; r < rows; ++r)
+    {
+        const PairPaddings sum(model, 0.0, own, r, wider);
+        for (std::size_t c = 0; c < components; ++c)
+            out.environment.push_back(sum.component(c));
+        for (std::size_t p = 0; p < selfPairs; ++p)
+            out.self.push_back(sum.self(p));
+    }
+    out.rows = before + rows;
+}
+
 }  // namespace rastercheck

@@ -322,4 +322,11 @@ private:
     Terms own_, added_;  // the first and second row given (added_ only when both are)
 };
 
+/** \brief Appends \a rows rows to \a out (its rows counted up): row r is \a own's row r plus, when
+    \a wider is not null, \a wider's row r, per component and self pair (a PairPadding of one row
+    gives row 0 to every r; a null \a own adds nothing). CollisionRequest::padding is not in them:
+    the rows are a request's pairPadding. */
+void appendPaddingRows(const CollisionModel &model, const PairPadding *own, const PairPadding *wider, std::size_t rows,
+                       PairPadding &out);
+
 }  // namespace rastercheck

@@ -455,6 +455,31 @@ device::ExecutorCounts StagedBackend::executorCounts() const
     return runner_->executorCounts();
 }
 
+bool StagedBackend::checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *verdicts,
+                                     const CollisionRequest &request, const PairPadding &wider, int threads) const
+{
+    if (n > kTwoPaddingsInOnePassMost)
+        return false;
+    // States 0..n-1 at the wider paddings (the request's pair paddings plus wider's), states n..2n-1
+    // the same configurations at the request's own.
+    const std::size_t dof = model_->robot->numCoordinates();
+    std::vector<double> twice(2 * n * dof);
+    std::copy_n(q, n * dof, twice.begin());
+    std::copy_n(q, n * dof, twice.begin() + static_cast<std::ptrdiff_t>(n * dof));
+    auto rows = std::make_shared<PairPadding>();
+    appendPaddingRows(*model_, request.pairPadding.get(), &wider, n, *rows);
+    appendPaddingRows(*model_, request.pairPadding.get(), nullptr, n, *rows);
+    CollisionRequest both = request;
+    both.pairPadding = std::move(rows);
+    std::vector<std::uint8_t> valid(2 * n);
+    check(twice.data(), 2 * n, valid.data(), nullptr, both, threads);
+    for (std::size_t i = 0; i < n; ++i)
+        verdicts[i] = static_cast<std::uint8_t>(valid[i]       ? PaddedVerdict::Clear
+                                                : valid[n + i] ? PaddedVerdict::Near
+                                                               : PaddedVerdict::Collides);
+    return true;
+}
+
 void StagedBackend::check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts,
                           const CollisionRequest &request, int threads) const
 {

@@ -64,6 +64,16 @@ public:
     std::string name() const override { return runner_->name(); }
     void check(const double *q, std::size_t n, std::uint8_t *valid, Contact *contacts, const CollisionRequest &request,
                int threads) const override;
+    /** \brief Up to kTwoPaddingsInOnePassMost states: one pass of twice the states, each at the
+        wider paddings and again at the request's (a pass's fixed costs once, where the Checker's two
+        checks paid them twice: certified edges' rounds of midpoints). Larger batches: false, and
+        the Checker's two checks (the second only of the states that missed the wider paddings). */
+    bool checkTwoPaddings(const double *q, std::size_t n, std::uint8_t *verdicts, const CollisionRequest &request,
+                          const PairPadding &wider, int threads) const override;
+    /** \brief The most states checkTwoPaddings decides in one pass: a planner's round of midpoints
+        (tens to a few thousand) is bound by a call's latency, a larger batch by its states, where
+        the second check's fewer states cost less than twice the first's. */
+    static constexpr std::size_t kTwoPaddingsInOnePassMost = 4096;
     /** \brief Whether passes count what the stages did (off by default: it costs two compactions
         per chunk). */
     void countStages(bool on) const;
