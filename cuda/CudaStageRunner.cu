@@ -839,62 +839,8 @@ public:
     {
         check(cudaGetDevice(&device_), "cudaGetDevice");
         const std::size_t m = static_cast<std::size_t>(host.numComponents);
-        const std::size_t o = static_cast<std::size_t>(host.numObjects);
-        arrays_ = host;
-        arrays_.joints = uploadOnce(model_memory_, host.joints, static_cast<std::size_t>(host.numJoints));
-        arrays_.componentVertices = uploadOnce(model_memory_, host.componentVertices, host.numComponentVertexFloats);
-        arrays_.componentTriangles = uploadOnce(model_memory_, host.componentTriangles, host.numComponentTriangleIndices);
-        arrays_.components = uploadOnce(model_memory_, host.components, m);
-        arrays_.componentLocalBoxes = uploadOnce(model_memory_, host.componentLocalBoxes, m);
-        arrays_.componentLink = uploadOnce(model_memory_, host.componentLink, m);
-        arrays_.componentSubtreeEnd = uploadOnce(model_memory_, host.componentSubtreeEnd, m);
-        arrays_.objectVertices = uploadOnce(model_memory_, host.objectVertices, host.numObjectVertexFloats);
-        arrays_.objectTriangles = uploadOnce(model_memory_, host.objectTriangles, host.numObjectTriangleIndices);
-        arrays_.objects = uploadOnce(model_memory_, host.objects, o);
-        arrays_.objectBoxes = uploadOnce(model_memory_, host.objectBoxes, o);
-        arrays_.objectOrientedBoxes = uploadOnce(model_memory_, host.objectOrientedBoxes, o);
-        arrays_.selfPairs = uploadOnce(model_memory_, host.selfPairs, 2 * static_cast<std::size_t>(host.numSelfPairs));
-        arrays_.convex.vertices = uploadOnce(model_memory_, host.convex.vertices, host.numConvexVertexDoubles);
-        arrays_.convex.hullPoints = uploadOnce(model_memory_, host.convex.hullPoints, host.numConvexHullDoubles);
-        arrays_.convex.pieces = uploadOnce(model_memory_, host.convex.pieces, host.numConvexPieces);
-        arrays_.convex.solidPieces = uploadOnce(model_memory_, host.convex.solidPieces, m + o + 1);
-        arrays_.convex.planes = uploadOnce(model_memory_, host.convex.planes, host.numConvexPlaneDoubles);
-        arrays_.convex.edges = uploadOnce(model_memory_, host.convex.edges, host.numConvexEdgeIndices);
-        arrays_.convex.supportCellStart =
-            uploadOnce(model_memory_, host.convex.supportCellStart, host.numConvexSupportCellOffsets);
-        arrays_.convex.supportCandidates =
-            uploadOnce(model_memory_, host.convex.supportCandidates, host.numConvexSupportCandidates);
-        arrays_.convex.patchNodes = uploadOnce(model_memory_, host.convex.patchNodes, host.numPatchNodes);
-        arrays_.convex.solidPatchNodes = uploadOnce(model_memory_, host.convex.solidPatchNodes, m + o + 1);
-        arrays_.convex.patchPieces = uploadOnce(model_memory_, host.convex.patchPieces, host.numPatches);
-        arrays_.convex.patchTriangles = uploadOnce(model_memory_, host.convex.patchTriangles, host.numPatchTriangleIndices);
-        arrays_.componentTreeNodes = uploadOnce(model_memory_, host.componentTreeNodes, host.numComponentTreeNodes);
-        arrays_.componentTriangleOrder =
-            uploadOnce(model_memory_, host.componentTriangleOrder, host.numComponentTriangleIndices / 3);
-        arrays_.objectTreeNodes = uploadOnce(model_memory_, host.objectTreeNodes, host.numObjectTreeNodes);
-        arrays_.objectTriangleOrder = uploadOnce(model_memory_, host.objectTriangleOrder, host.numObjectTriangleIndices / 3);
-        const auto uploadExact = [&](const device::ExactArrays &in, std::size_t triangles, std::size_t cells,
-                                     std::size_t probeDoubles, std::size_t shellStarts, std::size_t meshes) {
-            return device::ExactArrays{uploadOnce(model_memory_, in.corners, 9 * triangles),
-                                       uploadOnce(model_memory_, in.gridCells, cells),
-                                       uploadOnce(model_memory_, in.probePoints, probeDoubles),
-                                       uploadOnce(model_memory_, in.shellProbeStart, shellStarts),
-                                       uploadOnce(model_memory_, in.meshes, meshes)};
-        };
-        arrays_.componentExact = uploadExact(host.componentExact, host.numComponentTriangleIndices / 3,
-                                             host.numComponentGridCells, host.numComponentProbeDoubles,
-                                             host.numComponentShellStarts, m);
-        arrays_.curvedPairs = uploadOnce(model_memory_, host.curvedPairs, host.numCurvedPairFlags);
-        arrays_.curvedShapes.shapes = uploadOnce(model_memory_, host.curvedShapes.shapes, host.numCurvedShapes);
-        arrays_.curvedShapes.reach = uploadOnce(model_memory_, host.curvedShapes.reach, host.numCurvedShapes);
-        arrays_.curvedShapes.solidShapes = uploadOnce(model_memory_, host.curvedShapes.solidShapes, m + o + 1);
-        if (host.clearanceTables.tableOf)
-            arrays_.clearanceTables = device::ClearanceTableArrays{
-                uploadOnce(model_memory_, host.clearanceTables.tableOf, static_cast<std::size_t>(host.numSelfPairs)),
-                uploadOnce(model_memory_, host.clearanceTables.tables, host.numClearanceTables),
-                uploadOnce(model_memory_, host.clearanceTables.clearance, host.numClearanceNodes)};
-        arrays_.objectExact = uploadExact(host.objectExact, host.numObjectTriangleIndices / 3, host.numObjectGridCells,
-                                          host.numObjectProbeDoubles, host.numObjectShellStarts, o);
+        arrays_ = copyModelArrays(
+            host, [this](const auto *source, std::size_t count) { return uploadOnce(model_memory_, source, count); });
 
         // cudaMemcpy from pageable memory may return before its DMA lands, and the stages run on a
         // non-blocking stream that does not wait for the legacy one: wait here.

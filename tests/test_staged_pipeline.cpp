@@ -106,6 +106,39 @@ TEST(StagedPipeline, SameVerdictsAndFirstContactsAsTheCpuBackendOnTheAccuracySui
     }
 }
 
+TEST(StagedPipeline, HostCodeNeverReadsTheExecutorsMemory)
+{
+    // On a GPU the executor's buffers and the model's arrays are the device's: host code that reads
+    // them faults, and a download is junk until its wait. HostScratch::Guarded makes the host's
+    // memory behave so (pages open only while an operation runs): every mode, the small chunks'
+    // path (one wait, guessed bounds, replayed passes) and the large one's (a wait per count), with
+    // and without pair paddings per state, with the CPU backend's verdicts and first contacts. A
+    // host read of executor memory crashes this test.
+    const std::size_t states = sanitizerScaled(12);
+    for (const rc::test::StateSuite &suite : rc::test::accuracySuites(states))
+    {
+        const auto model = std::make_shared<const rc::CollisionModel>(suite.robot, suite.scene);
+        const rc::CpuBackend cpu(model);
+        rc::device::StageBudget waitForEachCount;
+        waitForEachCount.waitForCountsFrom = 0;
+        for (const rc::device::StageBudget &budget : {rc::device::StageBudget{}, waitForEachCount})
+        {
+            const rc::StagedBackend guarded(model, rc::makeHostStageRunner(model, budget, rc::HostScratch::Guarded));
+            for (rc::CollisionMode mode : kModes)
+            {
+                rc::CollisionRequest request;
+                request.mode = mode;
+                const std::string what =
+                    label(suite.name, mode) + (budget.waitForCountsFrom == 0 ? ", a wait per count" : ", one wait");
+                for (int call = 0; call < 3; ++call)  // the third replays a small chunk's pass
+                    rc::test::expectSameDecisions(guarded, cpu, *model, suite.states, request, what);
+                request.pairPadding = rc::test::randomPairPaddings(*model, suite.numStates(), 3);
+                rc::test::expectSameDecisions(guarded, cpu, *model, suite.states, request, what + ", pair paddings");
+            }
+        }
+    }
+}
+
 TEST(StagedPipeline, SplitWalksKeepTheirThreadsWithinTheBudget)
 {
     // Each open pair's walk gets as many parts as keep the pairs past the culls within the threads

@@ -32,6 +32,69 @@ struct StageMemoryExhausted : std::runtime_error
     16-core CPU backend means, such serial host work has to be a small part of it. */
 void copyInParallel(void *to, const void *from, std::size_t bytes);
 
+/** \brief \a host with every array replaced by \a copy(array, count), which returns the copy: how a
+    runner moves the model where its executors read it (the GPU's memory; the host executor's
+    guarded pages, HostScratch::Guarded). One list of the arrays for both, so that what a GPU reads
+    is what the host's guarded runs check. */
+template <class Copy>
+device::ModelArrays copyModelArrays(const device::ModelArrays &host, Copy &&copy)
+{
+    const std::size_t m = static_cast<std::size_t>(host.numComponents);
+    const std::size_t o = static_cast<std::size_t>(host.numObjects);
+    device::ModelArrays arrays = host;
+    arrays.joints = copy(host.joints, static_cast<std::size_t>(host.numJoints));
+    arrays.componentVertices = copy(host.componentVertices, host.numComponentVertexFloats);
+    arrays.componentTriangles = copy(host.componentTriangles, host.numComponentTriangleIndices);
+    arrays.components = copy(host.components, m);
+    arrays.componentLocalBoxes = copy(host.componentLocalBoxes, m);
+    arrays.componentLink = copy(host.componentLink, m);
+    arrays.componentSubtreeEnd = copy(host.componentSubtreeEnd, m);
+    arrays.objectVertices = copy(host.objectVertices, host.numObjectVertexFloats);
+    arrays.objectTriangles = copy(host.objectTriangles, host.numObjectTriangleIndices);
+    arrays.objects = copy(host.objects, o);
+    arrays.objectBoxes = copy(host.objectBoxes, o);
+    arrays.objectOrientedBoxes = copy(host.objectOrientedBoxes, o);
+    arrays.selfPairs = copy(host.selfPairs, 2 * static_cast<std::size_t>(host.numSelfPairs));
+    arrays.convex.vertices = copy(host.convex.vertices, host.numConvexVertexDoubles);
+    arrays.convex.hullPoints = copy(host.convex.hullPoints, host.numConvexHullDoubles);
+    arrays.convex.pieces = copy(host.convex.pieces, host.numConvexPieces);
+    arrays.convex.solidPieces = copy(host.convex.solidPieces, m + o + 1);
+    arrays.convex.planes = copy(host.convex.planes, host.numConvexPlaneDoubles);
+    arrays.convex.edges = copy(host.convex.edges, host.numConvexEdgeIndices);
+    arrays.convex.supportCellStart = copy(host.convex.supportCellStart, host.numConvexSupportCellOffsets);
+    arrays.convex.supportCandidates = copy(host.convex.supportCandidates, host.numConvexSupportCandidates);
+    arrays.convex.patchNodes = copy(host.convex.patchNodes, host.numPatchNodes);
+    arrays.convex.solidPatchNodes = copy(host.convex.solidPatchNodes, m + o + 1);
+    arrays.convex.patchPieces = copy(host.convex.patchPieces, host.numPatches);
+    arrays.convex.patchTriangles = copy(host.convex.patchTriangles, host.numPatchTriangleIndices);
+    arrays.componentTreeNodes = copy(host.componentTreeNodes, host.numComponentTreeNodes);
+    arrays.componentTriangleOrder = copy(host.componentTriangleOrder, host.numComponentTriangleIndices / 3);
+    arrays.objectTreeNodes = copy(host.objectTreeNodes, host.numObjectTreeNodes);
+    arrays.objectTriangleOrder = copy(host.objectTriangleOrder, host.numObjectTriangleIndices / 3);
+    const auto copyExact = [&](const device::ExactArrays &in, std::size_t triangles, std::size_t cells,
+                               std::size_t probeDoubles, std::size_t shellStarts, std::size_t meshes)
+    {
+        return device::ExactArrays{copy(in.corners, 9 * triangles), copy(in.gridCells, cells),
+                                   copy(in.probePoints, probeDoubles), copy(in.shellProbeStart, shellStarts),
+                                   copy(in.meshes, meshes)};
+    };
+    arrays.componentExact =
+        copyExact(host.componentExact, host.numComponentTriangleIndices / 3, host.numComponentGridCells,
+                  host.numComponentProbeDoubles, host.numComponentShellStarts, m);
+    arrays.objectExact = copyExact(host.objectExact, host.numObjectTriangleIndices / 3, host.numObjectGridCells,
+                                   host.numObjectProbeDoubles, host.numObjectShellStarts, o);
+    arrays.curvedPairs = copy(host.curvedPairs, host.numCurvedPairFlags);
+    arrays.curvedShapes.shapes = copy(host.curvedShapes.shapes, host.numCurvedShapes);
+    arrays.curvedShapes.reach = copy(host.curvedShapes.reach, host.numCurvedShapes);
+    arrays.curvedShapes.solidShapes = copy(host.curvedShapes.solidShapes, m + o + 1);
+    if (host.clearanceTables.tableOf)
+        arrays.clearanceTables = device::ClearanceTableArrays{
+            copy(host.clearanceTables.tableOf, static_cast<std::size_t>(host.numSelfPairs)),
+            copy(host.clearanceTables.tables, host.numClearanceTables),
+            copy(host.clearanceTables.clearance, host.numClearanceNodes)};
+    return arrays;
+}
+
 /** \brief Executors for concurrent passes: a call takes one no other call uses (made when none is
     idle) and gives it back, with its scratch, for later calls. A thread that calls again gets a
     warm executor, so a steady stream of batches allocates nothing; threads that call at the same

@@ -4,8 +4,15 @@
 #include <array>
 #include <chrono>
 #include <cstring>
+#include <deque>
+#include <mutex>
+#include <new>
 #include <numeric>
 #include <string>
+#include <type_traits>
+
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include "rastercheck/collision/ModeRules.h"
 #include "rastercheck/collision/PassRecorder.h"
@@ -125,6 +132,129 @@ struct NoGraph
 {
 };
 
+/** \brief Pages that only the host executor's operations may touch (HostScratch::Guarded): one
+    reserved range of address space, handed out page by page and kept PROT_NONE except while some
+    operation runs (an Open scope; nested and concurrent scopes are counted, and the last to close
+    shuts the range again). One range, so that opening and closing is one mprotect each. Released
+    pages go back to the system but not to the range (a test's few hundred megabytes at most). */
+class GuardedPages
+{
+public:
+    static void *allocate(std::size_t bytes)
+    {
+        State &state = instance();
+        const std::lock_guard<std::mutex> lock(state.mutex);
+        const std::size_t size = pageRound(bytes);
+        if (!state.base || size > kReserved - state.used)
+            throw std::bad_alloc();
+        unsigned char *pages = state.base + state.used;
+        state.used += size;
+        mprotect(pages, size, state.open > 0 ? PROT_READ | PROT_WRITE : PROT_NONE);
+        return pages;
+    }
+
+    static void release(void *pages, std::size_t bytes)
+    {
+        State &state = instance();
+        const std::lock_guard<std::mutex> lock(state.mutex);
+        madvise(pages, pageRound(bytes), MADV_DONTNEED);
+    }
+
+    /** \brief Every guarded page readable and writable while it lives (where \a on). */
+    class Open
+    {
+    public:
+        explicit Open(bool on) : on_(on)
+        {
+            if (on_)
+                shift(+1);
+        }
+        ~Open()
+        {
+            if (on_)
+                shift(-1);
+        }
+        Open(const Open &) = delete;
+        Open &operator=(const Open &) = delete;
+
+    private:
+        static void shift(int by)
+        {
+            State &state = instance();
+            const std::lock_guard<std::mutex> lock(state.mutex);
+            const bool wasOpen = state.open > 0;
+            state.open += by;
+            if (wasOpen != (state.open > 0) && state.used > 0)
+                mprotect(state.base, state.used, state.open > 0 ? PROT_READ | PROT_WRITE : PROT_NONE);
+        }
+        bool on_;
+    };
+
+private:
+    static constexpr std::size_t kReserved = std::size_t{1} << 32;  // address space, not memory
+
+    struct State
+    {
+        State()
+        {
+            void *range = mmap(nullptr, kReserved, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+            base = range == MAP_FAILED ? nullptr : static_cast<unsigned char *>(range);
+        }
+        std::mutex mutex;
+        unsigned char *base = nullptr;
+        std::size_t used = 0;
+        int open = 0;
+    };
+    static State &instance()
+    {
+        static State state;
+        return state;
+    }
+    static std::size_t pageRound(std::size_t bytes)
+    {
+        const std::size_t page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+        return std::max(page, (bytes + page - 1) / page * page);
+    }
+};
+
+/** \brief A scratch buffer of the host executor: plain memory, or guarded pages. Its contents do
+    not survive growth (a stage writes what it reads; HostScratch::Poisoned tests that). */
+class ScratchBytes
+{
+public:
+    ScratchBytes() = default;
+    ~ScratchBytes() { release(); }
+    ScratchBytes(const ScratchBytes &) = delete;
+    ScratchBytes &operator=(const ScratchBytes &) = delete;
+
+    unsigned char *data() const { return data_; }
+    std::size_t size() const { return size_; }
+    /** \brief \a bytes of zeros, in guarded pages where \a guarded. */
+    void allocate(std::size_t bytes, bool guarded)
+    {
+        release();
+        data_ = guarded ? static_cast<unsigned char *>(GuardedPages::allocate(bytes)) : new unsigned char[bytes]();
+        size_ = bytes;
+        guarded_ = guarded;
+    }
+    void release()
+    {
+        if (!data_)
+            return;
+        if (guarded_)
+            GuardedPages::release(data_, size_);
+        else
+            delete[] data_;
+        data_ = nullptr;
+        size_ = 0;
+    }
+
+private:
+    unsigned char *data_ = nullptr;
+    std::size_t size_ = 0;
+    bool guarded_ = false;
+};
+
 /** \brief The stages' primitives as host loops (OpenMP), for running the GPU's driver on the CPU.
     Its memory is the host's, so copies need no mirrors and waits wait for nothing, but it counts
     launches and waits where the CUDA executor makes them. */
@@ -139,24 +269,27 @@ public:
     template <class T>
     T *buffer(int slot, std::size_t count)
     {
-        std::vector<unsigned char> &storage = buffers_[static_cast<std::size_t>(slot)];
+        ScratchBytes &storage = buffers_[static_cast<std::size_t>(slot)];
         const std::size_t need = count * sizeof(T);
-        if (storage.size() < need)
+        if (storage.size() < need || !storage.data())
         {
             const std::size_t room = scratchRoom(maxScratchBytes_, heldBytes() - storage.size());
             if (need > room)
             {
                 recorder_.discard();  // the chunk is abandoned
-                for (std::vector<unsigned char> &b : buffers_)
-                    std::vector<unsigned char>().swap(b);
+                for (ScratchBytes &b : buffers_)
+                    b.release();
                 throw scratchExhausted("stage buffer " + std::to_string(slot), need, room, maxScratchBytes_);
             }
             recorder_.interrupt();  // what it recorded may use this buffer's storage
-            storage.resize(need);
+            storage.allocate(std::max<std::size_t>(need, 1), guarded());
             ++counts_.allocations;
         }
-        if (scratch_ == HostScratch::Poisoned)
+        if (scratch_ != HostScratch::Reused)
+        {
+            const GuardedPages::Open open(guarded());
             std::memset(storage.data(), 0xFF, need);
+        }
         return reinterpret_cast<T *>(storage.data());
     }
 
@@ -166,15 +299,32 @@ public:
     {
         T *destination = buffer<T>(slot, std::max<std::size_t>(count, 1));
         if (count > 0)
+        {
+            const GuardedPages::Open open(guarded());
             copyInParallel(destination, source, count * sizeof(T));
+        }
         return destination;
     }
 
-    /** \brief \a source itself: executor memory is host memory. */
+    /** \brief \a source itself (executor memory is host memory); with HostScratch::Guarded a host
+        mirror that an issued copy fills, as on a GPU (junk until the wait). */
     template <class T>
-    const T *download(int, const T *source, std::size_t)
+    const T *download(int slot, const T *source, std::size_t count)
     {
-        return source;
+        if (!guarded())
+            return source;
+        std::vector<unsigned char> &mirror = mirrors_[static_cast<std::size_t>(slot)];
+        const std::size_t bytes = count * sizeof(T);
+        if (mirror.size() < std::max<std::size_t>(bytes, 1))
+        {
+            recorder_.interrupt();  // what it recorded may copy into this mirror
+            mirror.resize(std::max<std::size_t>(bytes, 1));
+        }
+        unsigned char *host = mirror.data();
+        std::memset(host, 0xA5, bytes);
+        if (bytes > 0)
+            issue([host, source, bytes] { std::memcpy(host, source, bytes); }, host, source, bytes);
+        return reinterpret_cast<const T *>(host);
     }
 
     /** \brief The launches until the next wait() may be recorded and issued there (PassRecorder):
@@ -205,7 +355,7 @@ public:
         if (n == 0)
             return;
         ++counts_.launches;
-        recorder_.issue([this, n, f] { loop(n, f); }, kernelId<F>(), n, f);
+        issue([this, n, f] { loop(n, f); }, kernelId<F>(), n, f);
     }
 
     /** \brief The GPU holds these kernels to fewer registers; here the same loop. */
@@ -222,15 +372,14 @@ public:
         if (extent.bound == 0)
             return;
         ++counts_.launches;
-        recorder_.issue([this, extent, f] { loop(extent.size(), f); }, kernelId<F>(), extent,
-                        f);  // the count as it is then
+        issue([this, extent, f] { loop(extent.size(), f); }, kernelId<F>(), extent, f);  // the count as it is then
     }
 
     void selectFlagged(const std::uint8_t *flags, std::size_t n, std::uint32_t *selected, unsigned long long *count)
     {
         if (n > 0)
             ++counts_.launches;
-        recorder_.issue(
+        issue(
             [=]
             {
                 *count = 0;
@@ -247,7 +396,7 @@ public:
         if (n == 0)
             return;
         counts_.launches += 2;  // the GPU's iota and radix sort
-        recorder_.issue(
+        issue(
             [=]
             {
                 std::vector<std::size_t> next(static_cast<std::size_t>(numKeys) + 1, 0);
@@ -266,7 +415,7 @@ public:
     void exclusiveSum(const unsigned long long *in, unsigned long long *out, std::size_t n, unsigned long long *total)
     {
         ++counts_.launches;
-        recorder_.issue(
+        issue(
             [=]
             {
                 unsigned long long sum = 0;
@@ -289,8 +438,7 @@ public:
         if (n == 0)
             return;
         ++counts_.launches;
-        recorder_.issue([this, keys, values, n, keyBits] { radixSort(keys, values, n, keyBits); }, keys, values, n,
-                        keyBits);
+        issue([this, keys, values, n, keyBits] { radixSort(keys, values, n, keyBits); }, keys, values, n, keyBits);
     }
 
 private:
@@ -329,6 +477,21 @@ private:
             std::copy(fromKeys, fromKeys + n, keys);
             std::copy(fromValues, fromValues + n, values);
         }
+    }
+
+    bool guarded() const { return scratch_ == HostScratch::Guarded; }
+
+    /** \brief The recorder's issue, the guarded pages open while \a operation runs. */
+    template <class Operation, class... Parts>
+    void issue(Operation operation, const Parts &...parts)
+    {
+        recorder_.issue(
+            [this, operation]
+            {
+                const GuardedPages::Open open(guarded());
+                operation();
+            },
+            parts...);
     }
 
     template <class F>
@@ -379,7 +542,7 @@ private:
     std::size_t heldBytes() const
     {
         std::size_t total = 0;
-        for (const std::vector<unsigned char> &b : buffers_)
+        for (const ScratchBytes &b : buffers_)
             total += b.size();
         return total;
     }
@@ -389,7 +552,8 @@ private:
     HostLoop loop_;
     device::ExecutorCounts counts_;
     device::CountGuesses guesses_;
-    std::array<std::vector<unsigned char>, device::kNumStageBuffers> buffers_;
+    std::array<ScratchBytes, device::kNumStageBuffers> buffers_;
+    std::array<std::vector<unsigned char>, device::kNumStageBuffers> mirrors_;  // HostScratch::Guarded
     std::vector<unsigned long long> sortKeys_;  // sortByKey's other buffers
     std::vector<std::uint32_t> sortValues_;
     Recorder recorder_;
@@ -405,12 +569,28 @@ public:
     {
         arrays_ = hostModelArrays(*model_);
         budget_ = budget;
+        if (scratch == HostScratch::Guarded)
+            arrays_ = copyModelArrays(arrays_,
+                                      [this](const auto *source, std::size_t count)
+                                      {
+                                          using T = std::remove_const_t<std::remove_pointer_t<decltype(source)>>;
+                                          const std::size_t bytes = std::max<std::size_t>(1, count) * sizeof(T);
+                                          auto &pages = guardedModel_.emplace_back();
+                                          pages.allocate(bytes, true);
+                                          if (count > 0)
+                                          {
+                                              const GuardedPages::Open open(true);
+                                              std::memcpy(pages.data(), source, count * sizeof(T));
+                                          }
+                                          return reinterpret_cast<const T *>(pages.data());
+                                      });
     }
 
     std::string name() const override { return "cpu-staged"; }
 
 private:
-    CollisionModelConstPtr model_;  // what arrays_ point into
+    CollisionModelConstPtr model_;           // what arrays_ point into
+    std::deque<ScratchBytes> guardedModel_;  // or these, with HostScratch::Guarded
 };
 }  // namespace
 

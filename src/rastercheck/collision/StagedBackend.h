@@ -22,9 +22,15 @@ device::StageSettings stageSettings(const CollisionModel &model, const Collision
 /** \brief What the host executor's scratch buffers hold when a stage gets them. */
 enum class HostScratch
 {
-    Reused,   ///< whatever the last chunk left (zeros when new), as in production
-    Poisoned  ///< all bytes 0xFF (NaN, -1, all flags set), as uninitialised device memory may be:
-              ///< a stage that reads a slot nobody wrote then shows up in the CPU tests
+    Reused,    ///< whatever the last chunk left (zeros when new), as in production
+    Poisoned,  ///< all bytes 0xFF (NaN, -1, all flags set), as uninitialised device memory may be:
+               ///< a stage that reads a slot nobody wrote then shows up in the CPU tests
+    /** Poisoned, and the scratch and the model's arrays in pages no one may touch (PROT_NONE)
+        except while one of the executor's operations runs, with downloads copied into host
+        mirrors by an issued copy (as on a GPU, left 0xA5 until then): host code that reads the
+        executor's memory, which on a GPU is the device's, faults, and a download read before its
+        wait reads junk (tests; every operation changes page protections). */
+    Guarded
 };
 
 /** \brief How the host executor runs a kernel's elements. */
