@@ -9,6 +9,7 @@
 #include <ompl/base/SpaceInformation.h>
 
 #include "TestSupport.h"
+#include "rastercheck/collision/StagedBackend.h"
 #include "rastercheck/core/Error.h"
 #include "rastercheck/geometry/Primitives.h"
 #include "rastercheck/model/RigidBody.h"
@@ -266,6 +267,9 @@ TEST(CertifiedMotion, RejectsRasterModeAndBadOptions)
     bad.margin = 0;
     bad.levels = 41;
     EXPECT_THROW(rco::CertifiedMotionValidator(context.si, *context.validity, bad), rc::ConfigurationError);
+    bad.levels = 12;
+    bad.deviceRakeWidth = 0;
+    EXPECT_THROW(rco::CertifiedMotionValidator(context.si, *context.validity, bad), rc::ConfigurationError);
     EXPECT_EQ(rco::parseEdgeChecking("certified"), rco::EdgeChecking::Certified);
     EXPECT_THROW(rco::parseEdgeChecking("continuous"), rc::ConfigurationError);
 }
@@ -324,6 +328,62 @@ TEST(CertifiedMotion, EveryAcceptedCraneEdgeIsCollisionFreeAtEveryPoint)
         std::printf("crane, %s: %d edges certified, %d not (%d of them accepted by the discrete validator)\n",
                     sizing.name, counts[0], counts[1], counts[2]);
     }
+}
+
+TEST(CertifiedMotion, WhereTheFirstBatchReachesTheDeviceItIsWiderAndTheEdgesTakeFewerCalls)
+{
+    // On the stages (here the host executor, which counts the calls a GPU would get) every call
+    // costs about a device's latency: an edge's first batch takes deviceRakeWidth midpoints where
+    // it reaches the device, and the same verdicts come in fewer calls.
+    RASTERCHECK_REQUIRE_DATA(root);
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::HostStages;
+    options.checker.threads = 1;
+    options.checker.minDeviceBatch = 1;
+    const ::ompl::geometric::SimpleSetupPtr setup = rco::makeSimpleSetup(rc::test::pandaProblem(root, "cage"), options);
+    const ob::SpaceInformationPtr si = setup->getSpaceInformation();
+    si->setup();
+    const rco::StateValidityCheckerPtr validity = rco::getStateValidityChecker(*setup);
+    const auto *stages = dynamic_cast<const rc::StagedBackend *>(&validity->getChecker().backend());
+    ASSERT_NE(stages, nullptr);
+    rco::CertifiedMotionOptions narrow;
+    narrow.deviceRakeWidth = 1;
+    const rco::CertifiedMotionValidator one(si, *validity, narrow), wide(si, *validity);
+    EXPECT_EQ(one.firstBatchWidth(1), 1u);
+    EXPECT_EQ(wide.firstBatchWidth(1), 8u);
+    ob::StateSamplerPtr sampler = si->allocStateSampler();
+    ob::ScopedState<> from(si), to(si);
+    std::uint64_t calls[2] = {0, 0};
+    int accepted = 0;
+    for (int e = 0; e < 40; ++e)
+    {
+        sampler->sampleUniform(from.get());
+        sampler->sampleUniform(to.get());
+        si->getStateSpace()->interpolate(from.get(), to.get(), 0.3, to.get());
+        bool verdicts[2];
+        for (int w = 0; w < 2; ++w)
+        {
+            const std::uint64_t before = stages->executorCounts().calls;
+            verdicts[w] = (w == 0 ? one : wide).checkMotion(from.get(), to.get());
+            calls[w] += stages->executorCounts().calls - before;
+        }
+        EXPECT_EQ(verdicts[0], verdicts[1]) << "edge " << e;
+        accepted += verdicts[0] ? 1 : 0;
+    }
+    EXPECT_GT(accepted, 3);  // both verdicts occur
+    EXPECT_LT(accepted, 37);
+    EXPECT_LT(4 * calls[1], 3 * calls[0]) << calls[1] << " calls wide, " << calls[0] << " one midpoint first";
+
+    // The CPU backend, and batches below the device's smallest: the first batch stays narrow.
+    const Context cpu = makeContext(rc::test::pandaProblem(root, "cage"));
+    EXPECT_EQ(rco::CertifiedMotionValidator(cpu.si, *cpu.validity).firstBatchWidth(1000), 1u);
+    options.checker.minDeviceBatch = 32;
+    const ::ompl::geometric::SimpleSetupPtr hybrid =
+        rco::makeSimpleSetup(rc::test::pandaProblem(root, "cage"), options);
+    hybrid->getSpaceInformation()->setup();
+    const rco::CertifiedMotionValidator mixed(hybrid->getSpaceInformation(), *rco::getStateValidityChecker(*hybrid));
+    EXPECT_EQ(mixed.firstBatchWidth(3), 1u);  // 24 midpoints: the CPU's
+    EXPECT_EQ(mixed.firstBatchWidth(4), 8u);  // 32: the device's
 }
 
 TEST(CertifiedMotion, EdgesCheckedTogetherGetTheVerdictsTheyGetAlone)

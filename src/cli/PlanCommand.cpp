@@ -401,8 +401,9 @@ void addPlanCommand(CLI::App &app)
         ->check(CLI::NonNegativeNumber);
     command
         ->add_option("--rake-width", options->rakeWidth,
-                     "certified edges: coarsest midpoints in an edge's first check, later ones doubling (default 1; "
-                     "wider makes fewer, larger batches, for a backend whose calls cost more than their states)")
+                     "certified edges: coarsest midpoints in an edge's first check, later ones doubling (default 1, "
+                     "and at least 8 where the check reaches a GPU; wider makes fewer, larger batches, for a "
+                     "backend whose calls cost more than their states)")
         ->check(CLI::PositiveNumber);
     command
         ->add_option("--recheck-factor", options->recheckFactor,

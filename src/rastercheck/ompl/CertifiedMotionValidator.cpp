@@ -129,6 +129,7 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
       margin_(options.margin > 0.0 ? options.margin : 0.1 * bound_.size()),
       levels_(options.levels),
       rakeWidth_(options.rakeWidth),
+      deviceRakeWidth_(std::max(options.rakeWidth, options.deviceRakeWidth)),
       sizeByClearance_(options.sizeByClearance),
       clearanceMeasure_(options.clearanceMeasure),
       space_(si->getStateSpace().get())
@@ -143,13 +144,19 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
     if (levels_ > 40)
         throw ConfigurationError(
             "CertifiedMotionValidator: at most 40 levels (the finest margin is margin / 2^levels)");
-    if (rakeWidth_ == 0)
-        throw ConfigurationError("CertifiedMotionValidator: the rake width must be at least 1");
+    if (rakeWidth_ == 0 || options.deviceRakeWidth == 0)
+        throw ConfigurationError("CertifiedMotionValidator: the rake widths must be at least 1");
     if (!(margin_ > 0.0))
         margin_ = 1.0;  // a robot without geometry: nothing moves, every edge needs one check at any margin
 }
 
-void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
+unsigned int CertifiedMotionValidator::firstBatchWidth(std::size_t edges) const
+{
+    const std::size_t deviceBatch = checker_->deviceBatch();
+    return deviceBatch > 0 && edges * deviceRakeWidth_ >= deviceBatch ? deviceRakeWidth_ : rakeWidth_;
+}
+
+void CertifiedMotionValidator::start(const Edge &edge, unsigned int width, EdgeSearch &w) const
 {
     w.edge = edge;
     w.level = 0;
@@ -158,7 +165,7 @@ void CertifiedMotionValidator::start(const Edge &edge, EdgeSearch &w) const
     w.batch.clear();
     w.close.clear();
     w.next = 0;
-    w.width = rakeWidth_;
+    w.width = width;
     w.stop = std::numeric_limits<double>::infinity();
     w.spent = 0.0;
     w.finished = false;
@@ -334,10 +341,11 @@ void CertifiedMotionValidator::checkMotions(const Edge *edges, std::size_t n, st
     auto freeState = [this](ob::State *s) { si_->freeState(s); };
     std::unique_ptr<ob::State, decltype(freeState)> scratchState(
         bound_.tightensAboutReferences() ? si_->allocState() : nullptr, freeState);
+    const unsigned int width = firstBatchWidth(n);
     for (std::size_t i = 0; i < n; ++i)
     {
         pool[i]->state = scratchState.get();
-        start(edges[i], *pool[i]);
+        start(edges[i], width, *pool[i]);
     }
 
     CertifiedScratch &w = certifiedScratch();

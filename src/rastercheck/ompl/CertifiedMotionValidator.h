@@ -33,6 +33,13 @@ struct CertifiedMotionOptions
         certified edges"). Wider first batches make fewer, larger checker calls, for a backend whose
         calls cost more than their states. */
     unsigned int rakeWidth = 1;
+    /** \brief The first batch's coarsest midpoints per edge (>= 1; at least rakeWidth) where that
+        first batch reaches the GPU (checkMotions of n edges: n x deviceRakeWidth states, at least
+        Checker::deviceBatch()): a device call costs about its latency whatever its few hundred
+        states, so fewer rounds pay for more states there (Panda edges, every call on the stages:
+        4.28 -> 2.32 calls an edge for 25.0 states against 23.4; docs/benchmarks.md "Certified
+        edges' first batch on the device"). Batches on the CPU keep rakeWidth. */
+    unsigned int deviceRakeWidth = 8;
     /** \brief Where a midpoint misses its margin, size what it certifies by its clearance
         (Checker::freeRadius: each pair's exact distance against what it can close in along the
         edge) instead of halving the interval: conservative advancement. It checks fewer states
@@ -114,13 +121,17 @@ public:
     double getMargin() const { return margin_; }
     /** \brief Coarsest midpoints in an edge's first batch (options.rakeWidth). */
     unsigned int getRakeWidth() const { return rakeWidth_; }
+    /** \brief The same where checkMotions of \a edges edges sends its first batch to the GPU
+        (options.deviceRakeWidth), else getRakeWidth(). */
+    unsigned int firstBatchWidth(std::size_t edges) const;
     const MotionBound &getMotionBound() const { return bound_; }
 
 private:
     struct EdgeSearch;
-    /** \brief Starts \a search on \a edge: bounds, sweeps and the coarsest intervals in rake order;
-        finished at once when an end is outside the bounds or the sweeps are not finite. */
-    void start(const Edge &edge, EdgeSearch &search) const;
+    /** \brief Starts \a search on \a edge: bounds, sweeps and the coarsest intervals in rake order,
+        \a width of them in the first batch; finished at once when an end is outside the bounds or
+        the sweeps are not finite. */
+    void start(const Edge &edge, unsigned int width, EdgeSearch &search) const;
     /** \brief Fills search.batch with the next midpoints to check (finishing levels on the way);
         leaves it empty when the search is finished. */
     void nextBatch(EdgeSearch &search) const;
@@ -146,6 +157,7 @@ private:
     double margin_;
     unsigned int levels_;
     unsigned int rakeWidth_;
+    unsigned int deviceRakeWidth_;
     bool sizeByClearance_;
     ClearanceMeasure clearanceMeasure_;
     ::ompl::base::StateSpace *space_;
