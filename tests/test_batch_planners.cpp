@@ -96,6 +96,30 @@ void setAcrossTheWall(og::SimpleSetup &setup)
     rco::setStartAndGoal(setup, start, goal);
 }
 
+/** \brief wallWithGap's planar problem on the CPU backend, its space's resolution \a segmentFraction
+    of its extent, set up. */
+og::SimpleSetupPtr planarWallSetup(double segmentFraction)
+{
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::Cpu;
+    options.longestValidSegmentFraction = segmentFraction;
+    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    setup->getSpaceInformation()->setup();
+    return setup;
+}
+
+/** \brief The planar cube of \a setup (planarWallSetup) at (x, y), the other coordinates neutral. */
+std::shared_ptr<ob::ScopedState<>> planarState(const og::SimpleSetup &setup, double x, double y)
+{
+    const rco::StateMapping &mapping = rco::getStateValidityChecker(setup)->getStateMapping();
+    std::vector<double> q = mapping.baseConfiguration();
+    q[0] = x;
+    q[1] = y;
+    auto state = std::make_shared<ob::ScopedState<>>(setup.getSpaceInformation());
+    mapping.fromConfiguration(q, state->get());
+    return state;
+}
+
 /** \brief A planar unit square's start (0.05, 0.5) and goal (0.95, 0.5). */
 void setAcrossTheUnitSquare(og::SimpleSetup &setup)
 {
@@ -643,22 +667,9 @@ TEST(BatchShortcutter, TakesALineThatPassesTheRakeOnlyWhenTheEdgeCheckerAcceptsI
     // At a resolution of about 1.2 m the rake checks no state of a line shorter than that, so a
     // short line through the 0.1 m wall passes it; only certification refuses it. A shortcutter that
     // took the rake's word would cut through the wall here.
-    rco::SetupOptions options;
-    options.checker.backend = rc::BackendChoice::Cpu;
-    options.longestValidSegmentFraction = 0.2;
-    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    og::SimpleSetupPtr setup = planarWallSetup(0.2);
     const ob::SpaceInformationPtr si = setup->getSpaceInformation();
-    si->setup();
-    const rco::StateMapping &mapping = rco::getStateValidityChecker(*setup)->getStateMapping();
-    auto at = [&](double x, double y)
-    {
-        std::vector<double> q = mapping.baseConfiguration();
-        q[0] = x;
-        q[1] = y;
-        auto state = std::make_shared<ob::ScopedState<>>(si);
-        mapping.fromConfiguration(q, state->get());
-        return state;
-    };
+    auto at = [&](double x, double y) { return planarState(*setup, x, y); };
     // Down to the gap, through it, and up again on the other side.
     og::PathGeometric path(si);
     for (const auto &[x, y] : std::vector<std::pair<double, double>>{{-0.5, 1.0}, {-0.5, 0.0}, {0.5, 0.0}, {0.5, 1.0}})
@@ -685,21 +696,12 @@ TEST(EdgeChecker, RakesCandidatePathsUntilEachHasARejectedEdge)
     // block at its midpoint, the others are free. Path {e0, e2} is rejected at the first level;
     // e0 lies on {e0, e1, e3} too and is raked to the end, as alone; e4 lies only on {e2, e4},
     // whose rejection at the first level leaves it at one level and one state.
-    rco::SetupOptions options;
-    options.checker.backend = rc::BackendChoice::Cpu;
-    options.longestValidSegmentFraction = 0.01;
-    og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+    og::SimpleSetupPtr setup = planarWallSetup(0.01);
     const ob::SpaceInformationPtr si = setup->getSpaceInformation();
-    si->setup();
-    const rco::StateMapping &mapping = rco::getStateValidityChecker(*setup)->getStateMapping();
     std::vector<std::shared_ptr<ob::ScopedState<>>> kept;
     auto at = [&](double x, double y)
     {
-        std::vector<double> q = mapping.baseConfiguration();
-        q[0] = x;
-        q[1] = y;
-        kept.push_back(std::make_shared<ob::ScopedState<>>(si));
-        mapping.fromConfiguration(q, kept.back()->get());
+        kept.push_back(planarState(*setup, x, y));
         return kept.back()->get();
     };
     const std::vector<rco::Edge> edges{{at(-1.0, 0.0), at(-0.4, 0.0)},
