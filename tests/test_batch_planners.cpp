@@ -401,6 +401,45 @@ TEST(BatchRRTConnect, DecidingARoundsCandidatesTogetherMakesFewerCalls)
     }
 }
 
+TEST(BatchRRTConnect, TogetherALinesStepsAreCheckedInOneRound)
+{
+    // The straight line from start to goal is free and twenty steps of the range long: one at a
+    // time the start tree grows along it a step a round (a call each); together every step in one.
+    std::size_t calls[2] = {0, 0};
+    for (const int together : {0, 1})
+    {
+        rco::SetupOptions options;
+        options.checker.backend = rc::BackendChoice::HostStages;
+        options.checker.threads = 1;
+        options.checker.minDeviceBatch = 1;
+        og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+        const rco::StateMapping &mapping = rco::getStateValidityChecker(*setup)->getStateMapping();
+        std::vector<double> start = mapping.baseConfiguration(), goal = start;
+        start[0] = goal[0] = -1.0;
+        start[1] = -1.0;
+        goal[1] = 1.0;
+        rco::setStartAndGoal(*setup, start, goal);
+        const auto *stages =
+            dynamic_cast<const rc::StagedBackend *>(&rco::getStateValidityChecker(*setup)->getChecker().backend());
+        ASSERT_NE(stages, nullptr);
+        auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
+        planner->setRange(0.1);
+        planner->setDecideTogether(together);
+        setup->setPlanner(planner);
+        setup->setup();
+        const std::uint64_t before = stages->executorCounts().calls;
+        rc::test::seedOmpl(2);
+        ASSERT_EQ(setup->solve(30.0), ob::PlannerStatus::EXACT_SOLUTION);
+        calls[together] = stages->executorCounts().calls - before;
+        EXPECT_TRUE(collisionFree(*setup, setup->getSolutionPath()));
+        EXPECT_EQ(setup->getSolutionPath().getStateCount(), 21u);  // the line, its twenty steps
+    }
+    // One at a time a call per step; together one for the line, then the candidate's rake and
+    // certification.
+    EXPECT_GE(calls[0], 20u);
+    EXPECT_LE(calls[1], 5u);
+}
+
 TEST(BatchRRTConnect, SeededRunsRepeat)
 {
     RASTERCHECK_REQUIRE_DATA(root);

@@ -386,8 +386,8 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
         lines.push_back(line);
     }
     // Rounds: the next step of every live line, all decided in one call. One step per line and
-    // round: a step past a blocked one would be wasted work (on the CPU a batch costs the sum of its
-    // checks).
+    // round on the CPU: a step past a blocked one would be wasted work (a batch costs the sum of its
+    // checks there).
     std::vector<ompl::Edge> edges;
     std::vector<std::size_t> owner;
     std::vector<ob::State *> points;        ///< ends of the steps of this round (not the targets)
@@ -425,17 +425,26 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             line.alive = line.alive && !line.last->cut && !line.target->cut;
             if (!line.alive)
                 continue;
-            const double f = (line.grown + 1) * line.step;
-            const ob::State *to = line.target->state;
-            if (f < 1.0)
+            // Together (on a device), every step left to the target in this one round: a call costs
+            // its latency there, and the steps past a blocked one little.
+            const ob::State *from = line.last->state;
+            for (unsigned int k = 1; k == 1 || together; ++k)
             {
-                points.push_back(si_->allocState());
-                si_->getStateSpace()->interpolate(line.origin, line.target->state, f, points.back());
-                to = points.back();
+                const double f = (line.grown + k) * line.step;
+                const ob::State *to = line.target->state;
+                if (f < 1.0)
+                {
+                    points.push_back(si_->allocState());
+                    si_->getStateSpace()->interpolate(line.origin, line.target->state, f, points.back());
+                    to = points.back();
+                }
+                edges.push_back({from, to});
+                owner.push_back(l);
+                endIsTarget.push_back(to == line.target->state ? 1 : 0);
+                if (to == line.target->state)
+                    break;
+                from = to;
             }
-            edges.push_back({line.last->state, to});
-            owner.push_back(l);
-            endIsTarget.push_back(to == line.target->state ? 1 : 0);
         }
         const bool lazyRound = lazyNow_;  // a rejected candidate below may end laziness mid-round
         checkNewEdges(edges, valid, &endIsTarget);
@@ -443,6 +452,8 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
         for (std::size_t e = 0; e < edges.size(); ++e)
         {
             Line &line = lines[owner[e]];
+            if (!line.alive)
+                continue;  // an earlier step of this line, this round, was blocked
             // A lazy candidate rejected earlier in this round may have cut either end of the line.
             if (!valid[e] || line.last->cut || line.target->cut)
             {
@@ -458,8 +469,8 @@ bool BatchRRTConnect::connect(const std::vector<std::pair<Motion *, const Tree *
             }
             // Joined: root of the start tree ... last state of one tree, first of the other ... goal.
             const bool fromStart = line.other == &goalTree_;
-            joins.push_back(
-                {fromStart ? line.target : line.last, fromStart ? line.last : line.target, edges[e], !lazyRound});
+            joins.push_back({fromStart ? line.target : line.last, fromStart ? line.last : line.target,
+                             ompl::Edge{line.last->state, edges[e].to}, !lazyRound});
             joinLines.push_back(owner[e]);
             if (together)
                 continue;

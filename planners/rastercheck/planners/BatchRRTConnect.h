@@ -80,13 +80,12 @@ public:
         thread), the iterations run on the CPU and take kCpuSamplesPerBatch. */
     unsigned int samplesPerBatch() const;
     /** \brief Whether a connection round's candidate solutions are decided together, one rake for
-        all of them (each level of it one call), or one at a time, the first accepted ending the
-        round: decide_together 1 or 0; -1 (the default) by the backend: together where an
-        iteration's states reach the GPU (samplesPerBatch() samples, lazy_samples states each in
-        lazy mode, at least Checker::deviceBatch()), whose calls cost far more than their states.
-        Together, a solve makes fewer, larger calls and checks more states (Panda MotionBenchMaker
-        problems: 2.4x fewer calls, 2.2x the states; docs/benchmarks.md "A connection round's
-        candidates decided together"). (After setup().) */
+        all of them (each level of it one call), and each line's steps in one round, or one at a
+        time, the first accepted ending the round, and a step a round: decide_together 1 or 0; -1 (the default) by the
+       backend: together where an iteration's states reach the GPU (samplesPerBatch() samples, lazy_samples states each
+       in lazy mode, at least Checker::deviceBatch()), whose calls cost far more than their states. Together, a solve
+       makes fewer, larger calls and checks more states (Panda MotionBenchMaker problems: 2.4x fewer calls, 2.2x the
+       states; docs/benchmarks.md "A connection round's candidates decided together"). (After setup().) */
     bool decidesCandidatesTogether() const;
     /** \brief 1: decide a round's candidates together; 0: one at a time; -1 (the default): by the
         backend (decidesCandidatesTogether()). Throws ConfigurationError for another value. */
