@@ -120,6 +120,23 @@ std::shared_ptr<ob::ScopedState<>> planarState(const og::SimpleSetup &setup, dou
     return state;
 }
 
+/** \brief Setup options with every batch on the stages of the host executor (the calls a GPU would
+    get, counted), one thread. */
+rco::SetupOptions everyCallOnTheStages()
+{
+    rco::SetupOptions options;
+    options.checker.backend = rc::BackendChoice::HostStages;
+    options.checker.threads = 1;
+    options.checker.minDeviceBatch = 1;
+    return options;
+}
+
+/** \brief The staged backend of \a setup's checker, or null. */
+const rc::StagedBackend *stagesOf(const og::SimpleSetup &setup)
+{
+    return dynamic_cast<const rc::StagedBackend *>(&rco::getStateValidityChecker(setup)->getChecker().backend());
+}
+
 /** \brief A planar unit square's start (0.05, 0.5) and goal (0.95, 0.5). */
 void setAcrossTheUnitSquare(og::SimpleSetup &setup)
 {
@@ -353,8 +370,7 @@ TEST(BatchRRTConnect, SizesItsBatchesByTheBackend)
     }
     // A solve on the stages: its batches run there, and its path is collision-free.
     og::SimpleSetupPtr setup = planWith(rc::BackendChoice::HostStages, 64);
-    const auto *stages =
-        dynamic_cast<const rc::StagedBackend *>(&rco::getStateValidityChecker(*setup)->getChecker().backend());
+    const rc::StagedBackend *stages = stagesOf(*setup);
     ASSERT_NE(stages, nullptr);
     rc::test::seedOmpl(3);
     const og::PathGeometric path = solveAndCheck(*setup, 60.0);
@@ -374,15 +390,11 @@ TEST(BatchRRTConnect, DecidingARoundsCandidatesTogetherMakesFewerCalls)
         unsigned int rejected[2] = {0, 0};
         for (const int together : {0, 1})
         {
-            rco::SetupOptions options;
-            options.checker.backend = rc::BackendChoice::HostStages;
-            options.checker.threads = 1;
-            options.checker.minDeviceBatch = 1;
-            og::SimpleSetupPtr setup = rco::makeSimpleSetup(rc::test::pandaProblem(root, scenario), options);
+            og::SimpleSetupPtr setup =
+                rco::makeSimpleSetup(rc::test::pandaProblem(root, scenario), everyCallOnTheStages());
             rco::setStartAndGoal(
                 *setup, rc::loadMoveItRequest(root + "/mbm/panda/problems/" + scenario + "_panda/request0001.yaml"));
-            const auto *stages =
-                dynamic_cast<const rc::StagedBackend *>(&rco::getStateValidityChecker(*setup)->getChecker().backend());
+            const rc::StagedBackend *stages = stagesOf(*setup);
             ASSERT_NE(stages, nullptr);
             auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
             planner->setBatchSize(256);
@@ -408,19 +420,14 @@ TEST(BatchRRTConnect, TogetherALinesStepsAreCheckedInOneRound)
     std::size_t calls[2] = {0, 0};
     for (const int together : {0, 1})
     {
-        rco::SetupOptions options;
-        options.checker.backend = rc::BackendChoice::HostStages;
-        options.checker.threads = 1;
-        options.checker.minDeviceBatch = 1;
-        og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), options);
+        og::SimpleSetupPtr setup = rco::makeSimpleSetup(wallWithGap(true), everyCallOnTheStages());
         const rco::StateMapping &mapping = rco::getStateValidityChecker(*setup)->getStateMapping();
         std::vector<double> start = mapping.baseConfiguration(), goal = start;
         start[0] = goal[0] = -1.0;
         start[1] = -1.0;
         goal[1] = 1.0;
         rco::setStartAndGoal(*setup, start, goal);
-        const auto *stages =
-            dynamic_cast<const rc::StagedBackend *>(&rco::getStateValidityChecker(*setup)->getChecker().backend());
+        const rc::StagedBackend *stages = stagesOf(*setup);
         ASSERT_NE(stages, nullptr);
         auto planner = std::make_shared<rcp::BatchRRTConnect>(setup->getSpaceInformation());
         planner->setRange(0.1);
