@@ -245,8 +245,7 @@ bool BatchRRTConnect::decidesCandidatesTogether() const
 {
     if (decideTogether_ >= 0)
         return decideTogether_ == 1;
-    const std::size_t deviceBatch = edges_ ? edges_->deviceBatch() : 0;
-    return deviceBatch > 0 && samplesPerBatch() * std::size_t{lazy_ ? lazySamples_ : 1u} >= deviceBatch;
+    return edges_ && edges_->reachesDevice(samplesPerBatch() * std::size_t{lazy_ ? lazySamples_ : 1u});
 }
 
 std::size_t BatchRRTConnect::decideCandidates(const std::vector<Candidate> &candidates)

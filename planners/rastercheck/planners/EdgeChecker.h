@@ -56,6 +56,9 @@ public:
         host stages): Checker::deviceBatch(); 0 when its batches run on the CPU, or the validity
         checker is not rastercheck's. */
     std::size_t deviceBatch() const { return states_ ? states_->getChecker().deviceBatch() : 0; }
+    /** \brief Whether a batch of \a states runs there (Checker::reachesDevice); false for a foreign
+        validity checker. */
+    bool reachesDevice(std::size_t states) const { return states_ && states_->getChecker().reachesDevice(states); }
 
     /** \brief "certified", "batched" or "one at a time": what check() runs. */
     const std::string &description() const { return description_; }

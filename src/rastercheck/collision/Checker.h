@@ -105,6 +105,9 @@ public:
         minDeviceBatch, or its automatic value; 0 when every batch runs on the CPU backend. What a
         caller that can choose its batch sizes (BatchRRTConnect) sizes them by. */
     std::size_t deviceBatch() const { return usesStages_ ? minDeviceBatch_ : 0; }
+    /** \brief Whether a batch of \a states runs on the GPU backend (or the host stages): at least
+        deviceBatch() states, where that is not 0. */
+    bool reachesDevice(std::size_t states) const { return usesStages_ && states >= minDeviceBatch_; }
     const CollisionModel &collisionModel() const { return *model_; }
     /** \brief The same model, shared (to build another backend over it without rebuilding it). */
     CollisionModelConstPtr collisionModelPtr() const { return model_; }

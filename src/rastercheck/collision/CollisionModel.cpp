@@ -751,6 +751,7 @@ void CollisionModel::nameParties(std::uint32_t pair, Contact &contact) const
     contact.otherComponent = self.second;
     contact.object = -1;
 }
+
 void appendPaddingRows(const CollisionModel &model, const PairPadding *own, const PairPadding *wider, std::size_t rows,
                        PairPadding &out)
 {
@@ -768,5 +769,4 @@ void appendPaddingRows(const CollisionModel &model, const PairPadding *own, cons
     }
     out.rows = before + rows;
 }
-
 }  // namespace rastercheck

@@ -152,8 +152,7 @@ CertifiedMotionValidator::CertifiedMotionValidator(const ob::SpaceInformationPtr
 
 unsigned int CertifiedMotionValidator::firstBatchWidth(std::size_t edges) const
 {
-    const std::size_t deviceBatch = checker_->deviceBatch();
-    return deviceBatch > 0 && edges * deviceRakeWidth_ >= deviceBatch ? deviceRakeWidth_ : rakeWidth_;
+    return checker_->reachesDevice(edges * deviceRakeWidth_) ? deviceRakeWidth_ : rakeWidth_;
 }
 
 void CertifiedMotionValidator::start(const Edge &edge, unsigned int width, EdgeSearch &w) const
